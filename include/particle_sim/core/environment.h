@@ -1,0 +1,60 @@
+#pragma once
+
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "particle_sim/core/particle_pool.h"
+#include "particle_sim/core/status.h"
+
+namespace particle_sim
+{
+namespace core
+{
+/// How a collider answers a particle that reached it.
+struct ContactDef
+{
+  double restitution = 0.5;  ///< [-] in [0, 1]: share of the normal speed kept after a bounce
+  double friction = 0.3;     ///< [-] >= 0: Coulomb coefficient, tangential speed lost <= friction * normal impulse / m
+};
+
+/// The horizontal plane z = height; particles stay above it.
+struct GroundPlaneDef
+{
+  bool enabled = true;
+  double height = 0.0;  ///< [m]
+  ContactDef contact;
+};
+
+/// A static sphere; particles stay outside it.
+struct SphereColliderDef
+{
+  std::string name;
+  Eigen::Vector3d center = Eigen::Vector3d::Zero();  ///< [m]
+  double radius = 1.0;                               ///< [m] > 0
+  ContactDef contact;
+};
+
+Status validate(const ContactDef& def, const std::string& where);
+Status validate(const GroundPlaneDef& def);
+Status validate(const SphereColliderDef& def);
+
+/// What every body feels: gravity and the colliders. Bodies read it; only the world changes it.
+struct Environment
+{
+  Eigen::Vector3d gravity = Eigen::Vector3d(0.0, 0.0, -9.81);  ///< [m/s^2], z up (REP-103)
+  GroundPlaneDef ground;
+  std::vector<SphereColliderDef> spheres;
+};
+
+/// Moves every live, non-pinned particle of `pool` that ended a step inside a collider back out.
+///
+/// For each collider with outward normal n and penetration depth p > 0:
+///   position  x += (1 + e) p n          (mirror image for e = 1, the surface for e = 0)
+///   velocity  v_n' = -e v_n when moving inward,
+///             |v_t| shrinks by at most mu (1 + e) |v_n| (Coulomb friction on the impulse).
+/// The result is always outside the collider that was handled.
+void resolveCollisions(const Environment& env, ParticlePool& pool);
+
+}  // namespace core
+}  // namespace particle_sim

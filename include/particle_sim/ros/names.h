@@ -1,0 +1,35 @@
+#pragma once
+
+// Every topic, service and parameter name of the node, in one place. All are private (~) or
+// relative, so namespaces and remapping work; /clock is global by ROS convention.
+
+namespace particle_sim
+{
+namespace names
+{
+// Topics
+constexpr const char* kMarkersTopic = "markers";  // ~markers, visualization_msgs/MarkerArray
+constexpr const char* kClockTopic = "/clock";     // rosgraph_msgs/Clock
+
+// Services
+constexpr const char* kSpawnEmitter = "spawn_emitter";
+constexpr const char* kRemoveBody = "remove_body";
+constexpr const char* kReset = "reset";
+constexpr const char* kPausePhysics = "pause_physics";
+constexpr const char* kUnpausePhysics = "unpause_physics";
+constexpr const char* kStep = "step";
+
+// Parameters
+constexpr const char* kSceneParam = "scene";
+constexpr const char* kRateParam = "rate";
+constexpr const char* kDtParam = "dt";
+constexpr const char* kRealTimeFactorParam = "real_time_factor";
+constexpr const char* kPausedParam = "paused";
+constexpr const char* kFrameIdParam = "frame_id";
+constexpr const char* kParentFrameIdParam = "parent_frame_id";
+constexpr const char* kPublishClockParam = "publish_clock";
+constexpr const char* kParticleSizeParam = "particle_size";
+constexpr const char* kMaxParticlesParam = "max_particles_per_body";
+constexpr const char* kStatusPeriodParam = "status_period";
+}  // namespace names
+}  // namespace particle_sim

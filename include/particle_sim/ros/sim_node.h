@@ -1,0 +1,90 @@
+#pragma once
+
+#include <ros/ros.h>
+#include <std_srvs/Trigger.h>
+#include <tf2_ros/transform_broadcaster.h>
+
+#include <chrono>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "particle_sim/RemoveBody.h"
+#include "particle_sim/SpawnEmitter.h"
+#include "particle_sim/Step.h"
+#include "particle_sim/core/world.h"
+#include "particle_sim/ros/marker_builder.h"
+
+namespace particle_sim
+{
+namespace ros_interface
+{
+/// The node's settings, read once from private parameters (README "Parameters").
+struct NodeSettings
+{
+  std::string scene_path;          ///< ~scene, YAML scene file; empty = an empty world
+  double rate = 30.0;              ///< ~rate [Hz] publish rate (and physics ticks)
+  double dt = 0.0;                 ///< ~dt [s] physics step; 0 = the scene's world.dt
+  double real_time_factor = 1.0;   ///< ~real_time_factor [-]; 0 = as fast as possible
+  bool paused = false;             ///< ~paused: start paused
+  std::string frame_id = "world";  ///< ~frame_id: frame of every marker
+  std::string parent_frame_id = "map";  ///< ~parent_frame_id: tf parent of frame_id (identity)
+  bool publish_clock = true;       ///< ~publish_clock: publish /clock from sim time
+  double particle_size = 0.05;     ///< ~particle_size [m]
+  int max_particles_per_body = 0;  ///< ~max_particles_per_body; 0 = the scene's value
+  double status_period = 1.0;      ///< ~status_period [s] of wall time between status lines; 0 = none
+};
+
+/// The simulator node: owns a core::World, steps it at a fixed rate on steady (wall) time, serves
+/// its services between steps and publishes markers, tf and /clock.
+class SimNode
+{
+public:
+  SimNode(ros::NodeHandle node, ros::NodeHandle private_node);
+
+  /// Reads parameters and loads the scene; false (after logging why) when they are unusable.
+  bool initialize();
+
+  /// Runs until ROS shuts down: spin callbacks, step, publish, sleep until the next tick.
+  void run();
+
+private:
+  // One tick: `substeps_` physics steps unless paused, then publish.
+  void tick();
+  void stepPhysics(std::uint64_t steps);
+  void publish();
+  void printStatus(double wall_elapsed);
+
+  bool spawnEmitter(SpawnEmitter::Request& req, SpawnEmitter::Response& res);
+  bool removeBody(RemoveBody::Request& req, RemoveBody::Response& res);
+  bool reset(std_srvs::Trigger::Request& req, std_srvs::Trigger::Response& res);
+  bool pausePhysics(std_srvs::Trigger::Request& req, std_srvs::Trigger::Response& res);
+  bool unpausePhysics(std_srvs::Trigger::Request& req, std_srvs::Trigger::Response& res);
+  bool step(Step::Request& req, Step::Response& res);
+
+  ros::NodeHandle node_;
+  ros::NodeHandle private_node_;
+  NodeSettings settings_;
+  MarkerStyle style_;
+  std::unique_ptr<core::World> world_;
+  int substeps_ = 1;
+  bool paused_ = false;
+
+  ros::Publisher markers_pub_;
+  ros::Publisher clock_pub_;
+  std::unique_ptr<tf2_ros::TransformBroadcaster> tf_broadcaster_;
+  std::vector<ros::ServiceServer> services_;
+
+  bool delete_all_pending_ = true;
+  std::vector<std::string> removed_bodies_;
+  double last_tf_time_ = -1.0;
+  double last_clock_time_ = -1.0;
+
+  // Measurements for the status line.
+  std::uint64_t steps_since_status_ = 0;
+  double step_seconds_since_status_ = 0.0;
+  double sim_time_at_status_ = 0.0;
+};
+
+}  // namespace ros_interface
+}  // namespace particle_sim

@@ -1,0 +1,204 @@
+#include "particle_sim/core/emitter.h"
+
+#include <cmath>
+
+#include "particle_sim/core/validation.h"
+
+namespace particle_sim
+{
+namespace core
+{
+const char* toString(BodyKind kind)
+{
+  switch (kind)
+  {
+    case BodyKind::Emitter:
+      return "emitter";
+    case BodyKind::SpringNetwork:
+      return "spring_network";
+  }
+  return "unknown";
+}
+
+const char* toString(EmitterType type)
+{
+  switch (type)
+  {
+    case EmitterType::Fountain:
+      return "fountain";
+    case EmitterType::Waterfall:
+      return "waterfall";
+    case EmitterType::SemiSphere:
+      return "semi_sphere";
+    case EmitterType::Explosion:
+      return "explosion";
+  }
+  return "unknown";
+}
+
+const char* emitterTypeNames() { return "fountain, waterfall, semi_sphere, explosion"; }
+
+bool parseEmitterType(const std::string& text, EmitterType& type)
+{
+  for (EmitterType candidate :
+       {EmitterType::Fountain, EmitterType::Waterfall, EmitterType::SemiSphere, EmitterType::Explosion})
+  {
+    if (text == toString(candidate))
+    {
+      type = candidate;
+      return true;
+    }
+  }
+  return false;
+}
+
+Status validate(const EmitterDef& def, int max_particles_cap)
+{
+  if (def.name.empty()) return Status::failure("name is empty: every body needs a unique name");
+  if (Status s = checkFinite("origin", def.origin); !s) return s;
+  if (Status s = checkMin("rate", def.rate, 0.0); !s) return s;
+  if (Status s = checkIntRange("burst_count", def.burst_count, 0, max_particles_cap); !s) return s;
+  if (def.rate == 0.0 && def.burst_count == 0)
+    return Status::failure("rate = 0 and burst_count = 0: the emitter would never emit; set one of them > 0");
+  if (Status s = checkFinite("speed", def.speed); !s) return s;
+  if (def.type != EmitterType::Fountain && def.type != EmitterType::Waterfall)
+  {
+    if (Status s = checkMin("speed", def.speed, 0.0); !s) return s;
+  }
+  if (Status s = checkMin("spread", def.spread, 0.0); !s) return s;
+  if (Status s = checkPositive("lifetime", def.lifetime); !s) return s;
+  if (Status s = checkPositive("particle_mass", def.particle_mass); !s) return s;
+  if (Status s = checkIntRange("max_particles", def.max_particles, 1, max_particles_cap); !s) return s;
+  return Status::success();
+}
+
+namespace
+{
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kDegree = kPi / 180.0;
+
+// The lecture's rand01(), from a seeded 64-bit Mersenne twister: the top 53 bits as a double in
+// [0, 1). Written out (not std::uniform_real_distribution) so that it is the same on every
+// standard library.
+double rand01(std::mt19937_64& rng) { return static_cast<double>(rng() >> 11) * 0x1.0p-53; }
+
+// Unit direction at azimuth alpha and altitude beta, z up.
+Eigen::Vector3d direction(double alpha, double beta)
+{
+  return {std::cos(alpha) * std::cos(beta), std::sin(alpha) * std::cos(beta), std::sin(beta)};
+}
+}  // namespace
+
+void EmitterBody::sample(const EmitterDef& def, std::mt19937_64& rng, Eigen::Vector3d& position,
+                         Eigen::Vector3d& velocity)
+{
+  switch (def.type)
+  {
+    // Fountain and waterfall: a random horizontal velocity in [-spread/2, spread/2)^2 and a fixed
+    // vertical one (10 and 0 m/s in the lecture).
+    case EmitterType::Fountain:
+    case EmitterType::Waterfall:
+    {
+      const double vx = def.spread * (rand01(rng) - 0.5);
+      const double vy = def.spread * (rand01(rng) - 0.5);
+      position = def.origin;
+      velocity = {vx, vy, def.speed};
+      return;
+    }
+    // Semi-sphere: azimuth in [-180, 180) degrees, altitude in [0, 90); start on the unit sphere.
+    case EmitterType::SemiSphere:
+    {
+      const double alpha = 360.0 * (rand01(rng) - 0.5) * kDegree;
+      const double beta = 90.0 * rand01(rng) * kDegree;
+      const Eigen::Vector3d dir = direction(alpha, beta);
+      position = def.origin + dir;
+      velocity = def.speed * dir;
+      return;
+    }
+    // Explosion: azimuth in [-180, 180), altitude in [-90, 90); start 0.01 m from the origin.
+    // The lecture's speed * position would scale the speed by 0.01, so the unit direction is used.
+    case EmitterType::Explosion:
+    {
+      const double alpha = 360.0 * (rand01(rng) - 0.5) * kDegree;
+      const double beta = 180.0 * (rand01(rng) - 0.5) * kDegree;
+      const Eigen::Vector3d dir = direction(alpha, beta);
+      position = def.origin + 0.01 * dir;
+      velocity = def.speed * dir;
+      return;
+    }
+  }
+}
+
+EmitterBody::EmitterBody(const EmitterDef& def) : Body(def.name), def_(def)
+{
+  particles_.resize(def_.max_particles, 0);
+  reset();
+}
+
+void EmitterBody::reset()
+{
+  rng_.seed(def_.seed);
+  particles_.live_count = 0;
+  pending_ = 0.0;
+  emitted_ = 0;
+  dropped_ = 0;
+  emit(def_.burst_count);
+}
+
+void EmitterBody::emit(int count)
+{
+  ParticlePool& p = particles_;
+  const double inverse_mass = 1.0 / def_.particle_mass;
+  for (int k = 0; k < count; ++k)
+  {
+    if (p.live_count == p.capacity())
+    {
+      dropped_ += count - k;
+      return;
+    }
+    const int i = p.live_count++;
+    Eigen::Vector3d x, v;
+    sample(def_, rng_, x, v);
+    p.position.col(i) = x;
+    p.previous_position.col(i) = x;
+    p.velocity.col(i) = v;
+    p.inverse_mass[i] = inverse_mass;
+    p.age[i] = 0.0;
+    ++emitted_;
+  }
+}
+
+void EmitterBody::step(double dt, const Environment& env)
+{
+  ParticlePool& p = particles_;
+
+  // 1. Exact ballistic motion under constant gravity (free particles need no integrator).
+  const Eigen::Vector3d half_g_dt2 = 0.5 * dt * dt * env.gravity;
+  const Eigen::Vector3d g_dt = dt * env.gravity;
+  for (int i = 0; i < p.live_count; ++i)
+  {
+    p.previous_position.col(i) = p.position.col(i);
+    p.position.col(i) += dt * p.velocity.col(i) + half_g_dt2;
+    p.velocity.col(i) += g_dt;
+    p.age[i] += dt;
+  }
+  resolveCollisions(env, p);
+
+  // 2. Recycle particles older than their lifetime: the last live particle takes the slot.
+  for (int i = 0; i < p.live_count;)
+  {
+    if (p.age[i] >= def_.lifetime)
+      p.copy(--p.live_count, i);
+    else
+      ++i;
+  }
+
+  // 3. Emit what the continuous rate owes for this step; new particles start at age 0.
+  pending_ += def_.rate * dt;
+  const int due = static_cast<int>(pending_);
+  pending_ -= due;
+  emit(due);
+}
+
+}  // namespace core
+}  // namespace particle_sim

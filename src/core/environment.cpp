@@ -1,0 +1,80 @@
+#include "particle_sim/core/environment.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "particle_sim/core/validation.h"
+
+namespace particle_sim
+{
+namespace core
+{
+Status validate(const ContactDef& def, const std::string& where)
+{
+  if (Status s = checkRange(where + ".restitution", def.restitution, 0.0, 1.0); !s) return s;
+  return checkMin(where + ".friction", def.friction, 0.0);
+}
+
+Status validate(const GroundPlaneDef& def)
+{
+  if (Status s = checkFinite("ground.height", def.height); !s) return s;
+  return validate(def.contact, "ground");
+}
+
+Status validate(const SphereColliderDef& def)
+{
+  const std::string where = "sphere '" + def.name + "'";
+  if (Status s = checkFinite(where + ".center", def.center); !s) return s;
+  if (Status s = checkPositive(where + ".radius", def.radius); !s) return s;
+  return validate(def.contact, where);
+}
+
+namespace
+{
+// Applies one contact: pushes the particle out along the outward unit normal n by (1 + e) times
+// the penetration depth, reflects the inward normal velocity with restitution e and removes
+// tangential velocity by Coulomb friction on the normal impulse.
+void respond(const ContactDef& contact, const Eigen::Vector3d& n, double depth, Eigen::Ref<Eigen::Vector3d> x,
+             Eigen::Ref<Eigen::Vector3d> v)
+{
+  const double e = contact.restitution;
+  x += (1.0 + e) * depth * n;
+
+  const double vn = v.dot(n);
+  if (vn >= 0.0) return;  // already leaving the surface
+  const Eigen::Vector3d v_tangent = v - vn * n;
+  const double normal_change = -(1.0 + e) * vn;  // > 0
+  const double tangent_speed = v_tangent.norm();
+  const double tangent_loss = std::min(tangent_speed, contact.friction * normal_change);
+  v = -e * vn * n;
+  if (tangent_speed > 0.0) v += v_tangent * (1.0 - tangent_loss / tangent_speed);
+}
+}  // namespace
+
+void resolveCollisions(const Environment& env, ParticlePool& pool)
+{
+  const int n = pool.size();
+  for (int i = 0; i < n; ++i)
+  {
+    if (pool.inverse_mass[i] == 0.0) continue;  // pinned particles follow their target
+    auto x = pool.position.col(i);
+    auto v = pool.velocity.col(i);
+
+    // Ground plane z = height, normal +z.
+    if (env.ground.enabled && x.z() < env.ground.height)
+      respond(env.ground.contact, Eigen::Vector3d::UnitZ(), env.ground.height - x.z(), x, v);
+
+    // Spheres: outward normal from the centre through the particle.
+    for (const SphereColliderDef& sphere : env.spheres)
+    {
+      const Eigen::Vector3d offset = x - sphere.center;
+      const double distance = offset.norm();
+      if (distance >= sphere.radius) continue;
+      const Eigen::Vector3d normal = distance > 1e-12 ? Eigen::Vector3d(offset / distance) : Eigen::Vector3d::UnitZ();
+      respond(sphere.contact, normal, sphere.radius - distance, x, v);
+    }
+  }
+}
+
+}  // namespace core
+}  // namespace particle_sim

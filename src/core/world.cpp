@@ -1,0 +1,99 @@
+#include "particle_sim/core/world.h"
+
+#include <algorithm>
+
+#include "particle_sim/core/validation.h"
+
+namespace particle_sim
+{
+namespace core
+{
+Status validate(const WorldDef& def)
+{
+  if (Status s = checkFinite("gravity", def.gravity); !s) return s;
+  if (Status s = checkPositive("dt", def.dt); !s) return s;
+  if (Status s = checkRange("dt", def.dt, 0.0, kMaxDt); !s) return s;
+  if (Status s = checkIntRange("max_particles_per_body", def.max_particles_per_body, 1, 100000000); !s) return s;
+  if (Status s = validate(def.ground); !s) return s;
+  for (const SphereColliderDef& sphere : def.spheres)
+  {
+    if (Status s = validate(sphere); !s) return s;
+  }
+  return Status::success();
+}
+
+World::World(const WorldDef& def) : def_(def)
+{
+  env_.gravity = def.gravity;
+  env_.ground = def.ground;
+  env_.spheres = def.spheres;
+}
+
+void World::step()
+{
+  for (const std::unique_ptr<Body>& body : bodies_) body->step(def_.dt, env_);
+  ++step_count_;
+}
+
+void World::reset()
+{
+  for (const std::unique_ptr<Body>& body : bodies_) body->reset();
+}
+
+Status World::addEmitter(const EmitterDef& def)
+{
+  if (Status s = validate(def, def_.max_particles_per_body); !s) return s;
+  return addBody(std::make_unique<EmitterBody>(def));
+}
+
+Status World::addBody(std::unique_ptr<Body> body)
+{
+  if (body->name().empty()) return Status::failure("name is empty: every body needs a unique name");
+  if (findBody(body->name()))
+    return Status::failure("name = '" + body->name() + "' is already taken: body names must be unique");
+  bodies_.push_back(std::move(body));
+  return Status::success();
+}
+
+Status World::removeBody(const std::string& name)
+{
+  auto it = std::find_if(bodies_.begin(), bodies_.end(), [&](const auto& b) { return b->name() == name; });
+  if (it == bodies_.end()) return Status::failure("name = '" + name + "': no body has that name");
+  bodies_.erase(it);
+  return Status::success();
+}
+
+const Body* World::findBody(const std::string& name) const
+{
+  for (const std::unique_ptr<Body>& body : bodies_)
+  {
+    if (body->name() == name) return body.get();
+  }
+  return nullptr;
+}
+
+Body* World::findBody(const std::string& name)
+{
+  return const_cast<Body*>(static_cast<const World*>(this)->findBody(name));
+}
+
+int World::particleCount() const
+{
+  int count = 0;
+  for (const std::unique_ptr<Body>& body : bodies_) count += body->particles().size();
+  return count;
+}
+
+std::uint64_t deriveSeed(std::uint64_t world_seed, const std::string& body_name)
+{
+  std::uint64_t hash = 1469598103934665603ULL;  // FNV-1a offset basis
+  for (unsigned char c : body_name)
+  {
+    hash ^= c;
+    hash *= 1099511628211ULL;  // FNV prime
+  }
+  return hash ^ world_seed;
+}
+
+}  // namespace core
+}  // namespace particle_sim

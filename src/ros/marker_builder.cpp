@@ -1,0 +1,99 @@
+#include "particle_sim/ros/marker_builder.h"
+
+#include <algorithm>
+
+#include "particle_sim/core/emitter.h"
+
+namespace particle_sim
+{
+namespace ros_interface
+{
+namespace
+{
+visualization_msgs::Marker makeMarker(const std::string& ns, int id, const ros::Time& stamp, const MarkerStyle& style)
+{
+  visualization_msgs::Marker marker;
+  marker.header.frame_id = style.frame_id;
+  marker.header.stamp = stamp;
+  marker.ns = ns;
+  marker.id = id;
+  marker.pose.orientation.w = 1.0;
+  marker.scale.x = marker.scale.y = marker.scale.z = 1.0;
+  marker.color.a = 1.0;
+  return marker;
+}
+
+// Colour of an emitter particle by its age fraction s in [0, 1]: pale yellow when new, through
+// orange, to dark red when about to be recycled.
+std_msgs::ColorRGBA ageColor(double s)
+{
+  s = std::clamp(s, 0.0, 1.0);
+  std_msgs::ColorRGBA c;
+  c.r = static_cast<float>(1.0 - 0.4 * s);
+  c.g = static_cast<float>(0.95 * (1.0 - s));
+  c.b = static_cast<float>(0.6 * (1.0 - s) * (1.0 - s));
+  c.a = 1.0f;
+  return c;
+}
+
+void addEmitter(const core::EmitterBody& emitter, const ros::Time& stamp, const MarkerStyle& style,
+                visualization_msgs::MarkerArray& out)
+{
+  const core::ParticlePool& p = emitter.particles();
+  visualization_msgs::Marker marker = makeMarker(emitter.name(), kParticlesMarkerId, stamp, style);
+  marker.type = visualization_msgs::Marker::POINTS;
+  marker.scale.x = marker.scale.y = style.particle_size;
+  marker.points.reserve(p.size());
+  marker.colors.reserve(p.size());
+  const double lifetime = emitter.definition().lifetime;
+  for (int i = 0; i < p.size(); ++i)
+  {
+    const auto x = p.position.col(i);
+    if (!x.allFinite()) continue;  // never publish NaN; such a body is reported elsewhere
+    geometry_msgs::Point point;
+    point.x = x.x();
+    point.y = x.y();
+    point.z = x.z();
+    marker.points.push_back(point);
+    marker.colors.push_back(ageColor(p.age[i] / lifetime));
+  }
+  if (marker.points.empty())
+  {
+    marker.action = visualization_msgs::Marker::DELETE;
+    marker.colors.clear();
+  }
+  else
+  {
+    marker.action = visualization_msgs::Marker::ADD;
+  }
+  out.markers.push_back(std::move(marker));
+}
+}  // namespace
+
+visualization_msgs::MarkerArray buildMarkers(const core::World& world, const ros::Time& stamp,
+                                              const MarkerStyle& style, bool delete_all,
+                                              const std::vector<std::string>& removed)
+{
+  visualization_msgs::MarkerArray out;
+  if (delete_all)
+  {
+    visualization_msgs::Marker clear = makeMarker("", 0, stamp, style);
+    clear.action = visualization_msgs::Marker::DELETEALL;
+    out.markers.push_back(clear);
+  }
+  for (const std::string& name : removed)
+  {
+    visualization_msgs::Marker gone = makeMarker(name, kParticlesMarkerId, stamp, style);
+    gone.action = visualization_msgs::Marker::DELETE;
+    out.markers.push_back(gone);
+  }
+  for (const auto& body : world.bodies())
+  {
+    if (body->kind() == core::BodyKind::Emitter)
+      addEmitter(static_cast<const core::EmitterBody&>(*body), stamp, style, out);
+  }
+  return out;
+}
+
+}  // namespace ros_interface
+}  // namespace particle_sim

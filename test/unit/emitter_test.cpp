@@ -1,0 +1,219 @@
+// The lecture's four emitters: their initial positions and velocities obey the formulas, mapped
+// to z up; particles are recycled at their lifetime; the pool never grows; seeds reproduce.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "particle_sim/core/emitter.h"
+
+using particle_sim::core::EmitterBody;
+using particle_sim::core::EmitterDef;
+using particle_sim::core::EmitterType;
+using particle_sim::core::Environment;
+
+namespace
+{
+constexpr int kSamples = 20000;
+
+EmitterDef makeDef(EmitterType type)
+{
+  EmitterDef def;
+  def.name = "e";
+  def.type = type;
+  def.origin = {1.0, -2.0, 3.0};
+  def.speed = 7.0;
+  def.spread = 1.0;
+  return def;
+}
+}  // namespace
+
+TEST(EmitterFormulas, FountainStartsAtOriginWithBoundedHorizontalAndFixedVerticalVelocity)
+{
+  const EmitterDef def = makeDef(EmitterType::Fountain);
+  std::mt19937_64 rng(5);
+  double min_vx = 1e9, max_vx = -1e9, mean_vx = 0.0;
+  for (int i = 0; i < kSamples; ++i)
+  {
+    Eigen::Vector3d x, v;
+    EmitterBody::sample(def, rng, x, v);
+    EXPECT_EQ(x, def.origin);
+    EXPECT_EQ(v.z(), def.speed);
+    // rand01() - 0.5 lies in [-0.5, 0.5)
+    ASSERT_GE(v.x(), -0.5 * def.spread);
+    ASSERT_LT(v.x(), 0.5 * def.spread);
+    ASSERT_GE(v.y(), -0.5 * def.spread);
+    ASSERT_LT(v.y(), 0.5 * def.spread);
+    min_vx = std::min(min_vx, v.x());
+    max_vx = std::max(max_vx, v.x());
+    mean_vx += v.x() / kSamples;
+  }
+  // Uniform over the whole interval, centred.
+  EXPECT_LT(min_vx, -0.49);
+  EXPECT_GT(max_vx, 0.49);
+  EXPECT_NEAR(mean_vx, 0.0, 0.02);
+}
+
+TEST(EmitterFormulas, WaterfallDefaultsPourWithNoVerticalSpeed)
+{
+  EmitterDef def = makeDef(EmitterType::Waterfall);
+  def.speed = 0.0;
+  std::mt19937_64 rng(6);
+  for (int i = 0; i < 1000; ++i)
+  {
+    Eigen::Vector3d x, v;
+    EmitterBody::sample(def, rng, x, v);
+    EXPECT_EQ(x, def.origin);
+    EXPECT_EQ(v.z(), 0.0);
+    EXPECT_LE(std::abs(v.x()), 0.5);
+    EXPECT_LE(std::abs(v.y()), 0.5);
+  }
+}
+
+TEST(EmitterFormulas, SemiSphereStartsOnUnitUpperHemisphereMovingOutwardAtSpeed)
+{
+  const EmitterDef def = makeDef(EmitterType::SemiSphere);
+  std::mt19937_64 rng(7);
+  int negative_x = 0, negative_y = 0;
+  for (int i = 0; i < kSamples; ++i)
+  {
+    Eigen::Vector3d x, v;
+    EmitterBody::sample(def, rng, x, v);
+    const Eigen::Vector3d offset = x - def.origin;
+    ASSERT_NEAR(offset.norm(), 1.0, 1e-12);  // unit radius
+    ASSERT_GE(offset.z(), 0.0);              // altitude in [0, 90) degrees: upper half
+    ASSERT_NEAR(v.norm(), def.speed, 1e-12);
+    ASSERT_NEAR(v.normalized().dot(offset), 1.0, 1e-12);  // along the outward normal
+    negative_x += offset.x() < 0;
+    negative_y += offset.y() < 0;
+  }
+  // Azimuth covers the full circle.
+  EXPECT_NEAR(negative_x / double(kSamples), 0.5, 0.03);
+  EXPECT_NEAR(negative_y / double(kSamples), 0.5, 0.03);
+}
+
+TEST(EmitterFormulas, ExplosionStartsOnCentimetreSphereInEveryDirectionAtSpeed)
+{
+  const EmitterDef def = makeDef(EmitterType::Explosion);
+  std::mt19937_64 rng(8);
+  int below = 0;
+  for (int i = 0; i < kSamples; ++i)
+  {
+    Eigen::Vector3d x, v;
+    EmitterBody::sample(def, rng, x, v);
+    const Eigen::Vector3d offset = x - def.origin;
+    ASSERT_NEAR(offset.norm(), 0.01, 1e-14);
+    ASSERT_NEAR(v.norm(), def.speed, 1e-12);  // speed * unit direction, not speed * position
+    ASSERT_NEAR(v.normalized().dot(offset.normalized()), 1.0, 1e-9);
+    below += offset.z() < 0;
+  }
+  // Altitude in [-90, 90): both hemispheres, evenly.
+  EXPECT_NEAR(below / double(kSamples), 0.5, 0.03);
+}
+
+TEST(EmitterBody, SameSeedGivesIdenticalParticlesAndAnotherSeedDoesNot)
+{
+  EmitterDef def = makeDef(EmitterType::SemiSphere);
+  def.rate = 1000.0;
+  const Environment env;
+  EmitterBody a(def), b(def);
+  def.seed = 99;
+  EmitterBody c(def);
+  for (int k = 0; k < 500; ++k)
+  {
+    a.step(0.001, env);
+    b.step(0.001, env);
+    c.step(0.001, env);
+  }
+  ASSERT_EQ(a.particles().size(), b.particles().size());
+  const int n = a.particles().size();
+  EXPECT_GT(n, 0);
+  EXPECT_TRUE(a.particles().position.leftCols(n) == b.particles().position.leftCols(n));
+  EXPECT_TRUE(a.particles().velocity.leftCols(n) == b.particles().velocity.leftCols(n));
+  EXPECT_FALSE(a.particles().position.leftCols(n) == c.particles().position.leftCols(n));
+}
+
+TEST(EmitterBody, RateEmitsTheExpectedCountAndParticlesAreRecycledAtTheirLifetime)
+{
+  EmitterDef def = makeDef(EmitterType::Fountain);
+  def.rate = 200.0;      // particles/s
+  def.lifetime = 0.5;    // s
+  def.max_particles = 1000;
+  Environment env;
+  env.ground.enabled = false;
+  EmitterBody emitter(def);
+  const double dt = 0.001;
+  for (int k = 0; k < 2000; ++k)
+  {
+    emitter.step(dt, env);
+    for (int i = 0; i < emitter.particles().size(); ++i) ASSERT_LT(emitter.particles().age[i], def.lifetime);
+  }
+  // After 2 s: 400 emitted, and the live ones are those of the last 0.5 s.
+  EXPECT_NEAR(static_cast<double>(emitter.emittedCount()), 400.0, 1.0);
+  EXPECT_NEAR(emitter.particles().size(), def.rate * def.lifetime, 1.0);
+  EXPECT_EQ(emitter.droppedCount(), 0);
+}
+
+TEST(EmitterBody, FullPoolDropsEmissionsAndNeverGrows)
+{
+  EmitterDef def = makeDef(EmitterType::Fountain);
+  def.rate = 1000.0;
+  def.lifetime = 10.0;
+  def.max_particles = 50;
+  EmitterBody emitter(def);
+  const Environment env;
+  for (int k = 0; k < 200; ++k) emitter.step(0.001, env);
+  EXPECT_EQ(emitter.particles().size(), 50);
+  EXPECT_EQ(emitter.particles().capacity(), 50);
+  EXPECT_EQ(emitter.emittedCount() + emitter.droppedCount(), 200);
+}
+
+TEST(EmitterBody, BurstEmitsOnceAndResetRepeatsItExactly)
+{
+  EmitterDef def = makeDef(EmitterType::Explosion);
+  def.rate = 0.0;
+  def.burst_count = 300;
+  def.max_particles = 300;
+  EmitterBody emitter(def);
+  EXPECT_EQ(emitter.particles().size(), 300);
+  const Eigen::Matrix3Xd first = emitter.particles().position.leftCols(300);
+  const Environment env;
+  for (int k = 0; k < 100; ++k) emitter.step(0.001, env);
+  EXPECT_EQ(emitter.emittedCount(), 300);
+  emitter.reset();
+  EXPECT_TRUE(emitter.particles().position.leftCols(300) == first);
+}
+
+TEST(EmitterValidation, RefusesEachBadFieldNamingIt)
+{
+  struct Case
+  {
+    const char* field;
+    void (*spoil)(EmitterDef&);
+  };
+  const Case cases[] = {
+      {"name", [](EmitterDef& d) { d.name.clear(); }},
+      {"origin", [](EmitterDef& d) { d.origin.x() = std::nan(""); }},
+      {"rate", [](EmitterDef& d) { d.rate = -1.0; }},
+      {"burst_count", [](EmitterDef& d) { d.burst_count = -5; }},
+      {"lifetime", [](EmitterDef& d) { d.lifetime = 0.0; }},
+      {"particle_mass", [](EmitterDef& d) { d.particle_mass = -0.1; }},
+      {"max_particles", [](EmitterDef& d) { d.max_particles = 0; }},
+      {"speed", [](EmitterDef& d) { d.speed = INFINITY; }},
+  };
+  for (const Case& c : cases)
+  {
+    EmitterDef def = makeDef(EmitterType::Fountain);
+    ASSERT_TRUE(validate(def).ok);
+    c.spoil(def);
+    const auto status = validate(def);
+    EXPECT_FALSE(status.ok) << c.field;
+    EXPECT_NE(status.message.find(c.field), std::string::npos) << status.message;
+  }
+  EmitterDef def = makeDef(EmitterType::Fountain);
+  def.max_particles = 5000;
+  const auto status = validate(def, 1000);
+  EXPECT_FALSE(status.ok);
+  EXPECT_NE(status.message.find("max_particles = 5000"), std::string::npos) << status.message;
+  EXPECT_NE(status.message.find("1000"), std::string::npos) << status.message;
+}

@@ -1,0 +1,103 @@
+// Markers built from the world pass rviz's own validity rules (rviz marker_utils.cpp
+// checkMarkerMsg): unit quaternion, non-zero scale, alpha > 0, one colour per point, finite
+// values, non-empty point lists; DELETEALL first and only when asked; DELETE for removed bodies.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "particle_sim/ros/marker_builder.h"
+
+using namespace particle_sim;
+using visualization_msgs::Marker;
+
+namespace
+{
+void expectRvizValid(const Marker& m)
+{
+  SCOPED_TRACE("marker " + m.ns + "/" + std::to_string(m.id));
+  EXPECT_FALSE(m.header.frame_id.empty());
+  if (m.action != Marker::ADD) return;
+  const auto& q = m.pose.orientation;
+  EXPECT_NEAR(q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w, 1.0, 1e-9);
+  EXPECT_TRUE(std::isfinite(m.scale.x) && std::isfinite(m.scale.y) && std::isfinite(m.scale.z));
+  EXPECT_GT(m.color.a, 0.0f);
+  if (m.type == Marker::POINTS)
+  {
+    EXPECT_GT(m.scale.x, 0.0);
+    EXPECT_GT(m.scale.y, 0.0);
+  }
+  EXPECT_FALSE(m.points.empty());
+  EXPECT_TRUE(m.colors.empty() || m.colors.size() == m.points.size());
+  for (const auto& p : m.points) EXPECT_TRUE(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z));
+  for (const auto& c : m.colors) EXPECT_GT(c.a, 0.0f);
+}
+
+core::World makeWorld()
+{
+  core::World world{core::WorldDef{}};
+  core::EmitterDef e;
+  e.name = "fountain";
+  e.rate = 500.0;
+  EXPECT_TRUE(world.addEmitter(e).ok);
+  e.name = "idle";  // emits nothing for a long time: an empty pool
+  e.rate = 0.001;
+  EXPECT_TRUE(world.addEmitter(e).ok);
+  for (int k = 0; k < 200; ++k) world.step();
+  return world;
+}
+}  // namespace
+
+TEST(MarkerBuilder, EveryMarkerPassesRvizChecksWithOneNamespacePerBody)
+{
+  const core::World world = makeWorld();
+  ros_interface::MarkerStyle style;
+  const auto array = ros_interface::buildMarkers(world, ros::Time(1.0), style, false, {});
+  ASSERT_EQ(array.markers.size(), 2u);
+  for (const Marker& m : array.markers) expectRvizValid(m);
+
+  const Marker& fountain = array.markers[0];
+  EXPECT_EQ(fountain.ns, "fountain");
+  EXPECT_EQ(fountain.action, Marker::ADD);
+  EXPECT_EQ(fountain.type, Marker::POINTS);
+  EXPECT_EQ(static_cast<int>(fountain.points.size()), world.findBody("fountain")->particles().size());
+  EXPECT_EQ(fountain.points[0].x, world.findBody("fountain")->particles().position(0, 0));
+  // The empty emitter sends DELETE rather than an empty POINTS list.
+  EXPECT_EQ(array.markers[1].ns, "idle");
+  EXPECT_EQ(array.markers[1].action, Marker::DELETE);
+}
+
+TEST(MarkerBuilder, DeleteAllComesFirstOnlyWhenAskedAndRemovedBodiesGetDelete)
+{
+  const core::World world = makeWorld();
+  const auto array = ros_interface::buildMarkers(world, ros::Time(2.0), {}, true, {"gone"});
+  ASSERT_GE(array.markers.size(), 3u);
+  EXPECT_EQ(array.markers[0].action, Marker::DELETEALL);
+  EXPECT_EQ(array.markers[0].ns, "");
+  EXPECT_EQ(array.markers[1].action, Marker::DELETE);
+  EXPECT_EQ(array.markers[1].ns, "gone");
+  for (std::size_t i = 1; i < array.markers.size(); ++i) EXPECT_NE(array.markers[i].action, Marker::DELETEALL);
+  for (const Marker& m : array.markers) EXPECT_EQ(m.header.stamp, ros::Time(2.0));
+}
+
+TEST(MarkerBuilder, ParticlesAreColouredByAge)
+{
+  core::World world{core::WorldDef{}};
+  core::EmitterDef e;
+  e.name = "f";
+  e.rate = 100.0;
+  e.lifetime = 1.0;
+  ASSERT_TRUE(world.addEmitter(e).ok);
+  for (int k = 0; k < 900; ++k) world.step();
+  const auto array = ros_interface::buildMarkers(world, ros::Time(1.0), {}, false, {});
+  const auto& p = world.findBody("f")->particles();
+  const Marker& m = array.markers[0];
+  // Older particles are less green.
+  int oldest = 0, youngest = 0;
+  for (int i = 0; i < p.size(); ++i)
+  {
+    if (p.age[i] > p.age[oldest]) oldest = i;
+    if (p.age[i] < p.age[youngest]) youngest = i;
+  }
+  EXPECT_LT(m.colors[oldest].g, m.colors[youngest].g);
+}
