@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "particle_sim/core/validation.h"
+#include "particle_sim/core/world.h"
 
 namespace particle_sim
 {
@@ -54,7 +55,7 @@ bool parseEmitterType(const std::string& text, EmitterType& type)
 
 Status validate(const EmitterDef& def, int max_particles_cap)
 {
-  if (def.name.empty()) return Status::failure("name is empty: every body needs a unique name");
+  if (Status s = validateBodyName(def.name); !s) return s;
   if (Status s = checkFinite("origin", def.origin); !s) return s;
   if (Status s = checkMin("rate", def.rate, 0.0); !s) return s;
   if (Status s = checkIntRange("burst_count", def.burst_count, 0, max_particles_cap); !s) return s;

@@ -1,6 +1,7 @@
 #include "particle_sim/core/world.h"
 
 #include <algorithm>
+#include <cctype>
 
 #include "particle_sim/core/validation.h"
 
@@ -18,6 +19,19 @@ Status validate(const WorldDef& def)
   for (const SphereColliderDef& sphere : def.spheres)
   {
     if (Status s = validate(sphere); !s) return s;
+  }
+  return Status::success();
+}
+
+Status validateBodyName(const std::string& name)
+{
+  if (name.empty()) return Status::failure("name is empty: every body needs a unique name");
+  if (name[0] == '_') return Status::failure("name = '" + name + "' starts with '_', which is reserved");
+  for (char c : name)
+  {
+    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' || c == '/'))
+      return Status::failure("name = '" + name + "' has the character '" + std::string(1, c) +
+                             "'; allowed: letters, digits, '_', '-', '/'");
   }
   return Status::success();
 }
@@ -48,7 +62,7 @@ Status World::addEmitter(const EmitterDef& def)
 
 Status World::addBody(std::unique_ptr<Body> body)
 {
-  if (body->name().empty()) return Status::failure("name is empty: every body needs a unique name");
+  if (Status s = validateBodyName(body->name()); !s) return s;
   if (findBody(body->name()))
     return Status::failure("name = '" + body->name() + "' is already taken: body names must be unique");
   bodies_.push_back(std::move(body));

@@ -87,6 +87,22 @@ visualization_msgs::MarkerArray buildMarkers(const core::World& world, const ros
     gone.action = visualization_msgs::Marker::DELETE;
     out.markers.push_back(gone);
   }
+  // Sphere colliders, drawn translucent so that particles behind them stay visible.
+  const auto& spheres = world.environment().spheres;
+  for (std::size_t i = 0; i < spheres.size(); ++i)
+  {
+    visualization_msgs::Marker sphere = makeMarker(kCollidersNamespace, static_cast<int>(i), stamp, style);
+    sphere.type = visualization_msgs::Marker::SPHERE;
+    sphere.action = visualization_msgs::Marker::ADD;
+    sphere.pose.position.x = spheres[i].center.x();
+    sphere.pose.position.y = spheres[i].center.y();
+    sphere.pose.position.z = spheres[i].center.z();
+    sphere.scale.x = sphere.scale.y = sphere.scale.z = 2.0 * spheres[i].radius;
+    sphere.color.r = sphere.color.g = 0.55f;
+    sphere.color.b = 0.65f;
+    sphere.color.a = 0.6f;
+    out.markers.push_back(sphere);
+  }
   for (const auto& body : world.bodies())
   {
     if (body->kind() == core::BodyKind::Emitter)

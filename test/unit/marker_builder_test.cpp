@@ -18,6 +18,12 @@ void expectRvizValid(const Marker& m)
   SCOPED_TRACE("marker " + m.ns + "/" + std::to_string(m.id));
   EXPECT_FALSE(m.header.frame_id.empty());
   if (m.action != Marker::ADD) return;
+  if (m.type == Marker::SPHERE)
+  {
+    EXPECT_GT(m.scale.x, 0.0);
+    EXPECT_GT(m.color.a, 0.0f);
+    return;
+  }
   const auto& q = m.pose.orientation;
   EXPECT_NEAR(q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w, 1.0, 1e-9);
   EXPECT_TRUE(std::isfinite(m.scale.x) && std::isfinite(m.scale.y) && std::isfinite(m.scale.z));
@@ -35,7 +41,12 @@ void expectRvizValid(const Marker& m)
 
 core::World makeWorld()
 {
-  core::World world{core::WorldDef{}};
+  core::WorldDef def;
+  core::SphereColliderDef ball;
+  ball.center = {1, 2, 3};
+  ball.radius = 0.25;
+  def.spheres.push_back(ball);
+  core::World world{def};
   core::EmitterDef e;
   e.name = "fountain";
   e.rate = 500.0;
@@ -53,18 +64,24 @@ TEST(MarkerBuilder, EveryMarkerPassesRvizChecksWithOneNamespacePerBody)
   const core::World world = makeWorld();
   ros_interface::MarkerStyle style;
   const auto array = ros_interface::buildMarkers(world, ros::Time(1.0), style, false, {});
-  ASSERT_EQ(array.markers.size(), 2u);
+  ASSERT_EQ(array.markers.size(), 3u);
   for (const Marker& m : array.markers) expectRvizValid(m);
 
-  const Marker& fountain = array.markers[0];
+  const Marker& ball = array.markers[0];
+  EXPECT_EQ(ball.ns, ros_interface::kCollidersNamespace);
+  EXPECT_EQ(ball.type, Marker::SPHERE);
+  EXPECT_EQ(ball.pose.position.z, 3.0);
+  EXPECT_EQ(ball.scale.x, 0.5);  // the diameter
+
+  const Marker& fountain = array.markers[1];
   EXPECT_EQ(fountain.ns, "fountain");
   EXPECT_EQ(fountain.action, Marker::ADD);
   EXPECT_EQ(fountain.type, Marker::POINTS);
   EXPECT_EQ(static_cast<int>(fountain.points.size()), world.findBody("fountain")->particles().size());
   EXPECT_EQ(fountain.points[0].x, world.findBody("fountain")->particles().position(0, 0));
   // The empty emitter sends DELETE rather than an empty POINTS list.
-  EXPECT_EQ(array.markers[1].ns, "idle");
-  EXPECT_EQ(array.markers[1].action, Marker::DELETE);
+  EXPECT_EQ(array.markers[2].ns, "idle");
+  EXPECT_EQ(array.markers[2].action, Marker::DELETE);
 }
 
 TEST(MarkerBuilder, DeleteAllComesFirstOnlyWhenAskedAndRemovedBodiesGetDelete)

@@ -201,6 +201,10 @@ TEST(World, RefusesDuplicateNamesAndRemovesBodies)
   const Status dup = world.addEmitter(e);
   EXPECT_FALSE(dup.ok);
   EXPECT_NE(dup.message.find("'a'"), std::string::npos);
+  e.name = "_hidden";
+  EXPECT_NE(world.addEmitter(e).message.find("reserved"), std::string::npos);
+  e.name = "two words";
+  EXPECT_NE(world.addEmitter(e).message.find("character ' '"), std::string::npos);
   EXPECT_FALSE(world.removeBody("b").ok);
   EXPECT_TRUE(world.removeBody("a").ok);
   EXPECT_EQ(world.findBody("a"), nullptr);

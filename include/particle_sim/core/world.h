@@ -30,6 +30,9 @@ constexpr double kMaxDt = 0.1;
 
 Status validate(const WorldDef& def);
 
+/// Body names: non-empty, of letters, digits, '_', '-' and '/', not starting with '_' (reserved).
+Status validateBodyName(const std::string& name);
+
 /// A deterministic per-body seed from the world seed and the body name (FNV-1a hash), for
 /// bodies that do not set their own seed.
 std::uint64_t deriveSeed(std::uint64_t world_seed, const std::string& body_name);

@@ -23,7 +23,7 @@ namespace ros_interface
 struct NodeSettings
 {
   std::string scene_path;          ///< ~scene, YAML scene file; empty = an empty world
-  double rate = 30.0;              ///< ~rate [Hz] publish rate (and physics ticks)
+  double rate = 50.0;              ///< ~rate [Hz] publish rate (and physics ticks)
   double dt = 0.0;                 ///< ~dt [s] physics step; 0 = the scene's world.dt
   double real_time_factor = 1.0;   ///< ~real_time_factor [-]; 0 = as fast as possible
   bool paused = false;             ///< ~paused: start paused
