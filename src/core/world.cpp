@@ -15,6 +15,7 @@ Status validate(const WorldDef& def)
   if (Status s = checkPositive("dt", def.dt); !s) return s;
   if (Status s = checkRange("dt", def.dt, 0.0, kMaxDt); !s) return s;
   if (Status s = checkIntRange("max_particles_per_body", def.max_particles_per_body, 1, 100000000); !s) return s;
+  if (Status s = validate(def.integrator); !s) return s;
   if (Status s = validate(def.ground); !s) return s;
   for (const SphereColliderDef& sphere : def.spheres)
   {
@@ -60,6 +61,18 @@ Status World::addEmitter(const EmitterDef& def)
   return addBody(std::make_unique<EmitterBody>(def));
 }
 
+Status World::addSpringNetwork(const SpringNetworkDef& def)
+{
+  if (Status s = validate(def, def_.max_particles_per_body); !s) return s;
+  return addBody(std::make_unique<SpringNetworkBody>(def));
+}
+
+Status World::addRope(const RopeDef& def)
+{
+  if (Status s = validate(def, def_.max_particles_per_body); !s) return s;
+  return addSpringNetwork(buildRope(def));
+}
+
 Status World::addBody(std::unique_ptr<Body> body)
 {
   if (Status s = validateBodyName(body->name()); !s) return s;
@@ -89,6 +102,17 @@ const Body* World::findBody(const std::string& name) const
 Body* World::findBody(const std::string& name)
 {
   return const_cast<Body*>(static_cast<const World*>(this)->findBody(name));
+}
+
+SpringNetworkBody* World::findSpringBody(const std::string& name)
+{
+  Body* body = findBody(name);
+  return body && body->kind() == BodyKind::SpringNetwork ? static_cast<SpringNetworkBody*>(body) : nullptr;
+}
+
+const SpringNetworkBody* World::findSpringBody(const std::string& name) const
+{
+  return const_cast<World*>(this)->findSpringBody(name);
 }
 
 int World::particleCount() const

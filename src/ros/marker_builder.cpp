@@ -3,6 +3,7 @@
 #include <algorithm>
 
 #include "particle_sim/core/emitter.h"
+#include "particle_sim/core/spring_network.h"
 
 namespace particle_sim
 {
@@ -36,6 +37,78 @@ std_msgs::ColorRGBA ageColor(double s)
   return c;
 }
 
+std_msgs::ColorRGBA rgba(float r, float g, float b, float a = 1.0f)
+{
+  std_msgs::ColorRGBA c;
+  c.r = r;
+  c.g = g;
+  c.b = b;
+  c.a = a;
+  return c;
+}
+
+geometry_msgs::Point toPoint(const Eigen::Ref<const Eigen::Vector3d>& x)
+{
+  geometry_msgs::Point point;
+  point.x = x.x();
+  point.y = x.y();
+  point.z = x.z();
+  return point;
+}
+
+// Turns `marker` into a DELETE when it has no points (rviz refuses empty lists).
+void deleteIfEmpty(visualization_msgs::Marker& marker)
+{
+  marker.action = marker.points.empty() ? visualization_msgs::Marker::DELETE : visualization_msgs::Marker::ADD;
+}
+
+void addSpringBody(const core::SpringNetworkBody& body, const ros::Time& stamp, const MarkerStyle& style,
+                   visualization_msgs::MarkerArray& out)
+{
+  const core::ParticlePool& p = body.particles();
+  const int n = p.size();
+
+  // Free particles and pinned ones, each a SPHERE_LIST; pinned ones larger and red.
+  visualization_msgs::Marker free = makeMarker(body.name(), kParticlesMarkerId, stamp, style);
+  free.type = visualization_msgs::Marker::SPHERE_LIST;
+  free.scale.x = free.scale.y = free.scale.z = style.particle_size;
+  free.color = body.frozen() ? rgba(0.5f, 0.5f, 0.5f) : rgba(0.3f, 0.7f, 1.0f);
+  visualization_msgs::Marker pins = makeMarker(body.name(), kPinsMarkerId, stamp, style);
+  pins.type = visualization_msgs::Marker::SPHERE_LIST;
+  pins.scale.x = pins.scale.y = pins.scale.z = 2.0 * style.particle_size;
+  pins.color = rgba(1.0f, 0.25f, 0.2f);
+  free.points.reserve(n);
+  for (int i = 0; i < n; ++i) (body.isPinned(i) ? pins : free).points.push_back(toPoint(p.position.col(i)));
+  deleteIfEmpty(free);
+  deleteIfEmpty(pins);
+
+  // The rope as one line through its particles in order; a network as one segment per spring.
+  visualization_msgs::Marker lines = makeMarker(body.name(), kLinesMarkerId, stamp, style);
+  lines.scale.x = style.line_width;
+  lines.color = body.frozen() ? rgba(0.5f, 0.5f, 0.5f) : rgba(0.95f, 0.85f, 0.6f);
+  if (body.shape() == core::NetworkShape::Rope)
+  {
+    lines.type = visualization_msgs::Marker::LINE_STRIP;
+    lines.points.reserve(n);
+    for (int i = 0; i < n; ++i) lines.points.push_back(toPoint(p.position.col(i)));
+  }
+  else
+  {
+    lines.type = visualization_msgs::Marker::LINE_LIST;
+    lines.points.reserve(2 * body.springs().size());
+    for (const core::Spring& spring : body.springs())
+    {
+      lines.points.push_back(toPoint(p.position.col(spring.i)));
+      lines.points.push_back(toPoint(p.position.col(spring.j)));
+    }
+  }
+  deleteIfEmpty(lines);
+
+  out.markers.push_back(std::move(free));
+  out.markers.push_back(std::move(lines));
+  out.markers.push_back(std::move(pins));
+}
+
 void addEmitter(const core::EmitterBody& emitter, const ros::Time& stamp, const MarkerStyle& style,
                 visualization_msgs::MarkerArray& out)
 {
@@ -50,11 +123,7 @@ void addEmitter(const core::EmitterBody& emitter, const ros::Time& stamp, const 
   {
     const auto x = p.position.col(i);
     if (!x.allFinite()) continue;  // never publish NaN; such a body is reported elsewhere
-    geometry_msgs::Point point;
-    point.x = x.x();
-    point.y = x.y();
-    point.z = x.z();
-    marker.points.push_back(point);
+    marker.points.push_back(toPoint(x));
     marker.colors.push_back(ageColor(p.age[i] / lifetime));
   }
   if (marker.points.empty())
@@ -83,9 +152,12 @@ visualization_msgs::MarkerArray buildMarkers(const core::World& world, const ros
   }
   for (const std::string& name : removed)
   {
-    visualization_msgs::Marker gone = makeMarker(name, kParticlesMarkerId, stamp, style);
-    gone.action = visualization_msgs::Marker::DELETE;
-    out.markers.push_back(gone);
+    for (int id = 0; id < kMarkerIdsPerBody; ++id)
+    {
+      visualization_msgs::Marker gone = makeMarker(name, id, stamp, style);
+      gone.action = visualization_msgs::Marker::DELETE;
+      out.markers.push_back(gone);
+    }
   }
   // Sphere colliders, drawn translucent so that particles behind them stay visible.
   const auto& spheres = world.environment().spheres;
@@ -107,6 +179,8 @@ visualization_msgs::MarkerArray buildMarkers(const core::World& world, const ros
   {
     if (body->kind() == core::BodyKind::Emitter)
       addEmitter(static_cast<const core::EmitterBody&>(*body), stamp, style, out);
+    else if (body->kind() == core::BodyKind::SpringNetwork)
+      addSpringBody(static_cast<const core::SpringNetworkBody&>(*body), stamp, style, out);
   }
   return out;
 }

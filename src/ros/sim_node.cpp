@@ -3,6 +3,8 @@
 #include <geometry_msgs/TransformStamped.h>
 #include <rosgraph_msgs/Clock.h>
 
+#include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 #include <thread>
@@ -96,6 +98,11 @@ bool SimNode::initialize()
   services_.push_back(private_node_.advertiseService(names::kPausePhysics, &SimNode::pausePhysics, this));
   services_.push_back(private_node_.advertiseService(names::kUnpausePhysics, &SimNode::unpausePhysics, this));
   services_.push_back(private_node_.advertiseService(names::kStep, &SimNode::step, this));
+  services_.push_back(private_node_.advertiseService(names::kSpawnRope, &SimNode::spawnRope, this));
+  services_.push_back(private_node_.advertiseService(names::kPinParticle, &SimNode::pinParticle, this));
+  services_.push_back(private_node_.advertiseService(names::kUnpinParticle, &SimNode::unpinParticle, this));
+  services_.push_back(
+      private_node_.advertiseService(names::kSetSpringConstants, &SimNode::setSpringConstants, this));
 
   ROS_INFO_NAMED("sim",
                  "particle_sim: scene '%s', %zu bodies, dt = %g s, %d substeps per tick at %g Hz, real-time factor %g%s, "
@@ -144,10 +151,74 @@ void SimNode::tick()
 
 void SimNode::stepPhysics(std::uint64_t steps)
 {
+  updateFramePins();
   const auto start = SteadyClock::now();
-  for (std::uint64_t i = 0; i < steps; ++i) world_->step();
+  for (std::uint64_t i = 0; i < steps; ++i)
+  {
+    // Particles pinned to tf frames move in equal parts towards this tick's frame pose.
+    for (std::size_t k = 0; k < frame_pins_.size(); ++k)
+    {
+      const double s = static_cast<double>(i + 1) / static_cast<double>(steps);
+      world_->findSpringBody(frame_pins_[k].body)
+          ->setPinTarget(frame_pins_[k].index, frame_pin_start_[k] + s * (frame_pin_goal_[k] - frame_pin_start_[k]));
+    }
+    world_->step();
+  }
   step_seconds_since_status_ += secondsSince(start);
   steps_since_status_ += steps;
+}
+
+bool SimNode::lookupFrame(const std::string& frame, const Eigen::Vector3d& offset, double wait, Eigen::Vector3d& point,
+                          std::string& error)
+{
+  if (!tf_buffer_)
+  {
+    tf_buffer_ = std::make_unique<tf2_ros::Buffer>();
+    tf_listener_ = std::make_unique<tf2_ros::TransformListener>(*tf_buffer_);  // listens on its own thread
+  }
+  // Poll on wall time: waiting on ROS time could wait on our own /clock.
+  const auto deadline = SteadyClock::now() + std::chrono::duration_cast<SteadyClock::duration>(
+                                                 std::chrono::duration<double>(wait));
+  while (!tf_buffer_->canTransform(settings_.frame_id, frame, ros::Time(0), &error) && SteadyClock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  try
+  {
+    const geometry_msgs::TransformStamped t = tf_buffer_->lookupTransform(settings_.frame_id, frame, ros::Time(0));
+    const auto& q = t.transform.rotation;
+    const auto& v = t.transform.translation;
+    point = Eigen::Quaterniond(q.w, q.x, q.y, q.z).normalized() * offset + Eigen::Vector3d(v.x, v.y, v.z);
+    return point.allFinite();
+  }
+  catch (const tf2::TransformException& exception)
+  {
+    error = exception.what();
+    return false;
+  }
+}
+
+void SimNode::updateFramePins()
+{
+  // Forget pins whose body was removed or whose particle was unpinned or reset.
+  frame_pins_.erase(std::remove_if(frame_pins_.begin(), frame_pins_.end(),
+                                   [&](const FramePin& pin) {
+                                     const core::SpringNetworkBody* body = world_->findSpringBody(pin.body);
+                                     return !body || !body->isPinned(pin.index);
+                                   }),
+                    frame_pins_.end());
+  frame_pin_start_.resize(frame_pins_.size());
+  frame_pin_goal_.resize(frame_pins_.size());
+  for (std::size_t k = 0; k < frame_pins_.size(); ++k)
+  {
+    const FramePin& pin = frame_pins_[k];
+    frame_pin_start_[k] = world_->findSpringBody(pin.body)->pinTarget(pin.index);
+    std::string error;
+    if (!lookupFrame(pin.frame, pin.offset, 0.0, frame_pin_goal_[k], error))
+    {
+      frame_pin_goal_[k] = frame_pin_start_[k];  // hold still until the frame is back
+      ROS_WARN_THROTTLE_NAMED(5.0, "pins", "particle %d of '%s' follows frame '%s', which is not available: %s",
+                              pin.index, pin.body.c_str(), pin.frame.c_str(), error.c_str());
+    }
+  }
 }
 
 void SimNode::publish()
@@ -220,6 +291,130 @@ bool SimNode::spawnEmitter(SpawnEmitter::Request& req, SpawnEmitter::Response& r
     status.message = "spawned " + std::string(core::toString(def.type)) + " emitter '" + def.name + "'";
   else
     ROS_WARN_NAMED("services", "spawn_emitter refused: %s", status.message.c_str());
+  return answer(res, status);
+}
+
+bool SimNode::spawnRope(SpawnRope::Request& req, SpawnRope::Response& res)
+{
+  // The request becomes the same RopeDef a scene file builds, checked by the same validate().
+  core::RopeDef def;
+  def.name = req.name;
+  if (req.particles != 0) def.particles = static_cast<int>(std::min<std::uint32_t>(req.particles, 2000000000u));
+  def.start = {req.start.x, req.start.y, req.start.z};
+  def.end = {req.end.x, req.end.y, req.end.z};
+  if (req.mass != 0.0) def.mass = req.mass;
+  def.rest_length = req.rest_length;
+  def.stretch_stiffness = req.stretch_stiffness;
+  def.stretch_damping = req.stretch_damping;
+  def.bend_stiffness = req.bend_stiffness;
+  def.bend_damping = req.bend_damping;
+  def.pins.assign(req.pins.begin(), req.pins.end());
+  def.integrator = world_->definition().integrator;
+  if (!req.integrator.empty() && !core::parseIntegratorType(req.integrator, def.integrator.type))
+    return answer(res, core::Status::failure("integrator = '" + req.integrator +
+                                             "' is not an integrator; allowed: " + core::integratorTypeNames()));
+  core::Status status = world_->addRope(def);
+  if (status)
+    status.message = "spawned rope '" + def.name + "' with " + std::to_string(def.particles) + " particles, " +
+                     core::toString(def.integrator.type);
+  else
+    ROS_WARN_NAMED("services", "spawn_rope refused: %s", status.message.c_str());
+  return answer(res, status);
+}
+
+bool SimNode::pinParticle(PinParticle::Request& req, PinParticle::Response& res)
+{
+  res.index = -1;
+  core::SpringNetworkBody* body = world_->findSpringBody(req.body);
+  if (!body)
+    return answer(res, core::Status::failure("body = '" + req.body + "': no rope or spring network has that name"));
+  const Eigen::Vector3d point(req.point.x, req.point.y, req.point.z);
+  int index = req.index;
+  if (index == -1)
+  {
+    if (!point.allFinite()) return answer(res, core::Status::failure("point is not finite"));
+    index = body->nearestParticle(point);
+  }
+  else if (index < 0 || index >= body->particles().size())
+  {
+    return answer(res, core::Status::failure("index = " + std::to_string(index) + " is out of range: must be in [0, " +
+                                             std::to_string(body->particles().size() - 1) +
+                                             "], or -1 for the particle nearest to point"));
+  }
+
+  Eigen::Vector3d target;
+  std::string what;
+  switch (req.target)
+  {
+    case PinParticle::Request::TARGET_CURRENT:
+      target = body->particles().position.col(index);
+      what = "where it is";
+      break;
+    case PinParticle::Request::TARGET_POINT:
+      target = point;
+      what = "at the given point";
+      break;
+    case PinParticle::Request::TARGET_FRAME:
+    {
+      const Eigen::Vector3d offset(req.offset.x, req.offset.y, req.offset.z);
+      if (req.frame.empty()) return answer(res, core::Status::failure("frame is empty: name the tf frame to follow"));
+      if (!offset.allFinite()) return answer(res, core::Status::failure("offset is not finite"));
+      std::string error;
+      if (!lookupFrame(req.frame, offset, 2.0, target, error))
+        return answer(res, core::Status::failure("frame = '" + req.frame + "': no transform to '" + settings_.frame_id +
+                                                 "' within 2 s: " + error));
+      what = "to frame '" + req.frame + "'";
+      break;
+    }
+    default:
+      return answer(res, core::Status::failure("target = " + std::to_string(req.target) +
+                                               " is out of range: 0 (current), 1 (point) or 2 (frame)"));
+  }
+  core::Status status = body->pin(index, target);
+  if (!status) return answer(res, status);
+
+  // A particle follows at most one frame: replace any earlier frame pin of it.
+  frame_pins_.erase(std::remove_if(frame_pins_.begin(), frame_pins_.end(),
+                                   [&](const FramePin& p) { return p.body == req.body && p.index == index; }),
+                    frame_pins_.end());
+  if (req.target == PinParticle::Request::TARGET_FRAME)
+    frame_pins_.push_back({req.body, index, req.frame, Eigen::Vector3d(req.offset.x, req.offset.y, req.offset.z)});
+  res.index = index;
+  return answer(res, core::Status::success("pinned particle " + std::to_string(index) + " of '" + req.body + "' " + what));
+}
+
+bool SimNode::unpinParticle(UnpinParticle::Request& req, UnpinParticle::Response& res)
+{
+  core::SpringNetworkBody* body = world_->findSpringBody(req.body);
+  if (!body)
+    return answer(res, core::Status::failure("body = '" + req.body + "': no rope or spring network has that name"));
+  core::Status status = body->unpin(req.index);
+  if (status) status.message = "released particle " + std::to_string(req.index) + " of '" + req.body + "'";
+  return answer(res, status);
+}
+
+bool SimNode::setSpringConstants(SetSpringConstants::Request& req, SetSpringConstants::Response& res)
+{
+  core::SpringNetworkBody* body = world_->findSpringBody(req.body);
+  if (!body)
+    return answer(res, core::Status::failure("body = '" + req.body + "': no rope or spring network has that name"));
+  std::optional<core::SpringClass> spring_class;
+  if (req.spring_class != "all")
+  {
+    core::SpringClass parsed;
+    if (!core::parseSpringClass(req.spring_class, parsed))
+      return answer(res, core::Status::failure("spring_class = '" + req.spring_class +
+                                               "' is not a spring class; allowed: stretch, shear, bend, all"));
+    spring_class = parsed;
+  }
+  core::Status status = body->setSpringConstants(spring_class, req.stiffness, req.damping);
+  if (status)
+  {
+    std::ostringstream message;
+    message << "set " << req.spring_class << " springs of '" << req.body << "' to " << req.stiffness << " N/m, "
+            << req.damping << " N·s/m";
+    status.message = message.str();
+  }
   return answer(res, status);
 }
 

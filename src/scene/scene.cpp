@@ -149,9 +149,26 @@ void readContact(MapReader& reader, core::ContactDef& contact)
   reader.read("friction", contact.friction);
 }
 
+// The integrator keys, read at world level (the default) and per body (an override).
+void readIntegrator(MapReader& reader, core::IntegratorDef& integrator)
+{
+  if (reader.has("integrator"))
+  {
+    std::string name;
+    reader.read("integrator", name);
+    if (!core::parseIntegratorType(name, integrator.type))
+      reader.fail(reader.node()["integrator"], reader.field("integrator") + " = '" + name +
+                                                   "' is not an integrator; allowed: " + core::integratorTypeNames());
+  }
+  reader.read("verlet_damping", integrator.verlet_damping);
+  reader.read("cg_tolerance", integrator.cg_tolerance);
+  reader.read("cg_max_iterations", integrator.cg_max_iterations);
+}
+
 void readWorld(const YAML::Node& node, const std::string& source, core::WorldDef& world)
 {
   MapReader reader(node, "world", source);
+  readIntegrator(reader, world.integrator);
   reader.read("gravity", world.gravity);
   reader.read("dt", world.dt);
   reader.read("seed", world.seed);
@@ -220,6 +237,119 @@ core::EmitterDef readEmitter(MapReader& reader, const core::WorldDef& world)
   return def;
 }
 
+// Reads {stiffness, damping} of one spring class.
+void readSpringConstants(MapReader& parent, const std::string& key, double& stiffness, double& damping,
+                         const std::string& source)
+{
+  const YAML::Node node = parent.child(key);
+  if (!node) return;
+  MapReader reader(node, parent.field(key), source);
+  reader.read("stiffness", stiffness);
+  reader.read("damping", damping);
+  reader.finish();
+}
+
+std::vector<int> readIndexList(MapReader& reader, const std::string& key)
+{
+  std::vector<int> values;
+  const YAML::Node node = reader.child(key);
+  if (!node) return values;
+  if (!node.IsSequence()) reader.fail(node, reader.field(key) + " must be a list of particle indices");
+  for (std::size_t i = 0; i < node.size(); ++i)
+  {
+    int value = 0;
+    if (!node[i].IsScalar() || !YAML::convert<int>::decode(node[i], value))
+      reader.fail(node[i], reader.field(key) + "[" + std::to_string(i) + "] must be an integer particle index");
+    values.push_back(value);
+  }
+  return values;
+}
+
+core::RopeDef readRope(MapReader& reader, const core::WorldDef& world, const std::string& source)
+{
+  core::RopeDef def;
+  def.integrator = world.integrator;
+  reader.require("name", def.name);
+  reader.read("particles", def.particles);
+  reader.read("start", def.start);
+  reader.read("end", def.end);
+  reader.read("mass", def.mass);
+  reader.read("rest_length", def.rest_length);
+  readSpringConstants(reader, "stretch", def.stretch_stiffness, def.stretch_damping, source);
+  readSpringConstants(reader, "bend", def.bend_stiffness, def.bend_damping, source);
+  def.pins = readIndexList(reader, "pins");
+  readIntegrator(reader, def.integrator);
+  reader.finish();
+  check(reader, reader.field(""), core::validate(def, world.max_particles_per_body));
+  return def;
+}
+
+core::SpringNetworkDef readSpringNetwork(MapReader& reader, const core::WorldDef& world, const std::string& source)
+{
+  core::SpringNetworkDef def;
+  def.integrator = world.integrator;
+  reader.require("name", def.name);
+
+  const YAML::Node particles = reader.child("particles");
+  if (!particles || !particles.IsSequence() || particles.size() == 0)
+    reader.fail(particles ? particles : reader.node(), reader.field("particles") +
+                                                           " must be a non-empty list of {position, mass, velocity}");
+  bool any_velocity = false;
+  std::vector<Eigen::Vector3d> velocities;
+  for (std::size_t i = 0; i < particles.size(); ++i)
+  {
+    MapReader p(particles[i], reader.field("particles") + "[" + std::to_string(i) + "]", source);
+    Eigen::Vector3d position = Eigen::Vector3d::Zero(), velocity = Eigen::Vector3d::Zero();
+    double mass = 0.1;
+    p.require("position", position);
+    p.read("mass", mass);
+    any_velocity = any_velocity || p.has("velocity");
+    p.read("velocity", velocity);
+    p.finish();
+    def.positions.push_back(position);
+    def.masses.push_back(mass);
+    velocities.push_back(velocity);
+  }
+  if (any_velocity) def.velocities = velocities;
+
+  if (const YAML::Node springs = reader.child("springs"))
+  {
+    if (!springs.IsSequence()) reader.fail(springs, reader.field("springs") + " must be a list of springs");
+    for (std::size_t k = 0; k < springs.size(); ++k)
+    {
+      MapReader s(springs[k], reader.field("springs") + "[" + std::to_string(k) + "]", source);
+      std::vector<int> ends = readIndexList(s, "particles");
+      if (ends.size() != 2) s.fail(springs[k], s.field("particles") + " must be two particle indices [i, j]");
+      core::Spring spring;
+      spring.i = ends[0];
+      spring.j = ends[1];
+      // The rest length is a number [m] or "initial": the distance at the start.
+      const YAML::Node rest_node = s.child("rest_length");
+      const bool initial_rest = !rest_node || (rest_node.IsScalar() && rest_node.Scalar() == "initial");
+      if (!initial_rest) s.read("rest_length", spring.rest_length);
+      s.read("stiffness", spring.stiffness);
+      s.read("damping", spring.damping);
+      if (s.has("class"))
+      {
+        std::string name;
+        s.read("class", name);
+        if (!core::parseSpringClass(name, spring.spring_class))
+          s.fail(springs[k]["class"], s.field("class") + " = '" + name + "' is not a spring class; allowed: stretch, shear, bend");
+      }
+      s.finish();
+      const int n = static_cast<int>(def.positions.size());
+      if (initial_rest && spring.i >= 0 && spring.i < n && spring.j >= 0 && spring.j < n)
+        spring.rest_length = (def.positions[spring.j] - def.positions[spring.i]).norm();
+      def.springs.push_back(spring);
+    }
+  }
+  def.pins = readIndexList(reader, "pins");
+  readIntegrator(reader, def.integrator);
+  reader.finish();
+  check(reader, reader.field(""), core::validate(def, world.max_particles_per_body));
+  return def;
+}
+
 void readBodies(const YAML::Node& node, const std::string& source, SceneDef& scene)
 {
   if (!node.IsSequence()) throw SceneError{location(source, node) + "bodies must be a list of bodies"};
@@ -231,8 +361,13 @@ void readBodies(const YAML::Node& node, const std::string& source, SceneDef& sce
     reader.require("kind", kind);
     if (kind == "emitter")
       scene.bodies.emplace_back(readEmitter(reader, scene.world));
+    else if (kind == "rope")
+      scene.bodies.emplace_back(readRope(reader, scene.world, source));
+    else if (kind == "spring_network")
+      scene.bodies.emplace_back(readSpringNetwork(reader, scene.world, source));
     else
-      reader.fail(node[i]["kind"], reader.field("kind") + " = '" + kind + "' is not a body kind; allowed: emitter");
+      reader.fail(node[i]["kind"], reader.field("kind") + " = '" + kind +
+                                       "' is not a body kind; allowed: emitter, rope, spring_network");
 
     const std::string name = std::visit([](const auto& def) { return def.name; }, scene.bodies.back());
     if (!names.insert(name).second)
@@ -276,7 +411,8 @@ Status loadSceneFile(const std::string& path, SceneDef& scene)
 Status addBody(const BodyDef& body, core::World& world)
 {
   if (const auto* emitter = std::get_if<core::EmitterDef>(&body)) return world.addEmitter(*emitter);
-  return Status::failure("unknown body definition");
+  if (const auto* rope = std::get_if<core::RopeDef>(&body)) return world.addRope(*rope);
+  return world.addSpringNetwork(std::get<core::SpringNetworkDef>(body));
 }
 
 Status buildWorld(const SceneDef& scene, std::unique_ptr<core::World>& world)
@@ -301,6 +437,31 @@ YAML::Node vector3(const Eigen::Vector3d& v)
   return node;
 }
 
+void integrator(YAML::Node node, const core::IntegratorDef& i)
+{
+  node["integrator"] = core::toString(i.type);
+  node["verlet_damping"] = i.verlet_damping;
+  node["cg_tolerance"] = i.cg_tolerance;
+  node["cg_max_iterations"] = i.cg_max_iterations;
+}
+
+YAML::Node springConstants(double stiffness, double damping)
+{
+  YAML::Node node;
+  node.SetStyle(YAML::EmitterStyle::Flow);
+  node["stiffness"] = stiffness;
+  node["damping"] = damping;
+  return node;
+}
+
+YAML::Node indexList(const std::vector<int>& values)
+{
+  YAML::Node node(YAML::NodeType::Sequence);
+  node.SetStyle(YAML::EmitterStyle::Flow);
+  for (int v : values) node.push_back(v);
+  return node;
+}
+
 YAML::Node contact(YAML::Node node, const core::ContactDef& c)
 {
   node["restitution"] = c.restitution;
@@ -317,6 +478,7 @@ std::string toYaml(const SceneDef& scene)
   root["world"]["dt"] = w.dt;
   root["world"]["seed"] = w.seed;
   root["world"]["max_particles_per_body"] = w.max_particles_per_body;
+  integrator(root["world"], w.integrator);
   YAML::Node ground;
   ground["enabled"] = w.ground.enabled;
   ground["height"] = w.ground.height;
@@ -346,6 +508,51 @@ std::string toYaml(const SceneDef& scene)
       node["particle_mass"] = e->particle_mass;
       node["max_particles"] = e->max_particles;
       node["seed"] = e->seed;
+      root["bodies"].push_back(node);
+    }
+    else if (const auto* r = std::get_if<core::RopeDef>(&body))
+    {
+      YAML::Node node;
+      node["name"] = r->name;
+      node["kind"] = "rope";
+      node["particles"] = r->particles;
+      node["start"] = vector3(r->start);
+      node["end"] = vector3(r->end);
+      node["mass"] = r->mass;
+      node["rest_length"] = r->rest_length;
+      node["stretch"] = springConstants(r->stretch_stiffness, r->stretch_damping);
+      node["bend"] = springConstants(r->bend_stiffness, r->bend_damping);
+      node["pins"] = indexList(r->pins);
+      integrator(node, r->integrator);
+      root["bodies"].push_back(node);
+    }
+    else if (const auto* net = std::get_if<core::SpringNetworkDef>(&body))
+    {
+      YAML::Node node;
+      node["name"] = net->name;
+      node["kind"] = "spring_network";
+      for (std::size_t i = 0; i < net->positions.size(); ++i)
+      {
+        YAML::Node particle;
+        particle.SetStyle(YAML::EmitterStyle::Flow);
+        particle["position"] = vector3(net->positions[i]);
+        particle["mass"] = net->masses[i];
+        if (!net->velocities.empty()) particle["velocity"] = vector3(net->velocities[i]);
+        node["particles"].push_back(particle);
+      }
+      for (const core::Spring& spring : net->springs)
+      {
+        YAML::Node s;
+        s.SetStyle(YAML::EmitterStyle::Flow);
+        s["particles"] = indexList({spring.i, spring.j});
+        s["rest_length"] = spring.rest_length;
+        s["stiffness"] = spring.stiffness;
+        s["damping"] = spring.damping;
+        s["class"] = core::toString(spring.spring_class);
+        node["springs"].push_back(s);
+      }
+      node["pins"] = indexList(net->pins);
+      integrator(node, net->integrator);
       root["bodies"].push_back(node);
     }
   }

@@ -1,6 +1,6 @@
 // particle_sim_run: runs a scene with no ROS master and writes particle states as CSV.
 //
-//   particle_sim_run SCENE.yaml --duration T [--dt DT] [--output states.csv] [--every N]
+//   particle_sim_run SCENE.yaml --duration T [--dt DT] [--integrator NAME] [--output states.csv] [--every N]
 
 #include <chrono>
 #include <cmath>
@@ -15,10 +15,11 @@
 namespace
 {
 constexpr const char* kUsage =
-    "usage: particle_sim_run SCENE.yaml --duration T [--dt DT] [--output states.csv] [--every N]\n"
+    "usage: particle_sim_run SCENE.yaml --duration T [--dt DT] [--integrator NAME] [--output states.csv] [--every N]\n"
     "  SCENE.yaml       scene file (see README, 'Scene files')\n"
     "  --duration T     sim time to run [s], > 0\n"
     "  --dt DT          physics step [s], overrides the scene's world.dt, in (0, 0.1]\n"
+    "  --integrator NAME  integrator of every spring body: symplectic_euler, verlet, implicit_euler, rk4\n"
     "  --output FILE    write time,body,index,x,y,z,vx,vy,vz rows for every live particle\n"
     "  --every N        write every N-th step (default 1); the initial state is always written\n";
 
@@ -55,7 +56,7 @@ void writeStates(std::ostream& out, const particle_sim::core::World& world)
 
 int main(int argc, char** argv)
 {
-  std::string scene_path, output_path;
+  std::string scene_path, output_path, integrator_name;
   double duration = -1.0, dt = 0.0, every = 1.0;
   for (int i = 1; i < argc; ++i)
   {
@@ -82,6 +83,13 @@ int main(int argc, char** argv)
     {
       if (!value(every) || every < 1.0 || every != std::floor(every)) return usageError("--every needs an integer >= 1");
     }
+    else if (arg == "--integrator")
+    {
+      particle_sim::core::IntegratorType type;
+      if (i + 1 >= argc || !particle_sim::core::parseIntegratorType(argv[i + 1], type))
+        return usageError(std::string("--integrator needs one of: ") + particle_sim::core::integratorTypeNames());
+      integrator_name = argv[++i];
+    }
     else if (arg == "--output")
     {
       if (i + 1 >= argc) return usageError("--output needs a file name");
@@ -104,6 +112,17 @@ int main(int argc, char** argv)
     return 1;
   }
   if (dt > 0.0) scene.world.dt = dt;
+  if (!integrator_name.empty())
+  {
+    particle_sim::core::IntegratorType type;
+    particle_sim::core::parseIntegratorType(integrator_name, type);
+    scene.world.integrator.type = type;
+    for (auto& body : scene.bodies)
+    {
+      if (auto* rope = std::get_if<particle_sim::core::RopeDef>(&body)) rope->integrator.type = type;
+      if (auto* net = std::get_if<particle_sim::core::SpringNetworkDef>(&body)) net->integrator.type = type;
+    }
+  }
   std::unique_ptr<particle_sim::core::World> world;
   if (auto status = particle_sim::scene::buildWorld(scene, world); !status)
   {
@@ -146,8 +165,19 @@ int main(int argc, char** argv)
     }
   }
   const double wall = std::chrono::duration<double>(Clock::now() - start).count();
+  int exit_code = 0;
+  for (const auto& body : world->bodies())
+  {
+    const auto* spring_body = dynamic_cast<const particle_sim::core::SpringNetworkBody*>(body.get());
+    if (spring_body && spring_body->frozen())
+    {
+      std::fprintf(stderr, "particle_sim_run: body '%s' froze: %s\n", body->name().c_str(),
+                   spring_body->frozenReason().c_str());
+      exit_code = 3;
+    }
+  }
   std::printf("steps %llu, sim time %.6g s, wall %.3f s, %.3f us/step, live particles %d\n",
               static_cast<unsigned long long>(steps), world->simTime(), wall,
               steps ? 1e6 * stepping_seconds / steps : 0.0, world->particleCount());
-  return 0;
+  return exit_code;
 }

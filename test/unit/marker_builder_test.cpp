@@ -118,3 +118,49 @@ TEST(MarkerBuilder, ParticlesAreColouredByAge)
   }
   EXPECT_LT(m.colors[oldest].g, m.colors[youngest].g);
 }
+
+TEST(MarkerBuilder, RopeIsALineStripWithFreeAndPinnedParticlesApart)
+{
+  core::World world{core::WorldDef{}};
+  core::RopeDef rope;
+  rope.name = "rope";
+  rope.particles = 7;
+  rope.pins = {0, -1};
+  ASSERT_TRUE(world.addRope(rope).ok);
+  core::SpringNetworkDef net;
+  net.name = "net";
+  net.positions = {{0, 0, 1}, {1, 0, 1}, {0, 1, 1}};
+  net.masses = {1, 1, 1};
+  net.springs = {{0, 1, 1.0, 10, 0, core::SpringClass::Stretch}, {1, 2, 1.4, 10, 0, core::SpringClass::Shear}};
+  ASSERT_TRUE(world.addSpringNetwork(net).ok);
+  world.step();
+
+  const auto array = ros_interface::buildMarkers(world, ros::Time(1.0), {}, false, {});
+  ASSERT_EQ(array.markers.size(), 6u);
+  for (const Marker& m : array.markers) expectRvizValid(m);
+  const Marker& free = array.markers[0];
+  const Marker& line = array.markers[1];
+  const Marker& pins = array.markers[2];
+  EXPECT_EQ(free.type, Marker::SPHERE_LIST);
+  EXPECT_EQ(free.points.size(), 5u);
+  EXPECT_EQ(line.type, Marker::LINE_STRIP);
+  ASSERT_EQ(line.points.size(), 7u);
+  EXPECT_EQ(line.points[3].x, world.findBody("rope")->particles().position(0, 3));
+  EXPECT_EQ(pins.id, ros_interface::kPinsMarkerId);
+  EXPECT_EQ(pins.points.size(), 2u);
+  EXPECT_EQ(pins.points[1].x, 2.0);  // the last particle, at the rope's end
+
+  // The network: LINE_LIST with a pair of points per spring, and no pinned particle (DELETE).
+  EXPECT_EQ(array.markers[4].type, Marker::LINE_LIST);
+  EXPECT_EQ(array.markers[4].points.size(), 4u);
+  EXPECT_EQ(array.markers[5].action, Marker::DELETE);
+
+  // Removing a body deletes all its marker ids.
+  const auto removed = ros_interface::buildMarkers(world, ros::Time(1.0), {}, false, {"rope"});
+  for (int id = 0; id < ros_interface::kMarkerIdsPerBody; ++id)
+  {
+    EXPECT_EQ(removed.markers[id].ns, "rope");
+    EXPECT_EQ(removed.markers[id].id, id);
+    EXPECT_EQ(removed.markers[id].action, Marker::DELETE);
+  }
+}

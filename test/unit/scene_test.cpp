@@ -54,7 +54,7 @@ TEST(SceneFiles, EveryShippedSceneLoadsAndBuilds)
     EXPECT_FALSE(world->bodies().empty()) << entry.path();
     for (int k = 0; k < 100; ++k) world->step();
   }
-  EXPECT_GE(count, 5);  // one per emitter and the demo
+  EXPECT_GE(count, 8);  // one per emitter, the demo, ropes and a network
 }
 
 TEST(SceneFiles, ReadsWorldAndEmitterValues)
@@ -149,4 +149,86 @@ TEST(SceneFiles, ToYamlRoundTripsEveryDefinition)
   EXPECT_EQ(a.seed, b.seed);
   EXPECT_EQ(a.burst_count, b.burst_count);
   EXPECT_EQ(again.world.spheres[0].radius, original.world.spheres[0].radius);
+
+  // Ropes and networks too.
+  for (const char* name : {"rope_bridge", "spring_network"})
+  {
+    ASSERT_TRUE(scene::loadSceneFile(std::string(PARTICLE_SIM_SOURCE_DIR) + "/config/scenes/" + name + ".yaml", original).ok);
+    const core::Status status = scene::parseScene(scene::toYaml(original), "round-trip", again);
+    ASSERT_TRUE(status.ok) << status.message;
+    EXPECT_EQ(scene::toYaml(again), scene::toYaml(original)) << name;
+  }
+}
+
+TEST(SceneFiles, ReadsRopesWithWorldIntegratorDefaultsAndOverrides)
+{
+  const scene::SceneDef def = parseOk(
+      "world:\n  integrator: rk4\n  cg_tolerance: 1.0e-5\n"
+      "bodies:\n"
+      "  - name: a\n    kind: rope\n    particles: 8\n    start: [0, 0, 1]\n    end: [0, 0, 3]\n    mass: 0.4\n"
+      "    rest_length: 2.5\n    stretch: {stiffness: 300, damping: 0.2}\n    bend: {stiffness: 5}\n    pins: [0, -1]\n"
+      "  - name: b\n    kind: rope\n    integrator: verlet\n    verlet_damping: 0.99\n");
+  ASSERT_EQ(def.bodies.size(), 2u);
+  const auto& a = std::get<core::RopeDef>(def.bodies[0]);
+  EXPECT_EQ(a.particles, 8);
+  EXPECT_EQ(a.end, Eigen::Vector3d(0, 0, 3));
+  EXPECT_EQ(a.rest_length, 2.5);
+  EXPECT_EQ(a.stretch_stiffness, 300.0);
+  EXPECT_EQ(a.bend_stiffness, 5.0);
+  EXPECT_EQ(a.pins, (std::vector<int>{0, -1}));
+  EXPECT_EQ(a.integrator.type, core::IntegratorType::Rk4);  // the world's default
+  EXPECT_EQ(a.integrator.cg_tolerance, 1.0e-5);
+  const auto& b = std::get<core::RopeDef>(def.bodies[1]);
+  EXPECT_EQ(b.integrator.type, core::IntegratorType::Verlet);
+  EXPECT_EQ(b.integrator.verlet_damping, 0.99);
+}
+
+TEST(SceneFiles, ReadsSpringNetworksWithInitialAndGivenRestLengths)
+{
+  const scene::SceneDef def = parseOk(
+      "bodies:\n  - name: net\n    kind: spring_network\n    particles:\n"
+      "      - {position: [0, 0, 0], mass: 0.5}\n      - {position: [3, 4, 0], mass: 0.25, velocity: [1, 0, 0]}\n"
+      "      - {position: [0, 0, 2]}\n"
+      "    springs:\n      - {particles: [0, 1], stiffness: 10}\n"
+      "      - {particles: [0, 2], rest_length: 1.5, damping: 0.1, class: bend}\n"
+      "      - {particles: [1, 2], rest_length: initial}\n"
+      "    pins: [2]\n");
+  const auto& net = std::get<core::SpringNetworkDef>(def.bodies[0]);
+  ASSERT_EQ(net.positions.size(), 3u);
+  EXPECT_EQ(net.masses[1], 0.25);
+  ASSERT_EQ(net.velocities.size(), 3u);
+  EXPECT_EQ(net.velocities[1], Eigen::Vector3d(1, 0, 0));
+  ASSERT_EQ(net.springs.size(), 3u);
+  EXPECT_EQ(net.springs[0].rest_length, 5.0);  // "initial" by default: |(3, 4, 0)|
+  EXPECT_EQ(net.springs[0].stiffness, 10.0);
+  EXPECT_EQ(net.springs[1].rest_length, 1.5);
+  EXPECT_EQ(net.springs[1].spring_class, core::SpringClass::Bend);
+  EXPECT_NEAR(net.springs[2].rest_length, std::sqrt(9.0 + 16.0 + 4.0), 1e-12);
+  EXPECT_EQ(net.pins, std::vector<int>{2});
+}
+
+TEST(SceneFiles, RefusesBadRopesAndNetworks)
+{
+  const std::string rope = "bodies:\n  - name: r\n    kind: rope\n";
+  EXPECT_TRUE(contains(refusal(rope + "    particles: 1\n"), "bodies[0].particles = 1 is out of range"));
+  EXPECT_TRUE(contains(refusal(rope + "    stretch: {stiffness: -2}\n"), "stretch.stiffness = -2 is out of range"));
+  EXPECT_TRUE(contains(refusal(rope + "    stretch: {stifness: 2}\n"), "stretch.stifness is not a known key"));
+  EXPECT_TRUE(contains(refusal(rope + "    pins: [0, 25]\n"), "pins[1] = 25 is out of range"));
+  EXPECT_TRUE(contains(refusal(rope + "    pins: [first]\n"), "pins[0] must be an integer"));
+  EXPECT_TRUE(contains(refusal(rope + "    integrator: euler\n"),
+                       "integrator = 'euler' is not an integrator; allowed: symplectic_euler, verlet, implicit_euler, rk4"));
+  EXPECT_TRUE(contains(refusal(rope + "    verlet_damping: 1.5\n"), "verlet_damping = 1.5 is out of range"));
+  EXPECT_TRUE(contains(refusal("world:\n  cg_max_iterations: 0\n"), "cg_max_iterations = 0 is out of range"));
+
+  const std::string net = "bodies:\n  - name: n\n    kind: spring_network\n";
+  EXPECT_TRUE(contains(refusal(net + "    particles: []\n"), "particles must be a non-empty list"));
+  EXPECT_TRUE(contains(refusal(net + "    particles: [{position: [0, 0, 0]}]\n    springs: [{particles: [0, 3]}]\n"),
+                       "springs[0].j = 3 is out of range: must be in [0, 0]"));
+  EXPECT_TRUE(contains(refusal(net + "    particles: [{position: [0, 0, 0]}, {position: [1, 0, 0]}]\n"
+                                     "    springs: [{particles: [0]}]\n"),
+                       "must be two particle indices"));
+  EXPECT_TRUE(contains(refusal(net + "    particles: [{position: [0, 0, 0], mass: 0}]\n"), "masses[0] = 0 is out of range"));
+  EXPECT_TRUE(contains(refusal(net + "    particles: [{position: [0, 0, 0]}, {position: [1, 0, 0]}]\n"
+                                     "    springs: [{particles: [0, 1], class: twist}]\n"),
+                       "class = 'twist' is not a spring class"));
 }

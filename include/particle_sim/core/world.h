@@ -8,6 +8,8 @@
 #include "particle_sim/core/body.h"
 #include "particle_sim/core/emitter.h"
 #include "particle_sim/core/environment.h"
+#include "particle_sim/core/integrator.h"
+#include "particle_sim/core/spring_network.h"
 #include "particle_sim/core/status.h"
 
 namespace particle_sim
@@ -21,6 +23,7 @@ struct WorldDef
   double dt = 0.001;                                           ///< [s] fixed physics step
   std::uint64_t seed = 1;                   ///< default seed of bodies that do not set their own
   int max_particles_per_body = 100000;      ///< cap on any body's particle count
+  IntegratorDef integrator;                 ///< default integrator of spring bodies that set none
   GroundPlaneDef ground;
   std::vector<SphereColliderDef> spheres;
 };
@@ -62,12 +65,19 @@ public:
 
   /// Validates `def` (names unique, values in range) and adds the emitter.
   Status addEmitter(const EmitterDef& def);
+  /// Validates `def` and adds the spring network.
+  Status addSpringNetwork(const SpringNetworkDef& def);
+  /// Validates `def` and adds the rope it builds.
+  Status addRope(const RopeDef& def);
   /// Adds an already built body, refusing a duplicate or empty name.
   Status addBody(std::unique_ptr<Body> body);
   Status removeBody(const std::string& name);
 
   const Body* findBody(const std::string& name) const;
   Body* findBody(const std::string& name);
+  /// The spring body called `name`, or null (no such body, or not a spring body).
+  SpringNetworkBody* findSpringBody(const std::string& name);
+  const SpringNetworkBody* findSpringBody(const std::string& name) const;
   const std::vector<std::unique_ptr<Body>>& bodies() const { return bodies_; }
 
   /// Live particles over all bodies.

@@ -18,6 +18,10 @@ constexpr const char* kReset = "reset";
 constexpr const char* kPausePhysics = "pause_physics";
 constexpr const char* kUnpausePhysics = "unpause_physics";
 constexpr const char* kStep = "step";
+constexpr const char* kSpawnRope = "spawn_rope";
+constexpr const char* kPinParticle = "pin_particle";
+constexpr const char* kUnpinParticle = "unpin_particle";
+constexpr const char* kSetSpringConstants = "set_spring_constants";
 
 // Parameters
 constexpr const char* kSceneParam = "scene";

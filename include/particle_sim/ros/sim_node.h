@@ -2,16 +2,22 @@
 
 #include <ros/ros.h>
 #include <std_srvs/Trigger.h>
+#include <tf2_ros/buffer.h>
 #include <tf2_ros/transform_broadcaster.h>
+#include <tf2_ros/transform_listener.h>
 
 #include <chrono>
 #include <memory>
 #include <string>
 #include <vector>
 
+#include "particle_sim/PinParticle.h"
 #include "particle_sim/RemoveBody.h"
+#include "particle_sim/SetSpringConstants.h"
 #include "particle_sim/SpawnEmitter.h"
+#include "particle_sim/SpawnRope.h"
 #include "particle_sim/Step.h"
+#include "particle_sim/UnpinParticle.h"
 #include "particle_sim/core/world.h"
 #include "particle_sim/ros/marker_builder.h"
 
@@ -55,7 +61,27 @@ private:
   void publish();
   void printStatus(double wall_elapsed);
 
+  // A particle pinned to a tf frame: its target is the frame's pose applied to `offset`, looked
+  // up once per tick and approached linearly over the tick's substeps.
+  struct FramePin
+  {
+    std::string body;
+    int index = 0;
+    std::string frame;
+    Eigen::Vector3d offset = Eigen::Vector3d::Zero();
+  };
+  // Looks `frame` up in the sim frame (latest transform), waiting up to `wait` wall seconds.
+  bool lookupFrame(const std::string& frame, const Eigen::Vector3d& offset, double wait, Eigen::Vector3d& point,
+                   std::string& error);
+  // Drops frame pins whose body or pin is gone, and sets each remaining pin's start and goal for
+  // this tick (the goal from tf; the start where its target is now).
+  void updateFramePins();
+
   bool spawnEmitter(SpawnEmitter::Request& req, SpawnEmitter::Response& res);
+  bool spawnRope(SpawnRope::Request& req, SpawnRope::Response& res);
+  bool pinParticle(PinParticle::Request& req, PinParticle::Response& res);
+  bool unpinParticle(UnpinParticle::Request& req, UnpinParticle::Response& res);
+  bool setSpringConstants(SetSpringConstants::Request& req, SetSpringConstants::Response& res);
   bool removeBody(RemoveBody::Request& req, RemoveBody::Response& res);
   bool reset(std_srvs::Trigger::Request& req, std_srvs::Trigger::Response& res);
   bool pausePhysics(std_srvs::Trigger::Request& req, std_srvs::Trigger::Response& res);
@@ -74,6 +100,11 @@ private:
   ros::Publisher clock_pub_;
   std::unique_ptr<tf2_ros::TransformBroadcaster> tf_broadcaster_;
   std::vector<ros::ServiceServer> services_;
+
+  std::unique_ptr<tf2_ros::Buffer> tf_buffer_;  // created at the first frame pin
+  std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
+  std::vector<FramePin> frame_pins_;
+  std::vector<Eigen::Vector3d> frame_pin_start_, frame_pin_goal_;  // per frame pin, this tick
 
   bool delete_all_pending_ = true;
   std::vector<std::string> removed_bodies_;

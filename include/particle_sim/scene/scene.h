@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "particle_sim/core/emitter.h"
+#include "particle_sim/core/spring_network.h"
 #include "particle_sim/core/status.h"
 #include "particle_sim/core/world.h"
 
@@ -14,7 +15,7 @@ namespace particle_sim
 namespace scene
 {
 /// One body entry of a scene file, as the core definition it builds.
-using BodyDef = std::variant<core::EmitterDef>;
+using BodyDef = std::variant<core::EmitterDef, core::RopeDef, core::SpringNetworkDef>;
 
 /// A whole scene: world settings and named bodies, in file order.
 struct SceneDef

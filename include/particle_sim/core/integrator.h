@@ -1,0 +1,46 @@
+#pragma once
+
+#include <string>
+
+#include "particle_sim/core/status.h"
+
+namespace particle_sim
+{
+namespace core
+{
+/// The time integrators a spring body can use (chosen per body).
+enum class IntegratorType
+{
+  SymplecticEuler,  ///< the lecture's loop: v += h f/m, then x += h v (first order)
+  Verlet,           ///< the lecture's x' = x + k_d (x − x_prev) + h² f/m, second-order start (second order)
+  ImplicitEuler,    ///< linearised backward Euler solved by modified preconditioned CG (first order, stable)
+  Rk4,              ///< classical Runge–Kutta, the accuracy reference (fourth order)
+};
+
+const char* toString(IntegratorType type);
+/// Parses "symplectic_euler", "verlet", "implicit_euler" or "rk4"; false when unknown.
+bool parseIntegratorType(const std::string& text, IntegratorType& type);
+/// "symplectic_euler, verlet, implicit_euler, rk4", for error messages.
+const char* integratorTypeNames();
+
+/// An integrator and its settings, with defaults.
+struct IntegratorDef
+{
+  IntegratorType type = IntegratorType::ImplicitEuler;
+  double verlet_damping = 1.0;  ///< the lecture's Verlet k_d in [0, 1]: 1 = no damping, below 1 damps
+  double cg_tolerance = 1e-8;   ///< implicit Euler: stop when |r| <= tolerance |b| (filtered residuals), > 0
+  int cg_max_iterations = 500;  ///< implicit Euler: iteration cap, >= 1
+};
+
+Status validate(const IntegratorDef& def);
+
+/// What the last implicit solve did (zero iterations for the explicit methods).
+struct SolverReport
+{
+  int iterations = 0;
+  double relative_residual = 0.0;  ///< |r| / |b| at the end
+  bool converged = true;
+};
+
+}  // namespace core
+}  // namespace particle_sim

@@ -1,0 +1,57 @@
+#pragma once
+
+#include <Eigen/Core>
+#include <string>
+
+namespace particle_sim
+{
+namespace core
+{
+/// Which family a spring belongs to; stiffness and damping are set per class.
+enum class SpringClass
+{
+  Stretch,  ///< between neighbours (rope segments, cloth structural springs)
+  Shear,    ///< cloth diagonals
+  Bend,     ///< two apart (rope i, i+2; cloth bend springs)
+};
+
+const char* toString(SpringClass spring_class);
+/// Parses "stretch", "shear" or "bend"; false when unknown.
+bool parseSpringClass(const std::string& text, SpringClass& spring_class);
+
+/// One spring between particles i and j.
+struct Spring
+{
+  int i = 0;
+  int j = 0;
+  double rest_length = 1.0;  ///< [m] >= 0
+  double stiffness = 100.0;  ///< k_e [N/m] >= 0
+  double damping = 0.0;      ///< k_d [N·s/m] >= 0
+  SpringClass spring_class = SpringClass::Stretch;
+};
+
+/// The lecture's spring force on particle i (the force on j is its opposite):
+///   f_i = ( k_e (|x_j − x_i| − L) + k_d (v_j − v_i)·d ) d,   d = (x_j − x_i) / |x_j − x_i|.
+/// Coincident particles (|x_j − x_i| = 0) have no direction and get no force.
+Eigen::Vector3d springForce(const Eigen::Vector3d& xi, const Eigen::Vector3d& xj, const Eigen::Vector3d& vi,
+                            const Eigen::Vector3d& vj, double rest_length, double stiffness, double damping);
+
+/// Potential energy of the elastic part [J]: k_e (|x_j − x_i| − L)^2 / 2.
+double springEnergy(const Eigen::Vector3d& xi, const Eigen::Vector3d& xj, double rest_length, double stiffness);
+
+/// Jacobian blocks of f_i with respect to x_i and v_i. By symmetry of the spring,
+///   ∂f_i/∂x_i = ∂f_j/∂x_j = −∂f_i/∂x_j = −∂f_j/∂x_i = dfdx, and likewise for dfdv.
+///
+/// dfdx is the lecture's tangent stiffness of the elastic force,
+///   k_e ( −I + (L/l) (I − d dᵀ) ) = −k_e ( d dᵀ + (1 − L/l)(I − d dᵀ) ),   l = |x_j − x_i|;
+/// dfdv = −k_d d dᵀ. The dependence of the damping force on positions (through d) is left out,
+/// as in Baraff & Witkin 1998, which keeps the implicit system symmetric.
+///
+/// With `definite` set, the transverse factor (1 − L/l) is clamped at 0 for compressed springs,
+/// so that −dfdx is positive semi-definite and the implicit solve stays a symmetric positive
+/// definite system (Choi & Ko 2002). Without it the blocks are the exact derivatives.
+void springJacobians(const Eigen::Vector3d& xi, const Eigen::Vector3d& xj, double rest_length, double stiffness,
+                     double damping, bool definite, Eigen::Matrix3d& dfdx, Eigen::Matrix3d& dfdv);
+
+}  // namespace core
+}  // namespace particle_sim

@@ -1,0 +1,150 @@
+#pragma once
+
+#include <Eigen/Core>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "particle_sim/core/body.h"
+#include "particle_sim/core/implicit_euler_solver.h"
+#include "particle_sim/core/integrator.h"
+#include "particle_sim/core/spring.h"
+#include "particle_sim/core/status.h"
+
+namespace particle_sim
+{
+namespace core
+{
+/// How a spring network is laid out, so that it can be drawn: ropes are chains in index order.
+enum class NetworkShape
+{
+  Network,  ///< free-form particles and springs (the lecture's "interaction between particles")
+  Rope,     ///< a chain 0-1-2-...; see buildRope()
+};
+
+/// A body of particles joined by springs. Ropes, cloth and jelly are builders of this one
+/// structure, not separate physics.
+struct SpringNetworkDef
+{
+  std::string name;
+  NetworkShape shape = NetworkShape::Network;
+  std::vector<Eigen::Vector3d> positions;   ///< [m] initial positions
+  std::vector<Eigen::Vector3d> velocities;  ///< [m/s] initial velocities; empty = all zero
+  std::vector<double> masses;               ///< [kg] > 0, one per particle
+  std::vector<Spring> springs;
+  std::vector<int> pins;                    ///< indices pinned where they start
+  IntegratorDef integrator;
+};
+
+/// Checks sizes, indices, masses, spring constants, pins and the integrator; the message names the
+/// field (e.g. "springs[3].stiffness"), its value and the allowed range.
+Status validate(const SpringNetworkDef& def, int max_particles);
+
+/// A spring network: particles (struct-of-arrays pool), springs and pins, advanced by its chosen
+/// integrator. Forces: gravity m g on every particle and the lecture's spring forces.
+///
+/// Pins make a particle kinematic (inverse mass 0): during each step it moves in a straight line
+/// to its pin target, and it ends the step exactly there. Targets can be moved between steps (a
+/// gripper carrying the rope end). Implicit Euler filters pinned degrees of freedom.
+///
+/// A body whose state turns non-finite is restored to its last finite state and frozen: it stops
+/// stepping and says why (frozenReason()).
+class SpringNetworkBody : public Body
+{
+public:
+  /// `def` must have passed validate().
+  explicit SpringNetworkBody(const SpringNetworkDef& def);
+
+  BodyKind kind() const override { return BodyKind::SpringNetwork; }
+  NetworkShape shape() const { return def_.shape; }
+  const SpringNetworkDef& definition() const { return def_; }
+
+  void step(double dt, const Environment& env) override;
+  void reset() override;
+
+  // Pins ---------------------------------------------------------------------------------------
+  /// Pins particle `index` and sets its target [m] (its current position to hold it in place).
+  Status pin(int index, const Eigen::Vector3d& target);
+  /// Moves the target of a pinned particle; it gets there by the end of the next step.
+  Status setPinTarget(int index, const Eigen::Vector3d& target);
+  /// Releases a pinned particle with the velocity it had.
+  Status unpin(int index);
+  bool isPinned(int index) const { return pinned_[index] != 0; }
+  int pinnedCount() const;
+  Eigen::Vector3d pinTarget(int index) const { return pin_target_.col(index); }
+  /// Index of the particle nearest to `point`.
+  int nearestParticle(const Eigen::Vector3d& point) const;
+
+  // Springs ------------------------------------------------------------------------------------
+  const std::vector<Spring>& springs() const { return springs_; }
+  bool hasSpringClass(SpringClass spring_class) const;
+  /// Sets stiffness [N/m] and damping [N·s/m] of every spring of `spring_class` (all springs when
+  /// empty). Takes effect at the next step; the implicit system is rebuilt every step.
+  Status setSpringConstants(std::optional<SpringClass> spring_class, double stiffness, double damping);
+
+  // Integrator ---------------------------------------------------------------------------------
+  const IntegratorDef& integrator() const { return integrator_; }
+  Status setIntegrator(const IntegratorDef& integrator);
+  const SolverReport& lastSolve() const { return last_solve_; }
+
+  // Measurements -------------------------------------------------------------------------------
+  double kineticEnergy() const;                                  ///< [J], free particles
+  double potentialEnergy(const Eigen::Vector3d& gravity) const;  ///< [J], springs + gravity (z = 0 at 0)
+  Eigen::Vector3d momentum() const;                              ///< [kg·m/s], free particles
+  bool frozen() const { return !frozen_reason_.empty(); }
+  const std::string& frozenReason() const { return frozen_reason_; }
+
+  /// Total force on every particle at state (x, v): gravity plus springs.
+  void computeForces(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v, const Eigen::Vector3d& gravity,
+                     Eigen::Matrix3Xd& force) const;
+
+private:
+  void stepSymplecticEuler(double h, const Eigen::Vector3d& gravity);
+  void stepVerlet(double h, const Eigen::Vector3d& gravity);
+  void stepImplicitEuler(double h, const Eigen::Vector3d& gravity);
+  void stepRk4(double h, const Eigen::Vector3d& gravity);
+  // a = f / m for free particles, 0 for pinned ones.
+  void accelerations(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v, const Eigen::Vector3d& gravity,
+                     Eigen::Matrix3Xd& a);
+
+  SpringNetworkDef def_;
+  std::vector<Spring> springs_;
+  IntegratorDef integrator_;
+  Eigen::VectorXd mass_;            // [kg], kept for pinned particles too
+  std::vector<char> pinned_;
+  Eigen::Matrix3Xd pin_target_;
+  bool verlet_started_ = false;     // Verlet needs its second-order start after build, reset or a switch
+  SolverReport last_solve_;
+  std::string frozen_reason_;
+
+  // Work arrays, sized once.
+  ImplicitEulerSolver implicit_solver_;
+  Eigen::Matrix3Xd force_, saved_position_, saved_velocity_;
+  Eigen::Matrix3Xd rk_x_, rk_v_, rk_kx_[4], rk_kv_[4];
+};
+
+/// A rope: `particles` evenly spaced from `start` to `end`, N − 1 stretch springs and, when
+/// bend.stiffness > 0, bend springs between i and i + 2.
+struct RopeDef
+{
+  std::string name;
+  int particles = 20;                                  ///< >= 2
+  Eigen::Vector3d start = Eigen::Vector3d(0, 0, 2);    ///< [m] particle 0
+  Eigen::Vector3d end = Eigen::Vector3d(2, 0, 2);      ///< [m] particle N − 1
+  double mass = 1.0;                                   ///< [kg] total, shared equally
+  double rest_length = 0.0;  ///< [m] total rest length; 0 = |end − start| (a larger or smaller value starts it slack or stretched)
+  double stretch_stiffness = 500.0;  ///< [N/m]
+  double stretch_damping = 0.5;      ///< [N·s/m]
+  double bend_stiffness = 0.0;       ///< [N/m]; 0 = no bend springs
+  double bend_damping = 0.0;         ///< [N·s/m]
+  std::vector<int> pins;             ///< indices pinned where they start; negative counts from the end (-1 = last)
+  IntegratorDef integrator;
+};
+
+Status validate(const RopeDef& def, int max_particles);
+
+/// The spring network of a rope (shape Rope). `def` must have passed validate().
+SpringNetworkDef buildRope(const RopeDef& def);
+
+}  // namespace core
+}  // namespace particle_sim

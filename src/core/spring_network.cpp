@@ -1,0 +1,421 @@
+#include "particle_sim/core/spring_network.h"
+
+#include <cmath>
+#include <limits>
+
+#include "particle_sim/core/validation.h"
+#include "particle_sim/core/world.h"
+
+namespace particle_sim
+{
+namespace core
+{
+namespace
+{
+std::string indexed(const char* field, std::size_t i) { return std::string(field) + "[" + std::to_string(i) + "]"; }
+
+Status checkIndex(const std::string& field, long long index, int count)
+{
+  if (index >= 0 && index < count) return Status::success();
+  return Status::failure(field + " = " + std::to_string(index) + " is out of range: must be in [0, " +
+                         std::to_string(count - 1) + "] (the body has " + std::to_string(count) + " particles)");
+}
+
+Status checkSpringConstants(const std::string& where, double stiffness, double damping)
+{
+  if (Status s = checkMin(where + "stiffness", stiffness, 0.0); !s) return s;
+  return checkMin(where + "damping", damping, 0.0);
+}
+}  // namespace
+
+Status validate(const SpringNetworkDef& def, int max_particles)
+{
+  if (Status s = validateBodyName(def.name); !s) return s;
+  const int n = static_cast<int>(def.positions.size());
+  if (Status s = checkIntRange("particles (count)", n, 1, max_particles); !s) return s;
+  if (def.masses.size() != def.positions.size())
+    return Status::failure("masses has " + std::to_string(def.masses.size()) + " entries for " + std::to_string(n) +
+                           " particles: give one mass per particle");
+  if (!def.velocities.empty() && def.velocities.size() != def.positions.size())
+    return Status::failure("velocities has " + std::to_string(def.velocities.size()) + " entries for " +
+                           std::to_string(n) + " particles: give one per particle or none");
+  for (int i = 0; i < n; ++i)
+  {
+    if (Status s = checkFinite(indexed("positions", i), def.positions[i]); !s) return s;
+    if (Status s = checkPositive(indexed("masses", i), def.masses[i]); !s) return s;
+    if (!def.velocities.empty())
+    {
+      if (Status s = checkFinite(indexed("velocities", i), def.velocities[i]); !s) return s;
+    }
+  }
+  for (std::size_t k = 0; k < def.springs.size(); ++k)
+  {
+    const Spring& spring = def.springs[k];
+    const std::string where = indexed("springs", k) + ".";
+    if (Status s = checkIndex(where + "i", spring.i, n); !s) return s;
+    if (Status s = checkIndex(where + "j", spring.j, n); !s) return s;
+    if (spring.i == spring.j)
+      return Status::failure(where + "i = " + where + "j = " + std::to_string(spring.i) +
+                             ": a spring joins two different particles");
+    if (Status s = checkMin(where + "rest_length", spring.rest_length, 0.0); !s) return s;
+    if (Status s = checkSpringConstants(where, spring.stiffness, spring.damping); !s) return s;
+  }
+  for (std::size_t k = 0; k < def.pins.size(); ++k)
+  {
+    if (Status s = checkIndex(indexed("pins", k), def.pins[k], n); !s) return s;
+  }
+  return validate(def.integrator);
+}
+
+SpringNetworkBody::SpringNetworkBody(const SpringNetworkDef& def) : Body(def.name), def_(def)
+{
+  const int n = static_cast<int>(def_.positions.size());
+  particles_.resize(n, n);
+  mass_.resize(n);
+  pinned_.assign(n, 0);
+  pin_target_.setZero(3, n);
+  force_.setZero(3, n);
+  saved_position_.setZero(3, n);
+  saved_velocity_.setZero(3, n);
+  rk_x_.setZero(3, n);
+  rk_v_.setZero(3, n);
+  for (int k = 0; k < 4; ++k)
+  {
+    rk_kx_[k].setZero(3, n);
+    rk_kv_[k].setZero(3, n);
+  }
+  implicit_solver_.resize(n, static_cast<int>(def_.springs.size()));
+  reset();
+}
+
+void SpringNetworkBody::reset()
+{
+  const int n = static_cast<int>(def_.positions.size());
+  ParticlePool& p = particles_;
+  for (int i = 0; i < n; ++i)
+  {
+    p.position.col(i) = def_.positions[i];
+    p.previous_position.col(i) = def_.positions[i];
+    p.velocity.col(i) = def_.velocities.empty() ? Eigen::Vector3d::Zero() : def_.velocities[i];
+    mass_[i] = def_.masses[i];
+    p.inverse_mass[i] = 1.0 / mass_[i];
+    p.age[i] = 0.0;
+    pinned_[i] = 0;
+  }
+  for (int index : def_.pins)
+  {
+    pinned_[index] = 1;
+    p.inverse_mass[index] = 0.0;
+    pin_target_.col(index) = def_.positions[index];
+  }
+  springs_ = def_.springs;
+  integrator_ = def_.integrator;
+  verlet_started_ = false;
+  last_solve_ = SolverReport{};
+  frozen_reason_.clear();
+}
+
+// ---------------------------------------------------------------------------------------------
+// Pins and springs
+
+Status SpringNetworkBody::pin(int index, const Eigen::Vector3d& target)
+{
+  if (Status s = checkIndex("index", index, particles_.size()); !s) return s;
+  if (Status s = checkFinite("target", target); !s) return s;
+  pinned_[index] = 1;
+  particles_.inverse_mass[index] = 0.0;
+  pin_target_.col(index) = target;
+  return Status::success();
+}
+
+Status SpringNetworkBody::setPinTarget(int index, const Eigen::Vector3d& target)
+{
+  if (Status s = checkIndex("index", index, particles_.size()); !s) return s;
+  if (!pinned_[index]) return Status::failure("index = " + std::to_string(index) + " is not pinned");
+  if (Status s = checkFinite("target", target); !s) return s;
+  pin_target_.col(index) = target;
+  return Status::success();
+}
+
+Status SpringNetworkBody::unpin(int index)
+{
+  if (Status s = checkIndex("index", index, particles_.size()); !s) return s;
+  if (!pinned_[index]) return Status::failure("index = " + std::to_string(index) + " is not pinned");
+  pinned_[index] = 0;
+  particles_.inverse_mass[index] = 1.0 / mass_[index];
+  return Status::success();
+}
+
+int SpringNetworkBody::pinnedCount() const
+{
+  int count = 0;
+  for (char p : pinned_) count += p;
+  return count;
+}
+
+int SpringNetworkBody::nearestParticle(const Eigen::Vector3d& point) const
+{
+  int best = 0;
+  double best_distance = std::numeric_limits<double>::infinity();
+  for (int i = 0; i < particles_.size(); ++i)
+  {
+    const double distance = (particles_.position.col(i) - point).squaredNorm();
+    if (distance < best_distance)
+    {
+      best_distance = distance;
+      best = i;
+    }
+  }
+  return best;
+}
+
+bool SpringNetworkBody::hasSpringClass(SpringClass spring_class) const
+{
+  for (const Spring& spring : springs_)
+  {
+    if (spring.spring_class == spring_class) return true;
+  }
+  return false;
+}
+
+Status SpringNetworkBody::setSpringConstants(std::optional<SpringClass> spring_class, double stiffness, double damping)
+{
+  if (Status s = checkSpringConstants("", stiffness, damping); !s) return s;
+  if (spring_class && !hasSpringClass(*spring_class))
+    return Status::failure("spring_class = '" + std::string(toString(*spring_class)) + "': body '" + name() +
+                           "' has no such springs");
+  for (Spring& spring : springs_)
+  {
+    if (spring_class && spring.spring_class != *spring_class) continue;
+    spring.stiffness = stiffness;
+    spring.damping = damping;
+  }
+  return Status::success();
+}
+
+Status SpringNetworkBody::setIntegrator(const IntegratorDef& integrator)
+{
+  if (Status s = validate(integrator); !s) return s;
+  if (integrator.type != integrator_.type) verlet_started_ = false;
+  integrator_ = integrator;
+  return Status::success();
+}
+
+// ---------------------------------------------------------------------------------------------
+// Forces and measurements
+
+void SpringNetworkBody::computeForces(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v,
+                                      const Eigen::Vector3d& gravity, Eigen::Matrix3Xd& force) const
+{
+  for (int i = 0; i < x.cols(); ++i) force.col(i) = mass_[i] * gravity;
+  for (const Spring& s : springs_)
+  {
+    const Eigen::Vector3d f = springForce(x.col(s.i), x.col(s.j), v.col(s.i), v.col(s.j), s.rest_length, s.stiffness,
+                                          s.damping);
+    force.col(s.i) += f;
+    force.col(s.j) -= f;
+  }
+}
+
+void SpringNetworkBody::accelerations(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v,
+                                      const Eigen::Vector3d& gravity, Eigen::Matrix3Xd& a)
+{
+  computeForces(x, v, gravity, a);
+  for (int i = 0; i < a.cols(); ++i) a.col(i) *= particles_.inverse_mass[i];  // 0 for pinned
+}
+
+double SpringNetworkBody::kineticEnergy() const
+{
+  double energy = 0.0;
+  for (int i = 0; i < particles_.size(); ++i)
+  {
+    if (!pinned_[i]) energy += 0.5 * mass_[i] * particles_.velocity.col(i).squaredNorm();
+  }
+  return energy;
+}
+
+double SpringNetworkBody::potentialEnergy(const Eigen::Vector3d& gravity) const
+{
+  double energy = 0.0;
+  for (const Spring& s : springs_)
+    energy += springEnergy(particles_.position.col(s.i), particles_.position.col(s.j), s.rest_length, s.stiffness);
+  for (int i = 0; i < particles_.size(); ++i)
+  {
+    if (!pinned_[i]) energy -= mass_[i] * gravity.dot(particles_.position.col(i));
+  }
+  return energy;
+}
+
+Eigen::Vector3d SpringNetworkBody::momentum() const
+{
+  Eigen::Vector3d total = Eigen::Vector3d::Zero();
+  for (int i = 0; i < particles_.size(); ++i)
+  {
+    if (!pinned_[i]) total += mass_[i] * particles_.velocity.col(i);
+  }
+  return total;
+}
+
+// ---------------------------------------------------------------------------------------------
+// The step
+
+void SpringNetworkBody::step(double dt, const Environment& env)
+{
+  if (frozen()) return;
+  ParticlePool& p = particles_;
+  const int n = p.size();
+  saved_position_ = p.position;
+  saved_velocity_ = p.velocity;
+
+  // Pinned particles travel in a straight line to their target during the step: give them that
+  // velocity now (every integrator then moves them there, as their acceleration is 0).
+  for (int i = 0; i < n; ++i)
+  {
+    if (pinned_[i]) p.velocity.col(i) = (pin_target_.col(i) - p.position.col(i)) / dt;
+  }
+
+  switch (integrator_.type)
+  {
+    case IntegratorType::SymplecticEuler:
+      stepSymplecticEuler(dt, env.gravity);
+      break;
+    case IntegratorType::Verlet:
+      stepVerlet(dt, env.gravity);
+      break;
+    case IntegratorType::ImplicitEuler:
+      stepImplicitEuler(dt, env.gravity);
+      break;
+    case IntegratorType::Rk4:
+      stepRk4(dt, env.gravity);
+      break;
+  }
+
+  // Pinned particles end exactly on their target.
+  for (int i = 0; i < n; ++i)
+  {
+    if (pinned_[i]) p.position.col(i) = pin_target_.col(i);
+  }
+  resolveCollisions(env, p);
+  for (int i = 0; i < n; ++i) p.age[i] += dt;
+  p.previous_position = saved_position_;
+
+  // A non-finite state is never kept: go back to the last good one and stop this body.
+  if (!p.position.allFinite() || !p.velocity.allFinite())
+  {
+    p.position = saved_position_;
+    p.velocity = saved_velocity_;
+    frozen_reason_ = std::string("state became non-finite under ") + toString(integrator_.type) + " at dt = " +
+                     formatValue(dt) + " s; the body is frozen at its last finite state";
+  }
+}
+
+// The lecture's loop: v += h f(x, v) / m, then x += h v with the new v.
+void SpringNetworkBody::stepSymplecticEuler(double h, const Eigen::Vector3d& gravity)
+{
+  ParticlePool& p = particles_;
+  accelerations(p.position, p.velocity, gravity, force_);
+  p.velocity += h * force_;
+  p.position += h * p.velocity;
+  last_solve_ = SolverReport{};
+}
+
+// The lecture's Verlet, x_{n+1} = x_n + k_d (x_n − x_{n−1}) + h² f(x_n, v_n) / m, written with the
+// displacement u_n = (x_n − x_{n−1}) / h kept in the velocity array (so collisions and pins can edit
+// it like a velocity): u_{n+1} = k_d u_n + h a_n, x_{n+1} = x_n + h u_{n+1}. The first step after
+// build, reset or a switch starts it at second order: x_{−1} = x_0 − h v_0 + h² a_0 / 2, i.e.
+// u_0 = v_0 − h a_0 / 2.
+void SpringNetworkBody::stepVerlet(double h, const Eigen::Vector3d& gravity)
+{
+  ParticlePool& p = particles_;
+  accelerations(p.position, p.velocity, gravity, force_);
+  if (!verlet_started_)
+  {
+    p.velocity -= 0.5 * h * force_;
+    verlet_started_ = true;
+  }
+  p.velocity = integrator_.verlet_damping * p.velocity + h * force_;
+  p.position += h * p.velocity;
+  last_solve_ = SolverReport{};
+}
+
+void SpringNetworkBody::stepImplicitEuler(double h, const Eigen::Vector3d& gravity)
+{
+  ParticlePool& p = particles_;
+  computeForces(p.position, p.velocity, gravity, force_);
+  last_solve_ = implicit_solver_.step(h, springs_, mass_, pinned_, force_, integrator_.cg_tolerance,
+                                      integrator_.cg_max_iterations, p.position, p.velocity);
+}
+
+// Classical fourth-order Runge–Kutta on (x, v) with derivative (v, a(x, v)).
+void SpringNetworkBody::stepRk4(double h, const Eigen::Vector3d& gravity)
+{
+  ParticlePool& p = particles_;
+  const Eigen::Matrix3Xd& x0 = saved_position_;  // the state at the start of the step
+  rk_kx_[0] = p.velocity;
+  accelerations(p.position, p.velocity, gravity, rk_kv_[0]);
+  const double stage_offset[3] = {0.5 * h, 0.5 * h, h};
+  for (int k = 1; k < 4; ++k)
+  {
+    rk_x_ = x0 + stage_offset[k - 1] * rk_kx_[k - 1];
+    rk_v_ = p.velocity + stage_offset[k - 1] * rk_kv_[k - 1];
+    rk_kx_[k] = rk_v_;
+    accelerations(rk_x_, rk_v_, gravity, rk_kv_[k]);
+  }
+  p.position = x0 + (h / 6.0) * (rk_kx_[0] + 2.0 * rk_kx_[1] + 2.0 * rk_kx_[2] + rk_kx_[3]);
+  p.velocity += (h / 6.0) * (rk_kv_[0] + 2.0 * rk_kv_[1] + 2.0 * rk_kv_[2] + rk_kv_[3]);
+  last_solve_ = SolverReport{};
+}
+
+// ---------------------------------------------------------------------------------------------
+// Ropes
+
+Status validate(const RopeDef& def, int max_particles)
+{
+  if (Status s = validateBodyName(def.name); !s) return s;
+  if (Status s = checkIntRange("particles", def.particles, 2, max_particles); !s) return s;
+  if (Status s = checkFinite("start", def.start); !s) return s;
+  if (Status s = checkFinite("end", def.end); !s) return s;
+  if ((def.end - def.start).norm() == 0.0 && def.rest_length == 0.0)
+    return Status::failure("start = end = " + formatValue(def.start) + " and rest_length = 0: the rope has no length");
+  if (Status s = checkPositive("mass", def.mass); !s) return s;
+  if (Status s = checkMin("rest_length", def.rest_length, 0.0); !s) return s;
+  if (Status s = checkSpringConstants("stretch.", def.stretch_stiffness, def.stretch_damping); !s) return s;
+  if (Status s = checkSpringConstants("bend.", def.bend_stiffness, def.bend_damping); !s) return s;
+  for (std::size_t k = 0; k < def.pins.size(); ++k)
+  {
+    const int pin = def.pins[k];
+    if (pin < -def.particles || pin >= def.particles)
+      return Status::failure(indexed("pins", k) + " = " + std::to_string(pin) + " is out of range: must be in [" +
+                             std::to_string(-def.particles) + ", " + std::to_string(def.particles - 1) +
+                             "] (negative counts from the end)");
+  }
+  return validate(def.integrator);
+}
+
+SpringNetworkDef buildRope(const RopeDef& def)
+{
+  SpringNetworkDef net;
+  net.name = def.name;
+  net.shape = NetworkShape::Rope;
+  net.integrator = def.integrator;
+  const int n = def.particles;
+  const double total_rest = def.rest_length > 0.0 ? def.rest_length : (def.end - def.start).norm();
+  const double segment = total_rest / (n - 1);
+  for (int i = 0; i < n; ++i)
+  {
+    net.positions.push_back(def.start + (def.end - def.start) * (static_cast<double>(i) / (n - 1)));
+    net.masses.push_back(def.mass / n);
+  }
+  for (int i = 0; i + 1 < n; ++i)
+    net.springs.push_back({i, i + 1, segment, def.stretch_stiffness, def.stretch_damping, SpringClass::Stretch});
+  if (def.bend_stiffness > 0.0)
+  {
+    for (int i = 0; i + 2 < n; ++i)
+      net.springs.push_back({i, i + 2, 2.0 * segment, def.bend_stiffness, def.bend_damping, SpringClass::Bend});
+  }
+  for (int pin : def.pins) net.pins.push_back(pin < 0 ? n + pin : pin);
+  return net;
+}
+
+}  // namespace core
+}  // namespace particle_sim
