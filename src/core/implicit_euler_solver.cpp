@@ -88,7 +88,11 @@ SolverReport ImplicitEulerSolver::step(double h, const std::vector<Spring>& spri
     multiply(springs, mass, direction_, product_);
     filter(pinned, product_);
     const double curvature = dot(direction_, product_);
-    if (!(curvature > 0.0)) break;  // not positive definite (or NaN): stop and report
+    if (!(curvature > 0.0))
+    {
+      report.breakdown = true;  // not positive definite (or NaN): the solve failed
+      break;
+    }
     const double alpha = delta_new / curvature;
     delta_v_ += alpha * direction_;
     residual_ -= alpha * product_;

@@ -299,13 +299,17 @@ void SpringNetworkBody::step(double dt, const Environment& env)
   for (int i = 0; i < n; ++i) p.age[i] += dt;
   p.previous_position = saved_position_;
 
-  // A non-finite state is never kept: go back to the last good one and stop this body.
-  if (!p.position.allFinite() || !p.velocity.allFinite())
+  // A non-finite state or a failed solve is never kept: go back to the last good state and stop
+  // this body.
+  if (!p.position.allFinite() || !p.velocity.allFinite() || last_solve_.breakdown)
   {
     p.position = saved_position_;
     p.velocity = saved_velocity_;
-    frozen_reason_ = std::string("state became non-finite under ") + toString(integrator_.type) + " at dt = " +
-                     formatValue(dt) + " s; the body is frozen at its last finite state";
+    p.previous_position = saved_position_;
+    frozen_reason_ = std::string(last_solve_.breakdown ? "the implicit solve failed (CG breakdown)"
+                                                       : "state became non-finite") +
+                     " under " + toString(integrator_.type) + " at dt = " + formatValue(dt) +
+                     " s; the body is frozen at its last good state";
   }
 }
 

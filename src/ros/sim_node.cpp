@@ -166,6 +166,15 @@ void SimNode::stepPhysics(std::uint64_t steps)
   }
   step_seconds_since_status_ += secondsSince(start);
   steps_since_status_ += steps;
+
+  // A body that froze (non-finite state) is reported once; the rest of the world goes on.
+  for (const auto& body : world_->bodies())
+  {
+    if (body->kind() != core::BodyKind::SpringNetwork) continue;
+    const auto& spring_body = static_cast<const core::SpringNetworkBody&>(*body);
+    if (spring_body.frozen() && reported_frozen_.insert(body->name()).second)
+      ROS_ERROR_NAMED("sim", "body '%s' is frozen: %s", body->name().c_str(), spring_body.frozenReason().c_str());
+  }
 }
 
 bool SimNode::lookupFrame(const std::string& frame, const Eigen::Vector3d& offset, double wait, Eigen::Vector3d& point,
@@ -261,8 +270,23 @@ void SimNode::printStatus(double wall_elapsed)
   const double sim_time = world_->simTime();
   const double rtf = wall_elapsed > 0.0 ? (sim_time - sim_time_at_status_) / wall_elapsed : 0.0;
   const double step_us = steps_since_status_ ? 1e6 * step_seconds_since_status_ / steps_since_status_ : 0.0;
-  ROS_INFO_NAMED("status", "sim time %.3f s | real-time factor %.2f | live particles %d | step %.1f us%s", sim_time,
-                 rtf, world_->particleCount(), step_us, paused_ ? " | paused" : "");
+  // The implicit solves of the last step: most CG iterations and worst relative residual.
+  int cg_iterations = 0;
+  double cg_residual = 0.0;
+  bool any_implicit = false;
+  for (const auto& body : world_->bodies())
+  {
+    if (body->kind() != core::BodyKind::SpringNetwork) continue;
+    const auto& spring_body = static_cast<const core::SpringNetworkBody&>(*body);
+    if (spring_body.integrator().type != core::IntegratorType::ImplicitEuler) continue;
+    any_implicit = true;
+    cg_iterations = std::max(cg_iterations, spring_body.lastSolve().iterations);
+    cg_residual = std::max(cg_residual, spring_body.lastSolve().relative_residual);
+  }
+  char solver[96] = "";
+  if (any_implicit) std::snprintf(solver, sizeof(solver), " | CG %d iterations, residual %.1e", cg_iterations, cg_residual);
+  ROS_INFO_NAMED("status", "sim time %.3f s | real-time factor %.2f | live particles %d | step %.1f us%s%s", sim_time,
+                 rtf, world_->particleCount(), step_us, solver, paused_ ? " | paused" : "");
   sim_time_at_status_ = sim_time;
   steps_since_status_ = 0;
   step_seconds_since_status_ = 0.0;

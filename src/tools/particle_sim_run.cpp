@@ -9,6 +9,8 @@
 #include <fstream>
 #include <iostream>
 #include <string>
+#include <vector>
+#include <algorithm>
 
 #include "particle_sim/scene/scene.h"
 
@@ -150,12 +152,38 @@ int main(int argc, char** argv)
   const auto start = Clock::now();
   auto last_progress = start;
   double stepping_seconds = 0.0;
+
+  // Implicit Euler bodies: CG iterations and residuals over the run.
+  struct SolverStats
+  {
+    const particle_sim::core::SpringNetworkBody* body;
+    long long iterations = 0;
+    int max_iterations = 0;
+    double worst_residual = 0.0;
+    long long unconverged = 0;
+  };
+  std::vector<SolverStats> solver_stats;
+  for (const auto& body : world->bodies())
+  {
+    const auto* spring_body = dynamic_cast<const particle_sim::core::SpringNetworkBody*>(body.get());
+    if (spring_body && spring_body->integrator().type == particle_sim::core::IntegratorType::ImplicitEuler)
+      solver_stats.push_back({spring_body});
+  }
+
   for (std::uint64_t k = 1; k <= steps; ++k)
   {
     const auto before = Clock::now();
     world->step();
     const auto after = Clock::now();
     stepping_seconds += std::chrono::duration<double>(after - before).count();
+    for (SolverStats& stats : solver_stats)
+    {
+      const auto& report = stats.body->lastSolve();
+      stats.iterations += report.iterations;
+      stats.max_iterations = std::max(stats.max_iterations, report.iterations);
+      stats.worst_residual = std::max(stats.worst_residual, report.relative_residual);
+      stats.unconverged += report.converged ? 0 : 1;
+    }
     if (output.is_open() && (k % write_every == 0 || k == steps)) writeStates(output, *world);
     if (after - last_progress > std::chrono::seconds(1))
     {
@@ -179,5 +207,12 @@ int main(int argc, char** argv)
   std::printf("steps %llu, sim time %.6g s, wall %.3f s, %.3f us/step, live particles %d\n",
               static_cast<unsigned long long>(steps), world->simTime(), wall,
               steps ? 1e6 * stepping_seconds / steps : 0.0, world->particleCount());
+  for (const SolverStats& stats : solver_stats)
+  {
+    std::printf("body '%s' implicit_euler: CG iterations mean %.1f, max %d; worst relative residual %.2e; %lld "
+                "steps not converged\n",
+                stats.body->name().c_str(), steps ? static_cast<double>(stats.iterations) / steps : 0.0,
+                stats.max_iterations, stats.worst_residual, stats.unconverged);
+  }
   return exit_code;
 }

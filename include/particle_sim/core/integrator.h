@@ -12,7 +12,8 @@ namespace core
 enum class IntegratorType
 {
   SymplecticEuler,  ///< the lecture's loop: v += h f/m, then x += h v (first order)
-  Verlet,           ///< the lecture's x' = x + k_d (x − x_prev) + h² f/m, second-order start (second order)
+  Verlet,           ///< the lecture's x' = x + k_d (x − x_prev) + h² f/m, second-order start (second order
+                    ///< for position-only forces; first order once forces depend on velocity)
   ImplicitEuler,    ///< linearised backward Euler solved by modified preconditioned CG (first order, stable)
   Rk4,              ///< classical Runge–Kutta, the accuracy reference (fourth order)
 };
@@ -39,7 +40,8 @@ struct SolverReport
 {
   int iterations = 0;
   double relative_residual = 0.0;  ///< |r| / |b| at the end
-  bool converged = true;
+  bool converged = true;           ///< the residual reached the tolerance within the iteration cap
+  bool breakdown = false;          ///< CG met a direction of non-positive (or NaN) curvature: the solve failed
 };
 
 }  // namespace core

@@ -47,8 +47,9 @@ Status validate(const SpringNetworkDef& def, int max_particles);
 /// to its pin target, and it ends the step exactly there. Targets can be moved between steps (a
 /// gripper carrying the rope end). Implicit Euler filters pinned degrees of freedom.
 ///
-/// A body whose state turns non-finite is restored to its last finite state and frozen: it stops
-/// stepping and says why (frozenReason()).
+/// A body whose state turns non-finite, or whose implicit solve breaks down, is restored to its last
+/// good state and frozen: it stops stepping and says why (frozenReason()). A solve that reaches its
+/// iteration cap is kept and reported (lastSolve().converged = false).
 class SpringNetworkBody : public Body
 {
 public:
@@ -124,7 +125,7 @@ private:
 };
 
 /// A rope: `particles` evenly spaced from `start` to `end`, N − 1 stretch springs and, when
-/// bend.stiffness > 0, bend springs between i and i + 2.
+/// bend_stiffness > 0, bend springs between i and i + 2.
 struct RopeDef
 {
   std::string name;

@@ -8,6 +8,7 @@
 
 #include <chrono>
 #include <memory>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -105,6 +106,8 @@ private:
   std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
   std::vector<FramePin> frame_pins_;
   std::vector<Eigen::Vector3d> frame_pin_start_, frame_pin_goal_;  // per frame pin, this tick
+
+  std::set<std::string> reported_frozen_;  // frozen bodies already logged
 
   bool delete_all_pending_ = true;
   std::vector<std::string> removed_bodies_;

@@ -1,0 +1,258 @@
+// The spring force element: the force is the lecture's formula and acts equally and oppositely on
+// both ends, its energy's negative gradient is the elastic force, and its Jacobian blocks are the
+// derivatives of the force (central finite differences), the definite form staying semi-definite.
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Eigenvalues>
+#include <cmath>
+#include <random>
+
+#include "particle_sim/core/spring.h"
+
+using namespace particle_sim::core;
+
+namespace
+{
+// A random spring configuration: x_j sits at length `stretch` * rest_length from x_i along a
+// random direction, so stretch < 1 is compressed and stretch > 1 stretched.
+struct Config
+{
+  Eigen::Vector3d xi, xj, vi, vj;
+  double rest_length, stiffness, damping;
+};
+
+Config randomConfig(std::mt19937_64& rng, double stretch)
+{
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  auto vec = [&]() { return Eigen::Vector3d(unit(rng), unit(rng), unit(rng)); };
+  Config c;
+  c.rest_length = 0.5 + 1.5 * 0.5 * (unit(rng) + 1.0);  // [0.5, 2]
+  c.stiffness = std::pow(10.0, 1.0 + unit(rng));         // [1, 100]
+  c.damping = 5.0 * 0.5 * (unit(rng) + 1.0) + 0.1;       // [0.1, 5.1]
+  c.xi = vec();
+  Eigen::Vector3d direction = vec();
+  while (direction.norm() < 0.1) direction = vec();
+  c.xj = c.xi + stretch * c.rest_length * direction.normalized();
+  c.vi = vec();
+  c.vj = vec();
+  return c;
+}
+
+// Central difference of `f` (R^3 -> R^3) at `x`: column k is (f(x + e e_k) - f(x - e e_k)) / 2e.
+template <typename F>
+Eigen::Matrix3d centralDifference(F f, const Eigen::Vector3d& x, double step)
+{
+  Eigen::Matrix3d jacobian;
+  for (int k = 0; k < 3; ++k)
+  {
+    Eigen::Vector3d plus = x, minus = x;
+    plus[k] += step;
+    minus[k] -= step;
+    jacobian.col(k) = (f(plus) - f(minus)) / (2.0 * step);
+  }
+  return jacobian;
+}
+
+// Compressed and stretched lengths, as multiples of the rest length.
+const double kStretches[] = {0.3, 0.7, 0.95, 1.05, 1.4, 2.5};
+}  // namespace
+
+TEST(Spring, ForceMatchesTheLectureFormulaOnHandComputedCases)
+{
+  // Elastic only: l = 5 along (0.6, 0.8, 0), stretched by 3: f_i = 10 * 3 * d.
+  Eigen::Vector3d f = springForce({0, 0, 0}, {3, 4, 0}, {0, 0, 0}, {0, 0, 0}, 2.0, 10.0, 0.0);
+  EXPECT_NEAR((f - Eigen::Vector3d(18, 24, 0)).norm(), 0.0, 1e-12);
+
+  // Compressed by 0.5 along +z with k = 4 (-2), closing at 2 m/s with k_d = 3 (-6): f_i = -8 z.
+  f = springForce({1, 1, 1}, {1, 1, 3}, {1, 0, 0.5}, {0, 2, -1.5}, 2.5, 4.0, 3.0);
+  EXPECT_NEAR((f - Eigen::Vector3d(0, 0, -8)).norm(), 0.0, 1e-12);
+
+  // l = 5 along (0, 0.6, 0.8), L = 4, k = 2 (+2); (v_j - v_i).d = 1.4, k_d = 0.5 (+0.7): 2.7 d.
+  f = springForce({1, 2, 3}, {1, 5, 7}, {0, 0, 0}, {1, 1, 1}, 4.0, 2.0, 0.5);
+  EXPECT_NEAR((f - Eigen::Vector3d(0, 1.62, 2.16)).norm(), 0.0, 1e-12);
+
+  // Coincident particles have no direction and get no force.
+  f = springForce({1, 2, 3}, {1, 2, 3}, {0, 0, 0}, {1, 0, 0}, 1.0, 10.0, 1.0);
+  EXPECT_TRUE(f.allFinite());
+  EXPECT_EQ(f.norm(), 0.0);
+}
+
+TEST(Spring, ForceIsZeroAtRestLengthWithEqualVelocities)
+{
+  const Eigen::Vector3d v(0.7, -1.2, 3.0);
+  EXPECT_NEAR(springForce({1, 2, 3}, {3, 2, 3}, v, v, 2.0, 250.0, 4.0).norm(), 0.0, 1e-12);
+  EXPECT_NEAR(springForce({0, 0, 0}, {0, 3, 4}, v, v, 5.0, 1e4, 10.0).norm(), 0.0, 1e-10);
+}
+
+TEST(Spring, ForceOnJIsTheOppositeOfTheForceOnI)
+{
+  std::mt19937_64 rng(7);
+  for (double stretch : kStretches)
+  {
+    for (int trial = 0; trial < 20; ++trial)
+    {
+      const Config c = randomConfig(rng, stretch);
+      const Eigen::Vector3d fi = springForce(c.xi, c.xj, c.vi, c.vj, c.rest_length, c.stiffness, c.damping);
+      const Eigen::Vector3d fj = springForce(c.xj, c.xi, c.vj, c.vi, c.rest_length, c.stiffness, c.damping);
+      EXPECT_LE((fi + fj).norm(), 1e-12 * (1.0 + fi.norm())) << "stretch " << stretch;
+      // The force is along the spring.
+      const Eigen::Vector3d d = (c.xj - c.xi).normalized();
+      EXPECT_LE((fi - fi.dot(d) * d).norm(), 1e-12 * (1.0 + fi.norm()));
+    }
+  }
+}
+
+TEST(Spring, PositionJacobianIsTheFiniteDifferenceDerivativeOfTheElasticForce)
+{
+  std::mt19937_64 rng(42);
+  for (double stretch : kStretches)
+  {
+    for (int trial = 0; trial < 20; ++trial)
+    {
+      const Config c = randomConfig(rng, stretch);
+      Eigen::Matrix3d dfdx, dfdv;
+      springJacobians(c.xi, c.xj, c.rest_length, c.stiffness, c.damping, false, dfdx, dfdv);
+      // Without damping the blocks are the exact derivatives of f_i (damping's position
+      // dependence is left out by design, so it is switched off here).
+      const double step = 1e-6 * c.rest_length;
+      const Eigen::Matrix3d by_xi = centralDifference(
+          [&](const Eigen::Vector3d& x) { return springForce(x, c.xj, c.vi, c.vj, c.rest_length, c.stiffness, 0.0); },
+          c.xi, step);
+      const Eigen::Matrix3d by_xj = centralDifference(
+          [&](const Eigen::Vector3d& x) { return springForce(c.xi, x, c.vi, c.vj, c.rest_length, c.stiffness, 0.0); },
+          c.xj, step);
+      const double scale = dfdx.norm();
+      EXPECT_LE((dfdx - by_xi).norm(), 1e-6 * scale) << "stretch " << stretch << "\n" << dfdx << "\n" << by_xi;
+      EXPECT_LE((-dfdx - by_xj).norm(), 1e-6 * scale) << "stretch " << stretch;
+      // The tangent stiffness is symmetric.
+      EXPECT_LE((dfdx - dfdx.transpose()).norm(), 1e-12 * scale);
+    }
+  }
+}
+
+TEST(Spring, VelocityJacobianIsTheFiniteDifferenceDerivativeOfTheForce)
+{
+  std::mt19937_64 rng(43);
+  for (double stretch : kStretches)
+  {
+    for (int trial = 0; trial < 20; ++trial)
+    {
+      const Config c = randomConfig(rng, stretch);
+      for (bool definite : {false, true})
+      {
+        Eigen::Matrix3d dfdx, dfdv;
+        springJacobians(c.xi, c.xj, c.rest_length, c.stiffness, c.damping, definite, dfdx, dfdv);
+        const Eigen::Matrix3d by_vi = centralDifference(
+            [&](const Eigen::Vector3d& v) {
+              return springForce(c.xi, c.xj, v, c.vj, c.rest_length, c.stiffness, c.damping);
+            },
+            c.vi, 1e-6);
+        const Eigen::Matrix3d by_vj = centralDifference(
+            [&](const Eigen::Vector3d& v) {
+              return springForce(c.xi, c.xj, c.vi, v, c.rest_length, c.stiffness, c.damping);
+            },
+            c.vj, 1e-6);
+        const double scale = dfdv.norm();
+        ASSERT_GT(scale, 0.0);
+        EXPECT_LE((dfdv - by_vi).norm(), 1e-6 * scale) << "stretch " << stretch;
+        EXPECT_LE((-dfdv - by_vj).norm(), 1e-6 * scale) << "stretch " << stretch;
+      }
+    }
+  }
+}
+
+TEST(Spring, DefiniteJacobianIsNegativeSemiDefiniteAndExactWhenStretched)
+{
+  std::mt19937_64 rng(44);
+  for (double stretch : kStretches)
+  {
+    for (int trial = 0; trial < 20; ++trial)
+    {
+      const Config c = randomConfig(rng, stretch);
+      Eigen::Matrix3d exact_dfdx, exact_dfdv, dfdx, dfdv;
+      springJacobians(c.xi, c.xj, c.rest_length, c.stiffness, c.damping, false, exact_dfdx, exact_dfdv);
+      springJacobians(c.xi, c.xj, c.rest_length, c.stiffness, c.damping, true, dfdx, dfdv);
+      const double scale = c.stiffness;
+
+      // -dfdx and -dfdv are symmetric positive semi-definite, compressed or not.
+      for (const Eigen::Matrix3d* block : {&dfdx, &dfdv})
+      {
+        const Eigen::Matrix3d minus = -*block;
+        EXPECT_LE((minus - minus.transpose()).norm(), 1e-12 * scale);
+        Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(minus);
+        EXPECT_GE(eigen.eigenvalues().minCoeff(), -1e-12 * scale) << "stretch " << stretch << "\n" << minus;
+      }
+
+      const Eigen::Vector3d d = (c.xj - c.xi).normalized();
+      if (stretch > 1.0)
+      {
+        // Stretched: the definite form is the exact derivative.
+        EXPECT_LE((dfdx - exact_dfdx).norm(), 1e-12 * scale) << "stretch " << stretch;
+      }
+      else
+      {
+        // Compressed: the exact one has a positive (unstable) transverse eigenvalue
+        // k (L/l - 1), which the definite form clamps to 0, leaving -k d d^T.
+        Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(exact_dfdx);
+        EXPECT_NEAR(eigen.eigenvalues().maxCoeff(), c.stiffness * (1.0 / stretch - 1.0), 1e-10 * scale);
+        EXPECT_LE((dfdx + c.stiffness * d * d.transpose()).norm(), 1e-12 * scale) << "stretch " << stretch;
+      }
+      // Along the spring both forms give the full stiffness: dfdx d = -k d.
+      EXPECT_LE((dfdx * d + c.stiffness * d).norm(), 1e-12 * scale);
+      // The velocity block does not depend on the definite flag.
+      EXPECT_LE((dfdv - exact_dfdv).norm(), 1e-12 * scale);
+    }
+  }
+}
+
+TEST(Spring, EnergyNegativeGradientIsTheElasticForce)
+{
+  // Hand case: stretched by 3 with k = 10 stores 10 * 9 / 2 = 45 J.
+  EXPECT_NEAR(springEnergy({0, 0, 0}, {3, 4, 0}, 2.0, 10.0), 45.0, 1e-12);
+  EXPECT_EQ(springEnergy({1, 2, 3}, {3, 2, 3}, 2.0, 10.0), 0.0);
+
+  std::mt19937_64 rng(45);
+  for (double stretch : kStretches)
+  {
+    for (int trial = 0; trial < 20; ++trial)
+    {
+      const Config c = randomConfig(rng, stretch);
+      const double step = 1e-6 * c.rest_length;
+      Eigen::Vector3d gradient_i, gradient_j;
+      for (int k = 0; k < 3; ++k)
+      {
+        Eigen::Vector3d plus = c.xi, minus = c.xi;
+        plus[k] += step;
+        minus[k] -= step;
+        gradient_i[k] = (springEnergy(plus, c.xj, c.rest_length, c.stiffness) -
+                         springEnergy(minus, c.xj, c.rest_length, c.stiffness)) /
+                        (2.0 * step);
+        plus = c.xj;
+        minus = c.xj;
+        plus[k] += step;
+        minus[k] -= step;
+        gradient_j[k] = (springEnergy(c.xi, plus, c.rest_length, c.stiffness) -
+                         springEnergy(c.xi, minus, c.rest_length, c.stiffness)) /
+                        (2.0 * step);
+      }
+      const Eigen::Vector3d elastic = springForce(c.xi, c.xj, c.vi, c.vj, c.rest_length, c.stiffness, 0.0);
+      const double scale = c.stiffness * c.rest_length;
+      EXPECT_LE((-gradient_i - elastic).norm(), 1e-6 * scale) << "stretch " << stretch;
+      EXPECT_LE((-gradient_j + elastic).norm(), 1e-6 * scale) << "stretch " << stretch;
+      EXPECT_GE(springEnergy(c.xi, c.xj, c.rest_length, c.stiffness), 0.0);
+    }
+  }
+}
+
+TEST(Spring, ClassAndNamesRoundTrip)
+{
+  for (SpringClass spring_class : {SpringClass::Stretch, SpringClass::Shear, SpringClass::Bend})
+  {
+    SpringClass parsed = SpringClass::Stretch;
+    ASSERT_TRUE(parseSpringClass(toString(spring_class), parsed));
+    EXPECT_EQ(parsed, spring_class);
+  }
+  SpringClass parsed = SpringClass::Bend;
+  EXPECT_FALSE(parseSpringClass("twist", parsed));
+}
