@@ -15,6 +15,12 @@ Status validate(const ContactDef& def, const std::string& where)
   return checkMin(where + ".friction", def.friction, 0.0);
 }
 
+Status validate(const AirDef& def)
+{
+  if (Status s = checkMin("air.drag", def.drag, 0.0); !s) return s;
+  return checkFinite("air.wind", def.wind);
+}
+
 Status validate(const GroundPlaneDef& def)
 {
   if (Status s = checkFinite("ground.height", def.height); !s) return s;

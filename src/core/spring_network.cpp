@@ -1,5 +1,8 @@
 #include "particle_sim/core/spring_network.h"
 
+#include <Eigen/Geometry>
+
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -12,6 +15,9 @@ namespace core
 {
 namespace
 {
+// Relative slack allowed above the strain limit, for rounding.
+constexpr double kStrainTolerance = 1e-9;
+
 std::string indexed(const char* field, std::size_t i) { return std::string(field) + "[" + std::to_string(i) + "]"; }
 
 Status checkIndex(const std::string& field, long long index, int count)
@@ -20,13 +26,29 @@ Status checkIndex(const std::string& field, long long index, int count)
   return Status::failure(field + " = " + std::to_string(index) + " is out of range: must be in [0, " +
                          std::to_string(count - 1) + "] (the body has " + std::to_string(count) + " particles)");
 }
-
-Status checkSpringConstants(const std::string& where, double stiffness, double damping)
-{
-  if (Status s = checkMin(where + "stiffness", stiffness, 0.0); !s) return s;
-  return checkMin(where + "damping", damping, 0.0);
-}
 }  // namespace
+
+const char* toString(NetworkShape shape)
+{
+  switch (shape)
+  {
+    case NetworkShape::Network:
+      return "spring_network";
+    case NetworkShape::Rope:
+      return "rope";
+    case NetworkShape::Cloth:
+      return "cloth";
+    case NetworkShape::Jelly:
+      return "jelly";
+  }
+  return "unknown";
+}
+
+Status validate(const StrainLimitDef& def)
+{
+  if (Status s = checkMin("max_strain", def.max_strain, 0.0); !s) return s;
+  return checkIntRange("strain_iterations", def.iterations, 1, 100000);
+}
 
 Status validate(const SpringNetworkDef& def, int max_particles)
 {
@@ -64,6 +86,17 @@ Status validate(const SpringNetworkDef& def, int max_particles)
   {
     if (Status s = checkIndex(indexed("pins", k), def.pins[k], n); !s) return s;
   }
+  for (std::size_t k = 0; k < def.triangles.size(); ++k)
+  {
+    const Eigen::Vector3i& t = def.triangles[k];
+    for (int c = 0; c < 3; ++c)
+    {
+      if (Status s = checkIndex(indexed("triangles", k) + "[" + std::to_string(c) + "]", t[c], n); !s) return s;
+    }
+    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2])
+      return Status::failure(indexed("triangles", k) + " repeats a particle: a triangle needs three different ones");
+  }
+  if (Status s = validate(def.strain_limit); !s) return s;
   return validate(def.integrator);
 }
 
@@ -77,6 +110,7 @@ SpringNetworkBody::SpringNetworkBody(const SpringNetworkDef& def) : Body(def.nam
   force_.setZero(3, n);
   saved_position_.setZero(3, n);
   saved_velocity_.setZero(3, n);
+  unlimited_position_.setZero(3, n);
   rk_x_.setZero(3, n);
   rk_v_.setZero(3, n);
   for (int k = 0; k < 4; ++k)
@@ -215,6 +249,69 @@ void SpringNetworkBody::computeForces(const Eigen::Matrix3Xd& x, const Eigen::Ma
     force.col(s.i) += f;
     force.col(s.j) -= f;
   }
+  addAirForces(x, v, force);
+}
+
+void SpringNetworkBody::addAirForces(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v,
+                                     Eigen::Matrix3Xd& force) const
+{
+  if (air_.drag == 0.0) return;
+  // Per triangle: f = drag · A · ((wind − v̄)·n) n with A n = (e1 × e2) / 2, shared by the corners.
+  for (const Eigen::Vector3i& t : def_.triangles)
+  {
+    const Eigen::Vector3d area_normal = 0.5 * (x.col(t[1]) - x.col(t[0])).cross(x.col(t[2]) - x.col(t[0]));
+    const double area = area_normal.norm();
+    if (area == 0.0) continue;
+    const Eigen::Vector3d relative = air_.wind - (v.col(t[0]) + v.col(t[1]) + v.col(t[2])) / 3.0;
+    // A ((u·n) n) = (u·(A n)) (A n) / A
+    const Eigen::Vector3d f = air_.drag * relative.dot(area_normal) / area * area_normal;
+    for (int c = 0; c < 3; ++c) force.col(t[c]) += f / 3.0;
+  }
+}
+
+double SpringNetworkBody::maxStrain() const
+{
+  double strain = 0.0;
+  for (const Spring& s : springs_)
+  {
+    if (s.spring_class == SpringClass::Bend || s.rest_length == 0.0) continue;
+    const double length = (particles_.position.col(s.j) - particles_.position.col(s.i)).norm();
+    strain = std::max(strain, (length - s.rest_length) / s.rest_length);
+  }
+  return strain;
+}
+
+void SpringNetworkBody::limitStrain(double h)
+{
+  const StrainLimitDef& limit = def_.strain_limit;
+  if (limit.max_strain <= 0.0) return;
+  ParticlePool& p = particles_;
+  unlimited_position_ = p.position;
+
+  // Relaxation passes (Provot 1995): each over-stretched spring is shortened to its longest allowed
+  // length, its two ends moving in proportion to their inverse masses.
+  for (int pass = 0; pass < limit.iterations; ++pass)
+  {
+    bool over = false;
+    for (const Spring& s : springs_)
+    {
+      if (s.spring_class == SpringClass::Bend) continue;
+      const double w_i = p.inverse_mass[s.i], w_j = p.inverse_mass[s.j];
+      if (w_i + w_j == 0.0) continue;
+      const Eigen::Vector3d delta = p.position.col(s.j) - p.position.col(s.i);
+      const double length = delta.norm();
+      const double longest = (1.0 + limit.max_strain) * s.rest_length;
+      if (length <= longest * (1.0 + kStrainTolerance)) continue;
+      over = true;
+      const Eigen::Vector3d correction = (length - longest) / (length * (w_i + w_j)) * delta;
+      p.position.col(s.i) += w_i * correction;
+      p.position.col(s.j) -= w_j * correction;
+    }
+    if (!over) break;
+  }
+
+  // Velocities follow the positions: what the correction moved, over the step.
+  p.velocity += (p.position - unlimited_position_) / h;
 }
 
 void SpringNetworkBody::accelerations(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v,
@@ -262,6 +359,7 @@ Eigen::Vector3d SpringNetworkBody::momentum() const
 void SpringNetworkBody::step(double dt, const Environment& env)
 {
   if (frozen()) return;
+  air_ = def_.triangles.empty() ? AirDef{} : env.air;
   ParticlePool& p = particles_;
   const int n = p.size();
   saved_position_ = p.position;
@@ -295,7 +393,13 @@ void SpringNetworkBody::step(double dt, const Environment& env)
   {
     if (pinned_[i]) p.position.col(i) = pin_target_.col(i);
   }
+  // Restriction forces: collisions, strain limiting, and collisions again for what it moved.
   resolveCollisions(env, p);
+  if (def_.strain_limit.max_strain > 0.0)
+  {
+    limitStrain(dt);
+    resolveCollisions(env, p);
+  }
   for (int i = 0; i < n; ++i) p.age[i] += dt;
   p.previous_position = saved_position_;
 
@@ -385,14 +489,7 @@ Status validate(const RopeDef& def, int max_particles)
   if (Status s = checkMin("rest_length", def.rest_length, 0.0); !s) return s;
   if (Status s = checkSpringConstants("stretch.", def.stretch_stiffness, def.stretch_damping); !s) return s;
   if (Status s = checkSpringConstants("bend.", def.bend_stiffness, def.bend_damping); !s) return s;
-  for (std::size_t k = 0; k < def.pins.size(); ++k)
-  {
-    const int pin = def.pins[k];
-    if (pin < -def.particles || pin >= def.particles)
-      return Status::failure(indexed("pins", k) + " = " + std::to_string(pin) + " is out of range: must be in [" +
-                             std::to_string(-def.particles) + ", " + std::to_string(def.particles - 1) +
-                             "] (negative counts from the end)");
-  }
+  if (Status s = checkPinIndices(def.pins, def.particles); !s) return s;
   return validate(def.integrator);
 }
 

@@ -17,6 +17,7 @@ Status validate(const WorldDef& def)
   if (Status s = checkIntRange("max_particles_per_body", def.max_particles_per_body, 1, 100000000); !s) return s;
   if (Status s = validate(def.integrator); !s) return s;
   if (Status s = validate(def.ground); !s) return s;
+  if (Status s = validate(def.air); !s) return s;
   for (const SphereColliderDef& sphere : def.spheres)
   {
     if (Status s = validate(sphere); !s) return s;
@@ -42,6 +43,26 @@ World::World(const WorldDef& def) : def_(def)
   env_.gravity = def.gravity;
   env_.ground = def.ground;
   env_.spheres = def.spheres;
+  env_.air = def.air;
+}
+
+Status World::setSphereCenter(const std::string& name, const Eigen::Vector3d& center)
+{
+  if (Status s = checkFinite("center", center); !s) return s;
+  for (SphereColliderDef& sphere : env_.spheres)
+  {
+    if (sphere.name != name) continue;
+    sphere.center = center;
+    return Status::success();
+  }
+  return Status::failure("sphere = '" + name + "': no sphere collider has that name");
+}
+
+Status World::setWind(const Eigen::Vector3d& wind)
+{
+  if (Status s = checkFinite("wind", wind); !s) return s;
+  env_.air.wind = wind;
+  return Status::success();
 }
 
 void World::step()
@@ -71,6 +92,24 @@ Status World::addRope(const RopeDef& def)
 {
   if (Status s = validate(def, def_.max_particles_per_body); !s) return s;
   return addSpringNetwork(buildRope(def));
+}
+
+Status World::addClothGrid(const ClothGridDef& def)
+{
+  if (Status s = validate(def, def_.max_particles_per_body); !s) return s;
+  return addSpringNetwork(buildClothGrid(def));
+}
+
+Status World::addMeshCloth(const MeshClothDef& def)
+{
+  if (Status s = validate(def, def_.max_particles_per_body); !s) return s;
+  return addSpringNetwork(buildMeshCloth(def));
+}
+
+Status World::addJelly(const JellyDef& def)
+{
+  if (Status s = validate(def, def_.max_particles_per_body); !s) return s;
+  return addSpringNetwork(buildJelly(def));
 }
 
 Status World::addBody(std::unique_ptr<Body> body)

@@ -35,7 +35,17 @@ struct SphereColliderDef
   ContactDef contact;
 };
 
+/// Air around cloth and jelly: each surface triangle of area A and unit normal n, moving at the
+/// mean velocity v of its corners, feels f = drag · A · ((wind − v)·n) n, shared equally by its
+/// three corners (only the normal component: a sheet moving in its own plane feels none).
+struct AirDef
+{
+  double drag = 0.0;                              ///< [N·s/m³] >= 0; 0 = no air (nothing computed)
+  Eigen::Vector3d wind = Eigen::Vector3d::Zero();  ///< [m/s] wind velocity
+};
+
 Status validate(const ContactDef& def, const std::string& where);
+Status validate(const AirDef& def);
 Status validate(const GroundPlaneDef& def);
 Status validate(const SphereColliderDef& def);
 
@@ -45,6 +55,7 @@ struct Environment
   Eigen::Vector3d gravity = Eigen::Vector3d(0.0, 0.0, -9.81);  ///< [m/s^2], z up (REP-103)
   GroundPlaneDef ground;
   std::vector<SphereColliderDef> spheres;
+  AirDef air;
 };
 
 /// Moves every live, non-pinned particle of `pool` that ended a step inside a collider back out.

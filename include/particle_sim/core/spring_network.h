@@ -20,6 +20,20 @@ enum class NetworkShape
 {
   Network,  ///< free-form particles and springs (the lecture's "interaction between particles")
   Rope,     ///< a chain 0-1-2-...; see buildRope()
+  Cloth,    ///< a sheet with surface triangles; see buildClothGrid(), buildMeshCloth()
+  Jelly,    ///< a 3-D lattice whose boundary faces are its surface triangles; see buildJelly()
+};
+
+const char* toString(NetworkShape shape);
+
+/// Provot's strain limiting (1995): after each step, relaxation passes over the stretch and shear
+/// springs move the ends of every spring longer than (1 + max_strain) times its rest length back to
+/// that length (shared by inverse mass; pinned ends stay), until none is over or `iterations`
+/// passes are done. Velocities change by the position correction over dt.
+struct StrainLimitDef
+{
+  double max_strain = 0.0;  ///< [-] > 0 turns it on (e.g. 0.1 = 10 %); 0 = off
+  int iterations = 20;      ///< cap on relaxation passes, >= 1
 };
 
 /// A body of particles joined by springs. Ropes, cloth and jelly are builders of this one
@@ -33,6 +47,8 @@ struct SpringNetworkDef
   std::vector<double> masses;               ///< [kg] > 0, one per particle
   std::vector<Spring> springs;
   std::vector<int> pins;                    ///< indices pinned where they start
+  std::vector<Eigen::Vector3i> triangles;   ///< surface triangles (cloth, jelly): drawn, published, feel the air
+  StrainLimitDef strain_limit;
   IntegratorDef integrator;
 };
 
@@ -89,13 +105,15 @@ public:
   const SolverReport& lastSolve() const { return last_solve_; }
 
   // Measurements -------------------------------------------------------------------------------
+  /// Largest (|x_j − x_i| − L) / L over the stretch and shear springs [-].
+  double maxStrain() const;
   double kineticEnergy() const;                                  ///< [J], free particles
   double potentialEnergy(const Eigen::Vector3d& gravity) const;  ///< [J], springs + gravity (z = 0 at 0)
   Eigen::Vector3d momentum() const;                              ///< [kg·m/s], free particles
   bool frozen() const { return !frozen_reason_.empty(); }
   const std::string& frozenReason() const { return frozen_reason_; }
 
-  /// Total force on every particle at state (x, v): gravity plus springs.
+  /// Total force on every particle at state (x, v): gravity, springs and the air of the current step.
   void computeForces(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v, const Eigen::Vector3d& gravity,
                      Eigen::Matrix3Xd& force) const;
 
@@ -104,13 +122,18 @@ private:
   void stepVerlet(double h, const Eigen::Vector3d& gravity);
   void stepImplicitEuler(double h, const Eigen::Vector3d& gravity);
   void stepRk4(double h, const Eigen::Vector3d& gravity);
+  // Provot's correction of over-stretched springs, then velocities by the correction over h.
+  void limitStrain(double h);
   // a = f / m for free particles, 0 for pinned ones.
   void accelerations(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v, const Eigen::Vector3d& gravity,
                      Eigen::Matrix3Xd& a);
+  // Adds the air's force on every surface triangle (nothing when there is no air or no triangle).
+  void addAirForces(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v, Eigen::Matrix3Xd& force) const;
 
   SpringNetworkDef def_;
   std::vector<Spring> springs_;
   IntegratorDef integrator_;
+  AirDef air_;                      // the air of the current step
   Eigen::VectorXd mass_;            // [kg], kept for pinned particles too
   std::vector<char> pinned_;
   Eigen::Matrix3Xd pin_target_;
@@ -120,7 +143,7 @@ private:
 
   // Work arrays, sized once.
   ImplicitEulerSolver implicit_solver_;
-  Eigen::Matrix3Xd force_, saved_position_, saved_velocity_;
+  Eigen::Matrix3Xd force_, saved_position_, saved_velocity_, unlimited_position_;
   Eigen::Matrix3Xd rk_x_, rk_v_, rk_kx_[4], rk_kv_[4];
 };
 

@@ -69,5 +69,27 @@ inline Status checkIntRange(const std::string& field, long long value, long long
                          std::to_string(min) + ", " + std::to_string(max) + "]");
 }
 
+/// Stiffness [N/m] and damping [N·s/m] of a spring class, both >= 0; `where` prefixes the names.
+inline Status checkSpringConstants(const std::string& where, double stiffness, double damping)
+{
+  if (Status s = checkMin(where + "stiffness", stiffness, 0.0); !s) return s;
+  return checkMin(where + "damping", damping, 0.0);
+}
+
+/// Pin indices of a body of `count` particles; negative ones count from the end (-1 = last).
+template <typename Container>
+Status checkPinIndices(const Container& pins, int count)
+{
+  for (std::size_t k = 0; k < pins.size(); ++k)
+  {
+    const long long pin = pins[k];
+    if (pin < -count || pin >= count)
+      return Status::failure("pins[" + std::to_string(k) + "] = " + std::to_string(pin) + " is out of range: must be in [" +
+                             std::to_string(-count) + ", " + std::to_string(count - 1) +
+                             "] (negative counts from the end)");
+  }
+  return Status::success();
+}
+
 }  // namespace core
 }  // namespace particle_sim

@@ -7,7 +7,9 @@
 
 #include "particle_sim/core/body.h"
 #include "particle_sim/core/emitter.h"
+#include "particle_sim/core/cloth.h"
 #include "particle_sim/core/environment.h"
+#include "particle_sim/core/jelly.h"
 #include "particle_sim/core/integrator.h"
 #include "particle_sim/core/spring_network.h"
 #include "particle_sim/core/status.h"
@@ -26,6 +28,7 @@ struct WorldDef
   IntegratorDef integrator;                 ///< default integrator of spring bodies that set none
   GroundPlaneDef ground;
   std::vector<SphereColliderDef> spheres;
+  AirDef air;
 };
 
 /// Largest accepted physics step [s]; larger steps are refused by validate(WorldDef).
@@ -53,6 +56,11 @@ public:
   const Environment& environment() const { return env_; }
   double dt() const { return def_.dt; }
 
+  /// Moves the sphere collider called `name` to `center` [m] (a sphere carried by a robot's tool).
+  Status setSphereCenter(const std::string& name, const Eigen::Vector3d& center);
+  /// Sets the wind velocity [m/s] felt by cloth and jelly from the next step.
+  Status setWind(const Eigen::Vector3d& wind);
+
   /// Sim time [s] = stepCount() * dt().
   double simTime() const { return static_cast<double>(step_count_) * def_.dt; }
   std::uint64_t stepCount() const { return step_count_; }
@@ -69,6 +77,12 @@ public:
   Status addSpringNetwork(const SpringNetworkDef& def);
   /// Validates `def` and adds the rope it builds.
   Status addRope(const RopeDef& def);
+  /// Validates `def` and adds the grid cloth it builds.
+  Status addClothGrid(const ClothGridDef& def);
+  /// Validates `def` and adds the mesh cloth it builds.
+  Status addMeshCloth(const MeshClothDef& def);
+  /// Validates `def` and adds the jelly it builds.
+  Status addJelly(const JellyDef& def);
   /// Adds an already built body, refusing a duplicate or empty name.
   Status addBody(std::unique_ptr<Body> body);
   Status removeBody(const std::string& name);

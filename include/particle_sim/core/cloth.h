@@ -1,0 +1,85 @@
+#pragma once
+
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "particle_sim/core/spring_network.h"
+#include "particle_sim/core/status.h"
+
+namespace particle_sim
+{
+namespace core
+{
+/// Spring constants of one class.
+struct SpringConstants
+{
+  double stiffness = 0.0;  ///< [N/m] >= 0
+  double damping = 0.0;    ///< [N·s/m] >= 0
+};
+
+/// A regular grid cloth after Provot (1995): particle (a, b), a in [0, nu), b in [0, nv), sits at
+/// origin + a/(nu−1) edge_u + b/(nv−1) edge_v and has index b·nu + a. Stretch springs join grid
+/// neighbours, shear springs the two diagonals of each cell, bend springs particles two apart
+/// along u and v. Each cell is split into two surface triangles.
+///
+///      edge_v
+///        ^   corner_01 ---- edge_v1 ---- corner_11
+///        |       |                           |
+///        |    edge_u0                     edge_u1
+///        |       |                           |
+///     origin corner_00 ---- edge_v0 ---- corner_10  --> edge_u
+struct ClothGridDef
+{
+  std::string name;
+  Eigen::Vector3d origin = Eigen::Vector3d(-0.5, 0.0, 2.0);  ///< [m] particle (0, 0)
+  Eigen::Vector3d edge_u = Eigen::Vector3d(1.0, 0.0, 0.0);   ///< [m] from (0, 0) to (nu − 1, 0)
+  Eigen::Vector3d edge_v = Eigen::Vector3d(0.0, 1.0, 0.0);   ///< [m] from (0, 0) to (0, nv − 1)
+  int nu = 15;                                               ///< particles along u, >= 2
+  int nv = 15;                                               ///< particles along v, >= 2
+  double mass = 0.5;                                         ///< [kg] total, shared equally
+  SpringConstants stretch{1000.0, 0.5};
+  SpringConstants shear{200.0, 0.2};
+  SpringConstants bend{20.0, 0.05};   ///< stiffness 0 = no bend springs
+  std::vector<int> pins;              ///< indices; negative counts from the end
+  std::vector<std::string> named_pins;  ///< corner_00, corner_10, corner_01, corner_11, edge_u0, edge_u1, edge_v0, edge_v1
+  StrainLimitDef strain_limit;
+  IntegratorDef integrator;
+};
+
+Status validate(const ClothGridDef& def, int max_particles);
+/// The spring network of a grid cloth (shape Cloth). `def` must have passed validate().
+SpringNetworkDef buildClothGrid(const ClothGridDef& def);
+/// The particle indices a named pin of a nu x nv grid covers; false when the name is unknown.
+bool namedGridPins(const std::string& name, int nu, int nv, std::vector<int>& indices);
+/// "corner_00, corner_10, corner_01, corner_11, edge_u0, edge_u1, edge_v0, edge_v1"
+const char* namedGridPinNames();
+
+/// A cloth from a triangle mesh: every mesh edge is a stretch spring at its initial length, and
+/// across every interior edge the two opposite vertices are joined by a bend spring.
+struct MeshClothDef
+{
+  std::string name;
+  std::vector<Eigen::Vector3d> vertices;   ///< [m]
+  std::vector<Eigen::Vector3i> triangles;  ///< vertex indices
+  double mass = 0.5;                       ///< [kg] total, shared equally by the vertices
+  SpringConstants stretch{1000.0, 0.5};
+  SpringConstants bend{20.0, 0.05};        ///< stiffness 0 = no bend springs
+  std::vector<int> pins;
+  StrainLimitDef strain_limit;
+  IntegratorDef integrator;
+};
+
+Status validate(const MeshClothDef& def, int max_particles);
+/// The spring network of a mesh cloth (shape Cloth). `def` must have passed validate().
+SpringNetworkDef buildMeshCloth(const MeshClothDef& def);
+
+/// Area-weighted unit vertex normals of a triangle surface (zero for a vertex in no triangle).
+void vertexNormals(const Eigen::Matrix3Xd& positions, int count, const std::vector<Eigen::Vector3i>& triangles,
+                   std::vector<Eigen::Vector3d>& normals);
+
+/// Per particle, the largest strain (l − L) / L of the stretch and shear springs it belongs to.
+void vertexStrains(const SpringNetworkBody& body, std::vector<double>& strains);
+
+}  // namespace core
+}  // namespace particle_sim

@@ -1,0 +1,236 @@
+#include "particle_sim/core/cloth.h"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <map>
+#include <utility>
+
+#include "particle_sim/core/validation.h"
+#include "particle_sim/core/world.h"
+
+namespace particle_sim
+{
+namespace core
+{
+namespace
+{
+Spring makeSpring(const std::vector<Eigen::Vector3d>& x, int i, int j, const SpringConstants& c, SpringClass cls)
+{
+  return {i, j, (x[j] - x[i]).norm(), c.stiffness, c.damping, cls};
+}
+
+Status checkCommon(const std::string& name, const SpringConstants& stretch, const SpringConstants& bend, double mass,
+                   const StrainLimitDef& strain_limit, const IntegratorDef& integrator)
+{
+  if (Status s = validateBodyName(name); !s) return s;
+  if (Status s = checkPositive("mass", mass); !s) return s;
+  if (Status s = checkSpringConstants("stretch.", stretch.stiffness, stretch.damping); !s) return s;
+  if (Status s = checkSpringConstants("bend.", bend.stiffness, bend.damping); !s) return s;
+  if (Status s = checkMin("max_strain", strain_limit.max_strain, 0.0); !s) return s;
+  if (Status s = checkIntRange("strain_iterations", strain_limit.iterations, 1, 100000); !s) return s;
+  return validate(integrator);
+}
+
+void addPins(const std::vector<int>& pins, int n, std::vector<int>& out)
+{
+  for (int pin : pins) out.push_back(pin < 0 ? n + pin : pin);
+}
+}  // namespace
+
+const char* namedGridPinNames() { return "corner_00, corner_10, corner_01, corner_11, edge_u0, edge_u1, edge_v0, edge_v1"; }
+
+bool namedGridPins(const std::string& name, int nu, int nv, std::vector<int>& indices)
+{
+  auto index = [nu](int a, int b) { return b * nu + a; };
+  indices.clear();
+  if (name == "corner_00")
+    indices = {index(0, 0)};
+  else if (name == "corner_10")
+    indices = {index(nu - 1, 0)};
+  else if (name == "corner_01")
+    indices = {index(0, nv - 1)};
+  else if (name == "corner_11")
+    indices = {index(nu - 1, nv - 1)};
+  else if (name == "edge_v0" || name == "edge_v1")  // the edges along u, at v = 0 or v = 1
+    for (int a = 0; a < nu; ++a) indices.push_back(index(a, name == "edge_v0" ? 0 : nv - 1));
+  else if (name == "edge_u0" || name == "edge_u1")  // the edges along v, at u = 0 or u = 1
+    for (int b = 0; b < nv; ++b) indices.push_back(index(name == "edge_u0" ? 0 : nu - 1, b));
+  else
+    return false;
+  return true;
+}
+
+Status validate(const ClothGridDef& def, int max_particles)
+{
+  if (Status s = checkCommon(def.name, def.stretch, def.bend, def.mass, def.strain_limit, def.integrator); !s) return s;
+  if (Status s = checkSpringConstants("shear.", def.shear.stiffness, def.shear.damping); !s) return s;
+  if (Status s = checkFinite("origin", def.origin); !s) return s;
+  if (Status s = checkFinite("edge_u", def.edge_u); !s) return s;
+  if (Status s = checkFinite("edge_v", def.edge_v); !s) return s;
+  if (def.edge_u.cross(def.edge_v).norm() <= 1e-12 * def.edge_u.norm() * def.edge_v.norm() ||
+      def.edge_u.norm() == 0.0)
+    return Status::failure("edge_u = " + formatValue(def.edge_u) + " and edge_v = " + formatValue(def.edge_v) +
+                           " must be non-zero and not parallel");
+  if (Status s = checkIntRange("resolution[0]", def.nu, 2, max_particles); !s) return s;
+  if (Status s = checkIntRange("resolution[1]", def.nv, 2, max_particles); !s) return s;
+  if (static_cast<long long>(def.nu) * def.nv > max_particles)
+    return Status::failure("resolution = [" + std::to_string(def.nu) + ", " + std::to_string(def.nv) + "] makes " +
+                           std::to_string(static_cast<long long>(def.nu) * def.nv) +
+                           " particles, over the cap of " + std::to_string(max_particles));
+  if (Status s = checkPinIndices(def.pins, def.nu * def.nv); !s) return s;
+  std::vector<int> ignored;
+  for (std::size_t k = 0; k < def.named_pins.size(); ++k)
+  {
+    if (!namedGridPins(def.named_pins[k], def.nu, def.nv, ignored))
+      return Status::failure("pins[" + std::to_string(k) + "] = '" + def.named_pins[k] +
+                             "' is not a pin name; allowed: " + namedGridPinNames() + ", or an index");
+  }
+  return Status::success();
+}
+
+SpringNetworkDef buildClothGrid(const ClothGridDef& def)
+{
+  SpringNetworkDef net;
+  net.name = def.name;
+  net.shape = NetworkShape::Cloth;
+  net.integrator = def.integrator;
+  net.strain_limit = def.strain_limit;
+  const int nu = def.nu, nv = def.nv, n = nu * nv;
+  auto index = [nu](int a, int b) { return b * nu + a; };
+
+  // Particles on the grid, equal masses.
+  for (int b = 0; b < nv; ++b)
+    for (int a = 0; a < nu; ++a)
+      net.positions.push_back(def.origin + def.edge_u * (static_cast<double>(a) / (nu - 1)) +
+                              def.edge_v * (static_cast<double>(b) / (nv - 1)));
+  net.masses.assign(n, def.mass / n);
+
+  // Provot's springs: stretch to the neighbours, shear across each cell, bend two apart.
+  const std::vector<Eigen::Vector3d>& x = net.positions;
+  for (int b = 0; b < nv; ++b)
+  {
+    for (int a = 0; a < nu; ++a)
+    {
+      if (a + 1 < nu) net.springs.push_back(makeSpring(x, index(a, b), index(a + 1, b), def.stretch, SpringClass::Stretch));
+      if (b + 1 < nv) net.springs.push_back(makeSpring(x, index(a, b), index(a, b + 1), def.stretch, SpringClass::Stretch));
+      if (a + 1 < nu && b + 1 < nv)
+      {
+        net.springs.push_back(makeSpring(x, index(a, b), index(a + 1, b + 1), def.shear, SpringClass::Shear));
+        net.springs.push_back(makeSpring(x, index(a + 1, b), index(a, b + 1), def.shear, SpringClass::Shear));
+        // Two triangles per cell, both wound like (edge_u, edge_v).
+        net.triangles.emplace_back(index(a, b), index(a + 1, b), index(a + 1, b + 1));
+        net.triangles.emplace_back(index(a, b), index(a + 1, b + 1), index(a, b + 1));
+      }
+      if (def.bend.stiffness > 0.0)
+      {
+        if (a + 2 < nu) net.springs.push_back(makeSpring(x, index(a, b), index(a + 2, b), def.bend, SpringClass::Bend));
+        if (b + 2 < nv) net.springs.push_back(makeSpring(x, index(a, b), index(a, b + 2), def.bend, SpringClass::Bend));
+      }
+    }
+  }
+
+  // Pins by index and by name, each particle once.
+  addPins(def.pins, n, net.pins);
+  for (const std::string& name : def.named_pins)
+  {
+    std::vector<int> indices;
+    namedGridPins(name, nu, nv, indices);
+    net.pins.insert(net.pins.end(), indices.begin(), indices.end());
+  }
+  std::sort(net.pins.begin(), net.pins.end());
+  net.pins.erase(std::unique(net.pins.begin(), net.pins.end()), net.pins.end());
+  return net;
+}
+
+Status validate(const MeshClothDef& def, int max_particles)
+{
+  if (Status s = checkCommon(def.name, def.stretch, def.bend, def.mass, def.strain_limit, def.integrator); !s) return s;
+  const int n = static_cast<int>(def.vertices.size());
+  if (Status s = checkIntRange("vertices (count)", n, 3, max_particles); !s) return s;
+  if (def.triangles.empty()) return Status::failure("triangles is empty: a mesh cloth needs at least one triangle");
+  for (int i = 0; i < n; ++i)
+  {
+    if (Status s = checkFinite("vertices[" + std::to_string(i) + "]", def.vertices[i]); !s) return s;
+  }
+  for (std::size_t k = 0; k < def.triangles.size(); ++k)
+  {
+    const Eigen::Vector3i& t = def.triangles[k];
+    for (int c = 0; c < 3; ++c)
+    {
+      if (t[c] < 0 || t[c] >= n)
+        return Status::failure("triangles[" + std::to_string(k) + "] uses vertex " + std::to_string(t[c]) +
+                               ", out of range: the mesh has " + std::to_string(n) + " vertices");
+    }
+    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2])
+      return Status::failure("triangles[" + std::to_string(k) + "] repeats a vertex");
+  }
+  return checkPinIndices(def.pins, n);
+}
+
+SpringNetworkDef buildMeshCloth(const MeshClothDef& def)
+{
+  SpringNetworkDef net;
+  net.name = def.name;
+  net.shape = NetworkShape::Cloth;
+  net.integrator = def.integrator;
+  net.strain_limit = def.strain_limit;
+  net.positions = def.vertices;
+  net.triangles = def.triangles;
+  const int n = static_cast<int>(def.vertices.size());
+  net.masses.assign(n, def.mass / n);
+
+  // Each edge once (keyed by its sorted ends), with the vertices opposite it in its triangles.
+  std::map<std::pair<int, int>, std::vector<int>> opposite;
+  for (const Eigen::Vector3i& t : def.triangles)
+  {
+    for (int c = 0; c < 3; ++c)
+    {
+      const int i = t[c], j = t[(c + 1) % 3], k = t[(c + 2) % 3];
+      opposite[{std::min(i, j), std::max(i, j)}].push_back(k);
+    }
+  }
+  for (const auto& [edge, across] : opposite)
+  {
+    net.springs.push_back(makeSpring(net.positions, edge.first, edge.second, def.stretch, SpringClass::Stretch));
+    // An interior edge joins two triangles: a bend spring between the vertices across it.
+    if (def.bend.stiffness > 0.0 && across.size() == 2 && across[0] != across[1])
+      net.springs.push_back(makeSpring(net.positions, across[0], across[1], def.bend, SpringClass::Bend));
+  }
+  addPins(def.pins, n, net.pins);
+  return net;
+}
+
+void vertexNormals(const Eigen::Matrix3Xd& positions, int count, const std::vector<Eigen::Vector3i>& triangles,
+                   std::vector<Eigen::Vector3d>& normals)
+{
+  normals.assign(count, Eigen::Vector3d::Zero());
+  // The cross product of two edges is the normal times twice the area: summing it weights by area.
+  for (const Eigen::Vector3i& t : triangles)
+  {
+    const Eigen::Vector3d e1 = positions.col(t[1]) - positions.col(t[0]);
+    const Eigen::Vector3d e2 = positions.col(t[2]) - positions.col(t[0]);
+    const Eigen::Vector3d area_normal = e1.cross(e2);
+    for (int c = 0; c < 3; ++c) normals[t[c]] += area_normal;
+  }
+  for (Eigen::Vector3d& normal : normals)
+  {
+    const double length = normal.norm();
+    if (length > 0.0) normal /= length;
+  }
+}
+
+void vertexStrains(const SpringNetworkBody& body, std::vector<double>& strains)
+{
+  const ParticlePool& p = body.particles();
+  strains.assign(p.size(), 0.0);
+  for (const Spring& s : body.springs())
+  {
+    if (s.spring_class == SpringClass::Bend || s.rest_length == 0.0) continue;
+    const double strain = ((p.position.col(s.j) - p.position.col(s.i)).norm() - s.rest_length) / s.rest_length;
+    strains[s.i] = std::max(strains[s.i], strain);
+    strains[s.j] = std::max(strains[s.j], strain);
+  }
+}
+
+}  // namespace core
+}  // namespace particle_sim
