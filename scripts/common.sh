@@ -7,7 +7,7 @@ PARTICLE_SIM_BUILD="$PARTICLE_SIM_ROOT/build"
 # Debian packages the package needs to build, run and test (ROS 1 from Debian's own archive).
 PARTICLE_SIM_PACKAGES=(
   build-essential cmake catkin ros-core-dev libroscpp-dev libtf2-ros-dev ros-visualization-msgs
-  ros-geometry-msgs ros-std-msgs ros-std-srvs libros-rosgraph-msgs-dev ros-message-generation
+  ros-geometry-msgs ros-shape-msgs ros-std-msgs ros-std-srvs libros-rosgraph-msgs-dev ros-message-generation
   libyaml-cpp-dev libeigen3-dev libgtest-dev librostest-dev python3-rostest python3-rospy
   python3-roslaunch python3-rosservice python3-rostopic rosbash
 )

@@ -12,6 +12,7 @@ namespace core
 Status validate(const ContactDef& def, const std::string& where)
 {
   if (Status s = checkRange(where + ".restitution", def.restitution, 0.0, 1.0); !s) return s;
+  if (Status s = checkMin(where + ".bounce_speed", def.bounce_speed, 0.0); !s) return s;
   return checkMin(where + ".friction", def.friction, 0.0);
 }
 
@@ -38,15 +39,16 @@ Status validate(const SphereColliderDef& def)
 namespace
 {
 // Applies one contact: pushes the particle out along the outward unit normal n by (1 + e) times
-// the penetration depth, reflects the inward normal velocity with restitution e and removes
-// tangential velocity by Coulomb friction on the normal impulse.
+// the penetration depth, reflects the inward normal velocity with restitution e (0 below the
+// bounce speed) and removes tangential velocity by Coulomb friction on the normal impulse.
 void respond(const ContactDef& contact, const Eigen::Vector3d& n, double depth, Eigen::Ref<Eigen::Vector3d> x,
              Eigen::Ref<Eigen::Vector3d> v)
 {
-  const double e = contact.restitution;
-  x += (1.0 + e) * depth * n;
-
   const double vn = v.dot(n);
+  // Slow impacts (a particle resting on the surface, pulled in by one step of gravity) do not
+  // bounce: without this, resting particles would keep a velocity they never move with.
+  const double e = vn < -contact.bounce_speed ? contact.restitution : 0.0;
+  x += (1.0 + e) * depth * n;
   if (vn >= 0.0) return;  // already leaving the surface
   const Eigen::Vector3d v_tangent = v - vn * n;
   const double normal_change = -(1.0 + e) * vn;  // > 0

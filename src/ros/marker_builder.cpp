@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "particle_sim/core/cloth.h"
 #include "particle_sim/core/emitter.h"
 #include "particle_sim/core/spring_network.h"
 
@@ -9,6 +10,21 @@ namespace particle_sim
 {
 namespace ros_interface
 {
+namespace
+{
+std_msgs::ColorRGBA rgba(float r, float g, float b, float a = 1.0f);
+}  // namespace
+
+std_msgs::ColorRGBA strainColor(double strain, double max)
+{
+  // Blue -> green -> red as s goes 0 -> 1/2 -> 1.
+  const double s = std::clamp(max > 0.0 ? strain / max : 0.0, 0.0, 1.0);
+  const float r = static_cast<float>(std::clamp(2.0 * s - 1.0, 0.0, 1.0));
+  const float b = static_cast<float>(std::clamp(1.0 - 2.0 * s, 0.0, 1.0));
+  const float g = static_cast<float>(1.0 - r - b);
+  return rgba(r, g, b);
+}
+
 namespace
 {
 visualization_msgs::Marker makeMarker(const std::string& ns, int id, const ros::Time& stamp, const MarkerStyle& style)
@@ -37,7 +53,7 @@ std_msgs::ColorRGBA ageColor(double s)
   return c;
 }
 
-std_msgs::ColorRGBA rgba(float r, float g, float b, float a = 1.0f)
+std_msgs::ColorRGBA rgba(float r, float g, float b, float a)
 {
   std_msgs::ColorRGBA c;
   c.r = r;
@@ -62,11 +78,55 @@ void deleteIfEmpty(visualization_msgs::Marker& marker)
   marker.action = marker.points.empty() ? visualization_msgs::Marker::DELETE : visualization_msgs::Marker::ADD;
 }
 
+// A cloth or jelly surface: TRIANGLE_LIST with a colour per vertex. rviz draws triangle lists
+// without culling (both sides show) and, given vertex colours, without lighting, so the shading is
+// done here: the base colour dimmed by the angle between the vertex normal and a fixed light,
+// the same from either side. With style.color_by_strain the colour is the strain's instead.
+visualization_msgs::Marker surfaceMarker(const core::SpringNetworkBody& body, const ros::Time& stamp,
+                                         const MarkerStyle& style)
+{
+  const core::ParticlePool& p = body.particles();
+  const auto& triangles = body.definition().triangles;
+  visualization_msgs::Marker surface = makeMarker(body.name(), kLinesMarkerId, stamp, style);
+  surface.type = visualization_msgs::Marker::TRIANGLE_LIST;
+  surface.color = body.frozen() ? rgba(0.5f, 0.5f, 0.5f)
+                  : body.shape() == core::NetworkShape::Jelly ? rgba(0.95f, 0.35f, 0.55f)
+                                                              : rgba(0.35f, 0.6f, 0.95f);
+  std::vector<double> strains;
+  std::vector<Eigen::Vector3d> normals;
+  if (style.color_by_strain)
+    core::vertexStrains(body, strains);
+  else
+    core::vertexNormals(p.position, p.size(), triangles, normals);
+  const Eigen::Vector3d light = Eigen::Vector3d(0.3, -0.5, 0.8).normalized();
+
+  surface.points.reserve(3 * triangles.size());
+  surface.colors.reserve(3 * triangles.size());
+  for (const Eigen::Vector3i& t : triangles)
+  {
+    for (int c = 0; c < 3; ++c)
+    {
+      const int corner = t[c];
+      surface.points.push_back(toPoint(p.position.col(corner)));
+      if (style.color_by_strain)
+      {
+        surface.colors.push_back(strainColor(strains[corner], style.strain_color_max));
+        continue;
+      }
+      const float shade = static_cast<float>(0.35 + 0.65 * std::abs(normals[corner].dot(light)));
+      surface.colors.push_back(rgba(shade * surface.color.r, shade * surface.color.g, shade * surface.color.b));
+    }
+  }
+  deleteIfEmpty(surface);
+  return surface;
+}
+
 void addSpringBody(const core::SpringNetworkBody& body, const ros::Time& stamp, const MarkerStyle& style,
                    visualization_msgs::MarkerArray& out)
 {
   const core::ParticlePool& p = body.particles();
   const int n = p.size();
+  const bool has_surface = body.shape() == core::NetworkShape::Cloth || body.shape() == core::NetworkShape::Jelly;
 
   // Free particles and pinned ones, each a SPHERE_LIST; pinned ones larger and red.
   visualization_msgs::Marker free = makeMarker(body.name(), kParticlesMarkerId, stamp, style);
@@ -77,10 +137,25 @@ void addSpringBody(const core::SpringNetworkBody& body, const ros::Time& stamp, 
   pins.type = visualization_msgs::Marker::SPHERE_LIST;
   pins.scale.x = pins.scale.y = pins.scale.z = 2.0 * style.particle_size;
   pins.color = rgba(1.0f, 0.25f, 0.2f);
-  free.points.reserve(n);
-  for (int i = 0; i < n; ++i) (body.isPinned(i) ? pins : free).points.push_back(toPoint(p.position.col(i)));
+  free.points.reserve(has_surface ? 0 : n);
+  for (int i = 0; i < n; ++i)
+  {
+    // Cloth and jelly are drawn by their surface; only their pinned particles get spheres.
+    if (body.isPinned(i))
+      pins.points.push_back(toPoint(p.position.col(i)));
+    else if (!has_surface)
+      free.points.push_back(toPoint(p.position.col(i)));
+  }
   deleteIfEmpty(free);
   deleteIfEmpty(pins);
+
+  if (has_surface)
+  {
+    out.markers.push_back(std::move(free));
+    out.markers.push_back(surfaceMarker(body, stamp, style));
+    out.markers.push_back(std::move(pins));
+    return;
+  }
 
   // The rope as one line through its particles in order; a network as one segment per spring.
   visualization_msgs::Marker lines = makeMarker(body.name(), kLinesMarkerId, stamp, style);

@@ -9,6 +9,7 @@
 #include <sstream>
 #include <thread>
 
+#include "particle_sim/ros/mesh_builder.h"
 #include "particle_sim/ros/names.h"
 #include "particle_sim/scene/scene.h"
 
@@ -34,6 +35,16 @@ bool answer(Response& res, const core::Status& status)
   res.message = status.message;
   return true;
 }
+
+// Reads the integrator name of a spawn request into `integrator` (empty keeps the world's default).
+core::Status parseIntegratorField(const std::string& name, core::IntegratorDef& integrator)
+{
+  if (name.empty() || core::parseIntegratorType(name, integrator.type)) return core::Status::success();
+  return core::Status::failure("integrator = '" + name + "' is not an integrator; allowed: " +
+                               core::integratorTypeNames());
+}
+
+int clampCount(std::uint32_t value) { return static_cast<int>(std::min<std::uint32_t>(value, 2000000000u)); }
 }  // namespace
 
 SimNode::SimNode(ros::NodeHandle node, ros::NodeHandle private_node)
@@ -55,6 +66,8 @@ bool SimNode::initialize()
   private_node_.param(names::kParticleSizeParam, s.particle_size, s.particle_size);
   private_node_.param(names::kMaxParticlesParam, s.max_particles_per_body, s.max_particles_per_body);
   private_node_.param(names::kStatusPeriodParam, s.status_period, s.status_period);
+  private_node_.param(names::kColorByStrainParam, s.color_by_strain, s.color_by_strain);
+  private_node_.param(names::kStrainColorMaxParam, s.strain_color_max, s.strain_color_max);
 
   // Parameters are checked before anything starts; a bad one stops the node with its reason.
   auto refuse = [](const std::string& message) {
@@ -69,7 +82,10 @@ bool SimNode::initialize()
     return refuse("~particle_size = " + std::to_string(s.particle_size) + " must be > 0 m");
   if (s.frame_id.empty()) return refuse("~frame_id is empty");
 
-  scene::SceneDef scene;
+  if (!(s.strain_color_max > 0.0 && std::isfinite(s.strain_color_max)))
+    return refuse("~strain_color_max = " + std::to_string(s.strain_color_max) + " must be > 0");
+
+  scene::SceneDef& scene = scene_;
   if (!s.scene_path.empty())
   {
     if (core::Status status = scene::loadSceneFile(s.scene_path, scene); !status) return refuse(status.message);
@@ -77,6 +93,11 @@ bool SimNode::initialize()
   if (s.dt != 0.0) scene.world.dt = s.dt;
   if (s.max_particles_per_body != 0) scene.world.max_particles_per_body = s.max_particles_per_body;
   if (core::Status status = scene::buildWorld(scene, world_); !status) return refuse("~scene: " + status.message);
+  // Scene pins that follow frames other than the scene's scripted ones follow them through tf.
+  for (const scene::FramePinDef& pin : scene.frame_pins)
+  {
+    if (!scene::findFrame(scene, pin.frame)) frame_pins_.push_back({pin.body, pin.index, pin.frame, pin.offset});
+  }
 
   // The publish period must be a whole number of physics steps.
   const double period = 1.0 / s.rate;
@@ -87,8 +108,11 @@ bool SimNode::initialize()
   paused_ = s.paused;
   style_.frame_id = s.frame_id;
   style_.particle_size = s.particle_size;
+  style_.color_by_strain = s.color_by_strain;
+  style_.strain_color_max = s.strain_color_max;
 
   markers_pub_ = private_node_.advertise<visualization_msgs::MarkerArray>(names::kMarkersTopic, 10);
+  meshes_pub_ = private_node_.advertise<ClothMesh>(names::kMeshesTopic, 10);
   if (s.publish_clock) clock_pub_ = node_.advertise<rosgraph_msgs::Clock>(names::kClockTopic, 10);
   tf_broadcaster_ = std::make_unique<tf2_ros::TransformBroadcaster>();
 
@@ -103,6 +127,9 @@ bool SimNode::initialize()
   services_.push_back(private_node_.advertiseService(names::kUnpinParticle, &SimNode::unpinParticle, this));
   services_.push_back(
       private_node_.advertiseService(names::kSetSpringConstants, &SimNode::setSpringConstants, this));
+  services_.push_back(private_node_.advertiseService(names::kSpawnCloth, &SimNode::spawnCloth, this));
+  services_.push_back(private_node_.advertiseService(names::kSpawnJelly, &SimNode::spawnJelly, this));
+  services_.push_back(private_node_.advertiseService(names::kSetWind, &SimNode::setWind, this));
 
   ROS_INFO_NAMED("sim",
                  "particle_sim: scene '%s', %zu bodies, dt = %g s, %d substeps per tick at %g Hz, real-time factor %g%s, "
@@ -152,6 +179,7 @@ void SimNode::tick()
 void SimNode::stepPhysics(std::uint64_t steps)
 {
   updateFramePins();
+  updateFrameSpheres();
   const auto start = SteadyClock::now();
   for (std::uint64_t i = 0; i < steps; ++i)
   {
@@ -162,6 +190,8 @@ void SimNode::stepPhysics(std::uint64_t steps)
       world_->findSpringBody(frame_pins_[k].body)
           ->setPinTarget(frame_pins_[k].index, frame_pin_start_[k] + s * (frame_pin_goal_[k] - frame_pin_start_[k]));
     }
+    // Scripted frames are known exactly: where they are at the end of this step.
+    scene::applyScriptedFrames(scene_, world_->simTime() + world_->dt(), *world_);
     world_->step();
   }
   step_seconds_since_status_ += secondsSince(start);
@@ -230,6 +260,38 @@ void SimNode::updateFramePins()
   }
 }
 
+void SimNode::updateFrameSpheres()
+{
+  for (const scene::FrameSphereDef& follower : scene_.frame_spheres)
+  {
+    if (scene::findFrame(scene_, follower.frame)) continue;  // scripted: applied every step
+    Eigen::Vector3d center;
+    std::string error;
+    if (lookupFrame(follower.frame, Eigen::Vector3d::Zero(), 0.0, center, error))
+      world_->setSphereCenter(follower.sphere, center);
+    else
+      ROS_WARN_THROTTLE_NAMED(5.0, "colliders", "sphere '%s' follows frame '%s', which is not available: %s",
+                              follower.sphere.c_str(), follower.frame.c_str(), error.c_str());
+  }
+}
+
+void SimNode::broadcastScriptedFrames(const ros::Time& stamp)
+{
+  for (const scene::ScriptedFrameDef& frame : scene_.frames)
+  {
+    const Eigen::Vector3d x = frame.position(stamp.toSec());
+    geometry_msgs::TransformStamped transform;
+    transform.header.stamp = stamp;
+    transform.header.frame_id = settings_.frame_id;
+    transform.child_frame_id = frame.name;
+    transform.transform.translation.x = x.x();
+    transform.transform.translation.y = x.y();
+    transform.transform.translation.z = x.z();
+    transform.transform.rotation.w = 1.0;
+    tf_broadcaster_->sendTransform(transform);
+  }
+}
+
 void SimNode::publish()
 {
   const double sim_time = world_->simTime();
@@ -253,7 +315,20 @@ void SimNode::publish()
     transform.child_frame_id = settings_.frame_id;
     transform.transform.rotation.w = 1.0;
     tf_broadcaster_->sendTransform(transform);
+    broadcastScriptedFrames(stamp);
     last_tf_time_ = sim_time;
+  }
+
+  // Cloth and jelly meshes, one message per body, only when someone listens.
+  if (meshes_pub_.getNumSubscribers() > 0)
+  {
+    for (const auto& body : world_->bodies())
+    {
+      if (body->kind() != core::BodyKind::SpringNetwork) continue;
+      const auto& spring_body = static_cast<const core::SpringNetworkBody&>(*body);
+      if (spring_body.definition().triangles.empty()) continue;
+      meshes_pub_.publish(boost::make_shared<ClothMesh>(buildClothMesh(spring_body, stamp, settings_.frame_id)));
+    }
   }
 
   // Markers are only built when someone listens.
@@ -334,9 +409,7 @@ bool SimNode::spawnRope(SpawnRope::Request& req, SpawnRope::Response& res)
   def.bend_damping = req.bend_damping;
   def.pins.assign(req.pins.begin(), req.pins.end());
   def.integrator = world_->definition().integrator;
-  if (!req.integrator.empty() && !core::parseIntegratorType(req.integrator, def.integrator.type))
-    return answer(res, core::Status::failure("integrator = '" + req.integrator +
-                                             "' is not an integrator; allowed: " + core::integratorTypeNames()));
+  if (core::Status s = parseIntegratorField(req.integrator, def.integrator); !s) return answer(res, s);
   core::Status status = world_->addRope(def);
   if (status)
     status.message = "spawned rope '" + def.name + "' with " + std::to_string(def.particles) + " particles, " +
@@ -437,6 +510,73 @@ bool SimNode::setSpringConstants(SetSpringConstants::Request& req, SetSpringCons
     std::ostringstream message;
     message << "set " << req.spring_class << " springs of '" << req.body << "' to " << req.stiffness << " N/m, "
             << req.damping << " N·s/m";
+    status.message = message.str();
+  }
+  return answer(res, status);
+}
+
+bool SimNode::spawnCloth(SpawnCloth::Request& req, SpawnCloth::Response& res)
+{
+  core::ClothGridDef def;
+  def.name = req.name;
+  def.origin = {req.origin.x, req.origin.y, req.origin.z};
+  def.edge_u = {req.edge_u.x, req.edge_u.y, req.edge_u.z};
+  def.edge_v = {req.edge_v.x, req.edge_v.y, req.edge_v.z};
+  if (req.nu != 0) def.nu = clampCount(req.nu);
+  if (req.nv != 0) def.nv = clampCount(req.nv);
+  if (req.mass != 0.0) def.mass = req.mass;
+  def.stretch = {req.stretch_stiffness, req.stretch_damping};
+  def.shear = {req.shear_stiffness, req.shear_damping};
+  def.bend = {req.bend_stiffness, req.bend_damping};
+  def.pins.assign(req.pins.begin(), req.pins.end());
+  def.named_pins = req.named_pins;
+  def.strain_limit.max_strain = req.max_strain;
+  def.integrator = world_->definition().integrator;
+  if (core::Status s = parseIntegratorField(req.integrator, def.integrator); !s) return answer(res, s);
+  core::Status status = world_->addClothGrid(def);
+  if (status)
+    status.message = "spawned cloth '" + def.name + "' of " + std::to_string(def.nu) + " x " + std::to_string(def.nv) +
+                     " particles";
+  else
+    ROS_WARN_NAMED("services", "spawn_cloth refused: %s", status.message.c_str());
+  return answer(res, status);
+}
+
+bool SimNode::spawnJelly(SpawnJelly::Request& req, SpawnJelly::Response& res)
+{
+  core::JellyDef def;
+  def.name = req.name;
+  def.origin = {req.origin.x, req.origin.y, req.origin.z};
+  def.size = {req.size.x, req.size.y, req.size.z};
+  if (req.nx != 0) def.nx = clampCount(req.nx);
+  if (req.ny != 0) def.ny = clampCount(req.ny);
+  if (req.nz != 0) def.nz = clampCount(req.nz);
+  if (req.mass != 0.0) def.mass = req.mass;
+  def.stretch = {req.stretch_stiffness, req.stretch_damping};
+  def.shear = {req.shear_stiffness, req.shear_damping};
+  def.bend = {req.bend_stiffness, req.bend_damping};
+  def.velocity = {req.velocity.x, req.velocity.y, req.velocity.z};
+  def.pins.assign(req.pins.begin(), req.pins.end());
+  def.strain_limit.max_strain = req.max_strain;
+  def.integrator = world_->definition().integrator;
+  if (core::Status s = parseIntegratorField(req.integrator, def.integrator); !s) return answer(res, s);
+  core::Status status = world_->addJelly(def);
+  if (status)
+    status.message = "spawned jelly '" + def.name + "' of " + std::to_string(def.nx * def.ny * def.nz) + " particles";
+  else
+    ROS_WARN_NAMED("services", "spawn_jelly refused: %s", status.message.c_str());
+  return answer(res, status);
+}
+
+bool SimNode::setWind(SetWind::Request& req, SetWind::Response& res)
+{
+  const Eigen::Vector3d wind(req.wind.x, req.wind.y, req.wind.z);
+  core::Status status = world_->setWind(wind);
+  if (status)
+  {
+    std::ostringstream message;
+    message << "wind set to [" << wind.x() << ", " << wind.y() << ", " << wind.z() << "] m/s";
+    if (world_->environment().air.drag == 0.0) message << "; world.air.drag is 0, so nothing feels it";
     status.message = message.str();
   }
   return answer(res, status);

@@ -1,7 +1,14 @@
 #include "particle_sim/scene/scene.h"
 
+#include "map_reader.h"
+#include "particle_sim/core/validation.h"
+#include "particle_sim/scene/obj_mesh.h"
+
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <iomanip>
 #include <set>
@@ -13,130 +20,6 @@ namespace scene
 {
 namespace
 {
-using core::Status;
-
-// A scene error carries its own message; thrown only inside this file and turned into a Status
-// by parseScene(), so it never crosses the layer.
-struct SceneError
-{
-  std::string message;
-};
-
-std::string location(const std::string& source, const YAML::Node& node)
-{
-  const YAML::Mark mark = node.Mark();
-  if (mark.line < 0) return source + ": ";
-  return source + ":" + std::to_string(mark.line + 1) + ": ";
-}
-
-// Reads the keys of one YAML mapping, checking types, and refuses any key it was not asked for.
-class MapReader
-{
-public:
-  MapReader(const YAML::Node& node, std::string path, const std::string& source)
-    : node_(node), path_(std::move(path)), source_(source)
-  {
-    if (!node_.IsMap()) fail(node_, path_ + " must be a mapping of key: value");
-  }
-
-  bool has(const std::string& key) const { return static_cast<bool>(node_[key]); }
-
-  template <typename T>
-  void read(const std::string& key, T& value)
-  {
-    known_.insert(key);
-    const YAML::Node child = node_[key];
-    if (!child) return;
-    value = convert<T>(child, field(key));
-  }
-
-  void read(const std::string& key, Eigen::Vector3d& value)
-  {
-    known_.insert(key);
-    const YAML::Node child = node_[key];
-    if (!child) return;
-    if (!child.IsSequence() || child.size() != 3)
-      fail(child, field(key) + " = " + text(child) + " must be a list of 3 numbers [x, y, z]");
-    for (int i = 0; i < 3; ++i) value[i] = convert<double>(child[i], field(key) + "[" + std::to_string(i) + "]");
-  }
-
-  template <typename T>
-  void require(const std::string& key, T& value)
-  {
-    if (!has(key)) fail(node_, path_ + " needs the key '" + key + "'");
-    read(key, value);
-  }
-
-  YAML::Node child(const std::string& key)
-  {
-    known_.insert(key);
-    return node_[key];
-  }
-
-  // Refuses every key that no read() asked for, listing the accepted ones.
-  void finish() const
-  {
-    for (const auto& entry : node_)
-    {
-      const std::string key = entry.first.as<std::string>();
-      if (known_.count(key)) continue;
-      std::string allowed;
-      for (const std::string& k : known_) allowed += (allowed.empty() ? "" : ", ") + k;
-      fail(entry.first, field(key) + " is not a known key; allowed keys: " + allowed);
-    }
-  }
-
-  std::string field(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
-  const YAML::Node& node() const { return node_; }
-  [[noreturn]] void fail(const YAML::Node& at, const std::string& message) const
-  {
-    throw SceneError{location(source_, at) + message};
-  }
-
-private:
-  static std::string text(const YAML::Node& node)
-  {
-    if (node.IsScalar()) return "'" + node.Scalar() + "'";
-    YAML::Emitter out;
-    out << YAML::Flow << node;
-    return out.c_str();
-  }
-
-  template <typename T>
-  T convert(const YAML::Node& child, const std::string& name) const
-  {
-    if (!child.IsScalar()) fail(child, name + " = " + text(child) + " must be " + typeName<T>());
-    try
-    {
-      return child.as<T>();
-    }
-    catch (const YAML::Exception&)
-    {
-      fail(child, name + " = " + text(child) + " must be " + typeName<T>());
-    }
-  }
-
-  template <typename T>
-  static const char* typeName()
-  {
-    if constexpr (std::is_same_v<T, bool>)
-      return "true or false";
-    else if constexpr (std::is_same_v<T, std::string>)
-      return "a string";
-    else if constexpr (std::is_floating_point_v<T>)
-      return "a number";
-    else if constexpr (std::is_unsigned_v<T>)
-      return "a non-negative integer";
-    else
-      return "an integer";
-  }
-
-  YAML::Node node_;
-  std::string path_;
-  const std::string& source_;
-  std::set<std::string> known_;
-};
-
 // Fails at `reader`'s node with a core validation message, prefixed by the entry's path.
 void check(const MapReader& reader, const std::string& prefix, const Status& status)
 {
@@ -147,6 +30,7 @@ void readContact(MapReader& reader, core::ContactDef& contact)
 {
   reader.read("restitution", contact.restitution);
   reader.read("friction", contact.friction);
+  reader.read("bounce_speed", contact.bounce_speed);
 }
 
 // The integrator keys, read at world level (the default) and per body (an override).
@@ -165,8 +49,9 @@ void readIntegrator(MapReader& reader, core::IntegratorDef& integrator)
   reader.read("cg_max_iterations", integrator.cg_max_iterations);
 }
 
-void readWorld(const YAML::Node& node, const std::string& source, core::WorldDef& world)
+void readWorld(const YAML::Node& node, const std::string& source, SceneDef& scene)
 {
+  core::WorldDef& world = scene.world;
   MapReader reader(node, "world", source);
   readIntegrator(reader, world.integrator);
   reader.read("gravity", world.gravity);
@@ -194,13 +79,47 @@ void readWorld(const YAML::Node& node, const std::string& source, core::WorldDef
       s.require("center", sphere.center);
       s.require("radius", sphere.radius);
       readContact(s, sphere.contact);
+      std::string frame;
+      s.read("frame", frame);
+      if (!frame.empty()) scene.frame_spheres.push_back({sphere.name, frame});
       s.finish();
       check(s, "", core::validate(sphere));
       world.spheres.push_back(sphere);
     }
   }
+  if (const YAML::Node air = reader.child("air"))
+  {
+    MapReader a(air, "world.air", source);
+    a.read("drag", world.air.drag);
+    a.read("wind", world.air.wind);
+    a.finish();
+  }
   reader.finish();
   check(reader, "world.", core::validate(world));
+}
+
+void readFrames(const YAML::Node& node, const std::string& source, SceneDef& scene)
+{
+  if (!node.IsSequence()) throw SceneError{location(source, node) + "frames must be a list of frames"};
+  for (std::size_t i = 0; i < node.size(); ++i)
+  {
+    MapReader reader(node[i], "frames[" + std::to_string(i) + "]", source);
+    ScriptedFrameDef frame;
+    reader.require("name", frame.name);
+    reader.read("center", frame.center);
+    reader.read("radius", frame.radius);
+    reader.read("period", frame.period);
+    reader.read("phase", frame.phase);
+    reader.finish();
+    if (frame.name.empty()) reader.fail(node[i], reader.field("name") + " is empty");
+    check(reader, reader.field(""), core::checkFinite("center", frame.center));
+    check(reader, reader.field(""), core::checkMin("radius", frame.radius, 0.0));
+    check(reader, reader.field(""), core::checkPositive("period", frame.period));
+    check(reader, reader.field(""), core::checkFinite("phase", frame.phase));
+    if (findFrame(scene, frame.name))
+      reader.fail(node[i], reader.field("name") + " = '" + frame.name + "' is already taken");
+    scene.frames.push_back(frame);
+  }
 }
 
 core::EmitterDef readEmitter(MapReader& reader, const core::WorldDef& world)
@@ -350,6 +269,214 @@ core::SpringNetworkDef readSpringNetwork(MapReader& reader, const core::WorldDef
   return def;
 }
 
+// Pins given by index (negative counts from the end) or, where `names` is given, by name.
+void readPins(MapReader& reader, std::vector<int>& indices, std::vector<std::string>* names)
+{
+  const YAML::Node node = reader.child("pins");
+  if (!node) return;
+  if (!node.IsSequence()) reader.fail(node, reader.field("pins") + " must be a list of particle indices");
+  for (std::size_t i = 0; i < node.size(); ++i)
+  {
+    int value = 0;
+    if (node[i].IsScalar() && YAML::convert<int>::decode(node[i], value))
+      indices.push_back(value);
+    else if (names && node[i].IsScalar())
+      names->push_back(node[i].Scalar());
+    else
+      reader.fail(node[i], reader.field("pins") + "[" + std::to_string(i) + "] must be an integer particle index" +
+                               (names ? std::string(" or a pin name") : std::string()));
+  }
+}
+
+void readStrainLimit(MapReader& reader, core::StrainLimitDef& limit)
+{
+  reader.read("max_strain", limit.max_strain);
+  reader.read("strain_iterations", limit.iterations);
+}
+
+// Reads one entry of `frame_pins`, resolving its pin (a name of a grid cloth or an index) to indices.
+struct FramePinEntry
+{
+  YAML::Node node;
+  std::string pin;
+  std::string frame;
+  Eigen::Vector3d offset = Eigen::Vector3d::Zero();
+};
+
+std::vector<FramePinEntry> readFramePinEntries(MapReader& reader, const std::string& source)
+{
+  std::vector<FramePinEntry> entries;
+  const YAML::Node node = reader.child("frame_pins");
+  if (!node) return entries;
+  if (!node.IsSequence()) reader.fail(node, reader.field("frame_pins") + " must be a list of {pin, frame, offset}");
+  for (std::size_t i = 0; i < node.size(); ++i)
+  {
+    MapReader entry(node[i], reader.field("frame_pins") + "[" + std::to_string(i) + "]", source);
+    FramePinEntry e;
+    e.node = node[i];
+    entry.require("pin", e.pin);
+    entry.require("frame", e.frame);
+    entry.read("offset", e.offset);
+    entry.finish();
+    check(entry, entry.field(""), core::checkFinite("offset", e.offset));
+    entries.push_back(e);
+  }
+  return entries;
+}
+
+// Turns frame pin entries into FramePinDefs of body `body` with `count` particles, adding each
+// pinned index to `pins`. `resolve_name` maps a pin name to indices (false: unknown name).
+template <typename ResolveName>
+void addFramePins(MapReader& reader, const std::vector<FramePinEntry>& entries, const std::string& body, int count,
+                  ResolveName resolve_name, std::vector<int>& pins, SceneDef& scene)
+{
+  for (const FramePinEntry& e : entries)
+  {
+    std::vector<int> indices;
+    int index = 0;
+    if (YAML::convert<int>::decode(e.node["pin"], index))
+      indices.push_back(index < 0 ? count + index : index);
+    else if (!resolve_name(e.pin, indices))
+      reader.fail(e.node["pin"], reader.field("frame_pins") + ": pin = '" + e.pin + "' is neither an index nor a pin name");
+    for (int i : indices)
+    {
+      if (i < 0 || i >= count)
+        reader.fail(e.node["pin"], reader.field("frame_pins") + ": pin = " + e.pin + " is out of range: the body has " +
+                                       std::to_string(count) + " particles");
+      if (std::find(pins.begin(), pins.end(), i) == pins.end()) pins.push_back(i);
+      scene.frame_pins.push_back({body, i, e.frame, e.offset});
+    }
+  }
+}
+
+void readClothConstants(MapReader& reader, core::SpringConstants& stretch, core::SpringConstants* shear,
+                        core::SpringConstants& bend, const std::string& source)
+{
+  readSpringConstants(reader, "stretch", stretch.stiffness, stretch.damping, source);
+  if (shear) readSpringConstants(reader, "shear", shear->stiffness, shear->damping, source);
+  readSpringConstants(reader, "bend", bend.stiffness, bend.damping, source);
+}
+
+std::string resolvePath(const std::string& source, const std::string& path)
+{
+  const std::filesystem::path p(path);
+  if (p.is_absolute()) return path;
+  return (std::filesystem::path(source).parent_path() / p).string();
+}
+
+BodyDef readCloth(MapReader& reader, SceneDef& scene, const std::string& source)
+{
+  const core::WorldDef& world = scene.world;
+  std::string name, model = "springs";
+  reader.require("name", name);
+  reader.read("model", model);
+  if (model != "springs")
+    reader.fail(reader.node()["model"], reader.field("model") + " = '" + model + "' is not a cloth model; allowed: springs");
+  const std::vector<FramePinEntry> frame_pins = readFramePinEntries(reader, source);
+
+  // A triangle mesh (an OBJ file, or vertices and triangles inline) or a regular grid.
+  if (reader.has("mesh") || reader.has("vertices"))
+  {
+    core::MeshClothDef def;
+    def.name = name;
+    def.integrator = world.integrator;
+    if (reader.has("mesh"))
+    {
+      std::string file;
+      reader.read("mesh", file);
+      ObjMesh mesh;
+      if (Status s = loadObjFile(resolvePath(source, file), mesh); !s) reader.fail(reader.node()["mesh"], s.message);
+      double scale = 1.0;
+      Eigen::Vector3d origin = Eigen::Vector3d::Zero();
+      reader.read("scale", scale);
+      reader.read("origin", origin);
+      check(reader, reader.field(""), core::checkPositive("scale", scale));
+      check(reader, reader.field(""), core::checkFinite("origin", origin));
+      for (const Eigen::Vector3d& v : mesh.vertices) def.vertices.push_back(origin + scale * v);
+      def.triangles = mesh.triangles;
+    }
+    else
+    {
+      const YAML::Node vertices = reader.child("vertices"), triangles = reader.child("triangles");
+      for (std::size_t i = 0; vertices.IsSequence() && i < vertices.size(); ++i)
+      {
+        if (!vertices[i].IsSequence() || vertices[i].size() != 3)
+          reader.fail(vertices[i], reader.field("vertices") + "[" + std::to_string(i) + "] must be [x, y, z]");
+        def.vertices.emplace_back(vertices[i][0].as<double>(), vertices[i][1].as<double>(), vertices[i][2].as<double>());
+      }
+      for (std::size_t i = 0; triangles && triangles.IsSequence() && i < triangles.size(); ++i)
+      {
+        if (!triangles[i].IsSequence() || triangles[i].size() != 3)
+          reader.fail(triangles[i], reader.field("triangles") + "[" + std::to_string(i) + "] must be [i, j, k]");
+        def.triangles.emplace_back(triangles[i][0].as<int>(), triangles[i][1].as<int>(), triangles[i][2].as<int>());
+      }
+    }
+    reader.read("mass", def.mass);
+    readClothConstants(reader, def.stretch, nullptr, def.bend, source);
+    readPins(reader, def.pins, nullptr);
+    readStrainLimit(reader, def.strain_limit);
+    readIntegrator(reader, def.integrator);
+    reader.finish();
+    check(reader, reader.field(""), core::validate(def, world.max_particles_per_body));
+    addFramePins(reader, frame_pins, name, static_cast<int>(def.vertices.size()),
+                 [](const std::string&, std::vector<int>&) { return false; }, def.pins, scene);
+    return def;
+  }
+
+  core::ClothGridDef def;
+  def.name = name;
+  def.integrator = world.integrator;
+  reader.read("origin", def.origin);
+  reader.read("edge_u", def.edge_u);
+  reader.read("edge_v", def.edge_v);
+  if (const YAML::Node resolution = reader.child("resolution"))
+  {
+    if (!resolution.IsSequence() || resolution.size() != 2)
+      reader.fail(resolution, reader.field("resolution") + " must be [nu, nv]");
+    def.nu = resolution[0].as<int>();
+    def.nv = resolution[1].as<int>();
+  }
+  reader.read("mass", def.mass);
+  readClothConstants(reader, def.stretch, &def.shear, def.bend, source);
+  readPins(reader, def.pins, &def.named_pins);
+  readStrainLimit(reader, def.strain_limit);
+  readIntegrator(reader, def.integrator);
+  reader.finish();
+  check(reader, reader.field(""), core::validate(def, world.max_particles_per_body));
+  addFramePins(reader, frame_pins, name, def.nu * def.nv,
+               [&](const std::string& pin, std::vector<int>& indices) {
+                 return core::namedGridPins(pin, def.nu, def.nv, indices);
+               },
+               def.pins, scene);
+  return def;
+}
+
+core::JellyDef readJelly(MapReader& reader, SceneDef& scene, const std::string& source)
+{
+  core::JellyDef def;
+  def.integrator = scene.world.integrator;
+  reader.require("name", def.name);
+  reader.read("origin", def.origin);
+  reader.read("size", def.size);
+  if (const YAML::Node resolution = reader.child("resolution"))
+  {
+    if (!resolution.IsSequence() || resolution.size() != 3)
+      reader.fail(resolution, reader.field("resolution") + " must be [nx, ny, nz]");
+    def.nx = resolution[0].as<int>();
+    def.ny = resolution[1].as<int>();
+    def.nz = resolution[2].as<int>();
+  }
+  reader.read("mass", def.mass);
+  reader.read("velocity", def.velocity);
+  readClothConstants(reader, def.stretch, &def.shear, def.bend, source);
+  readPins(reader, def.pins, nullptr);
+  readStrainLimit(reader, def.strain_limit);
+  readIntegrator(reader, def.integrator);
+  reader.finish();
+  check(reader, reader.field(""), core::validate(def, scene.world.max_particles_per_body));
+  return def;
+}
+
 void readBodies(const YAML::Node& node, const std::string& source, SceneDef& scene)
 {
   if (!node.IsSequence()) throw SceneError{location(source, node) + "bodies must be a list of bodies"};
@@ -365,9 +492,13 @@ void readBodies(const YAML::Node& node, const std::string& source, SceneDef& sce
       scene.bodies.emplace_back(readRope(reader, scene.world, source));
     else if (kind == "spring_network")
       scene.bodies.emplace_back(readSpringNetwork(reader, scene.world, source));
+    else if (kind == "cloth")
+      scene.bodies.emplace_back(readCloth(reader, scene, source));
+    else if (kind == "jelly")
+      scene.bodies.emplace_back(readJelly(reader, scene, source));
     else
       reader.fail(node[i]["kind"], reader.field("kind") + " = '" + kind +
-                                       "' is not a body kind; allowed: emitter, rope, spring_network");
+                                       "' is not a body kind; allowed: emitter, rope, spring_network, cloth, jelly");
 
     const std::string name = std::visit([](const auto& def) { return def.name; }, scene.bodies.back());
     if (!names.insert(name).second)
@@ -384,7 +515,8 @@ Status parseScene(const std::string& yaml_text, const std::string& source, Scene
     const YAML::Node root = YAML::Load(yaml_text);
     if (root.IsNull()) return Status::failure(source + ": the scene is empty; it needs at least 'world' or 'bodies'");
     MapReader reader(root, "", source);
-    if (const YAML::Node world = reader.child("world")) readWorld(world, source, scene.world);
+    if (const YAML::Node world = reader.child("world")) readWorld(world, source, scene);
+    if (const YAML::Node frames = reader.child("frames")) readFrames(frames, source, scene);
     if (const YAML::Node bodies = reader.child("bodies")) readBodies(bodies, source, scene);
     reader.finish();
   }
@@ -412,6 +544,9 @@ Status addBody(const BodyDef& body, core::World& world)
 {
   if (const auto* emitter = std::get_if<core::EmitterDef>(&body)) return world.addEmitter(*emitter);
   if (const auto* rope = std::get_if<core::RopeDef>(&body)) return world.addRope(*rope);
+  if (const auto* cloth = std::get_if<core::ClothGridDef>(&body)) return world.addClothGrid(*cloth);
+  if (const auto* mesh = std::get_if<core::MeshClothDef>(&body)) return world.addMeshCloth(*mesh);
+  if (const auto* jelly = std::get_if<core::JellyDef>(&body)) return world.addJelly(*jelly);
   return world.addSpringNetwork(std::get<core::SpringNetworkDef>(body));
 }
 
@@ -423,7 +558,50 @@ Status buildWorld(const SceneDef& scene, std::unique_ptr<core::World>& world)
   {
     if (Status s = addBody(body, *built); !s) return s;
   }
+  // Frame pins start on their frame where it is scripted (the node does the rest through tf);
+  // spheres that follow a frame must exist.
+  for (const FrameSphereDef& follower : scene.frame_spheres)
+  {
+    const auto& spheres = scene.world.spheres;
+    if (std::none_of(spheres.begin(), spheres.end(), [&](const auto& s) { return s.name == follower.sphere; }))
+      return Status::failure("sphere '" + follower.sphere + "' follows frame '" + follower.frame + "' but does not exist");
+  }
+  if (Status s = applyScriptedFrames(scene, 0.0, *built); !s) return s;
   world = std::move(built);
+  return Status::success();
+}
+
+Eigen::Vector3d ScriptedFrameDef::position(double t) const
+{
+  const double angle = 2.0 * M_PI * t / period + phase;
+  return center + radius * Eigen::Vector3d(std::cos(angle), std::sin(angle), 0.0);
+}
+
+const ScriptedFrameDef* findFrame(const SceneDef& scene, const std::string& name)
+{
+  for (const ScriptedFrameDef& frame : scene.frames)
+  {
+    if (frame.name == name) return &frame;
+  }
+  return nullptr;
+}
+
+Status applyScriptedFrames(const SceneDef& scene, double t, core::World& world)
+{
+  for (const FramePinDef& pin : scene.frame_pins)
+  {
+    const ScriptedFrameDef* frame = findFrame(scene, pin.frame);
+    core::SpringNetworkBody* body = world.findSpringBody(pin.body);
+    if (!frame || !body || !body->isPinned(pin.index)) continue;
+    if (Status s = body->setPinTarget(pin.index, frame->position(t) + pin.offset); !s) return s;
+  }
+  for (const FrameSphereDef& follower : scene.frame_spheres)
+  {
+    if (const ScriptedFrameDef* frame = findFrame(scene, follower.frame))
+    {
+      if (Status s = world.setSphereCenter(follower.sphere, frame->position(t)); !s) return s;
+    }
+  }
   return Status::success();
 }
 
@@ -462,10 +640,34 @@ YAML::Node indexList(const std::vector<int>& values)
   return node;
 }
 
+void strainLimit(YAML::Node node, const core::StrainLimitDef& limit)
+{
+  node["max_strain"] = limit.max_strain;
+  node["strain_iterations"] = limit.iterations;
+}
+
+// Frame pins of `body` whose index is `index`.
+YAML::Node framePins(const SceneDef& scene, const std::string& body)
+{
+  YAML::Node list(YAML::NodeType::Sequence);
+  for (const FramePinDef& pin : scene.frame_pins)
+  {
+    if (pin.body != body) continue;
+    YAML::Node entry;
+    entry.SetStyle(YAML::EmitterStyle::Flow);
+    entry["pin"] = pin.index;
+    entry["frame"] = pin.frame;
+    entry["offset"] = vector3(pin.offset);
+    list.push_back(entry);
+  }
+  return list;
+}
+
 YAML::Node contact(YAML::Node node, const core::ContactDef& c)
 {
   node["restitution"] = c.restitution;
   node["friction"] = c.friction;
+  node["bounce_speed"] = c.bounce_speed;
   return node;
 }
 }  // namespace
@@ -489,7 +691,23 @@ std::string toYaml(const SceneDef& scene)
     sphere["name"] = s.name;
     sphere["center"] = vector3(s.center);
     sphere["radius"] = s.radius;
+    for (const FrameSphereDef& follower : scene.frame_spheres)
+    {
+      if (follower.sphere == s.name) sphere["frame"] = follower.frame;
+    }
     root["world"]["spheres"].push_back(contact(sphere, s.contact));
+  }
+  root["world"]["air"]["drag"] = w.air.drag;
+  root["world"]["air"]["wind"] = vector3(w.air.wind);
+  for (const ScriptedFrameDef& f : scene.frames)
+  {
+    YAML::Node frame;
+    frame["name"] = f.name;
+    frame["center"] = vector3(f.center);
+    frame["radius"] = f.radius;
+    frame["period"] = f.period;
+    frame["phase"] = f.phase;
+    root["frames"].push_back(frame);
   }
   for (const BodyDef& body : scene.bodies)
   {
@@ -553,6 +771,63 @@ std::string toYaml(const SceneDef& scene)
       }
       node["pins"] = indexList(net->pins);
       integrator(node, net->integrator);
+      root["bodies"].push_back(node);
+    }
+    else if (const auto* c = std::get_if<core::ClothGridDef>(&body))
+    {
+      YAML::Node node;
+      node["name"] = c->name;
+      node["kind"] = "cloth";
+      node["model"] = "springs";
+      node["origin"] = vector3(c->origin);
+      node["edge_u"] = vector3(c->edge_u);
+      node["edge_v"] = vector3(c->edge_v);
+      node["resolution"] = indexList({c->nu, c->nv});
+      node["mass"] = c->mass;
+      node["stretch"] = springConstants(c->stretch.stiffness, c->stretch.damping);
+      node["shear"] = springConstants(c->shear.stiffness, c->shear.damping);
+      node["bend"] = springConstants(c->bend.stiffness, c->bend.damping);
+      YAML::Node pins = indexList(c->pins);
+      for (const std::string& name : c->named_pins) pins.push_back(name);
+      node["pins"] = pins;
+      node["frame_pins"] = framePins(scene, c->name);
+      strainLimit(node, c->strain_limit);
+      integrator(node, c->integrator);
+      root["bodies"].push_back(node);
+    }
+    else if (const auto* m = std::get_if<core::MeshClothDef>(&body))
+    {
+      YAML::Node node;
+      node["name"] = m->name;
+      node["kind"] = "cloth";
+      node["model"] = "springs";
+      for (const Eigen::Vector3d& v : m->vertices) node["vertices"].push_back(vector3(v));
+      for (const Eigen::Vector3i& t : m->triangles) node["triangles"].push_back(indexList({t[0], t[1], t[2]}));
+      node["mass"] = m->mass;
+      node["stretch"] = springConstants(m->stretch.stiffness, m->stretch.damping);
+      node["bend"] = springConstants(m->bend.stiffness, m->bend.damping);
+      node["pins"] = indexList(m->pins);
+      node["frame_pins"] = framePins(scene, m->name);
+      strainLimit(node, m->strain_limit);
+      integrator(node, m->integrator);
+      root["bodies"].push_back(node);
+    }
+    else if (const auto* j = std::get_if<core::JellyDef>(&body))
+    {
+      YAML::Node node;
+      node["name"] = j->name;
+      node["kind"] = "jelly";
+      node["origin"] = vector3(j->origin);
+      node["size"] = vector3(j->size);
+      node["resolution"] = indexList({j->nx, j->ny, j->nz});
+      node["mass"] = j->mass;
+      node["velocity"] = vector3(j->velocity);
+      node["stretch"] = springConstants(j->stretch.stiffness, j->stretch.damping);
+      node["shear"] = springConstants(j->shear.stiffness, j->shear.damping);
+      node["bend"] = springConstants(j->bend.stiffness, j->bend.damping);
+      node["pins"] = indexList(j->pins);
+      strainLimit(node, j->strain_limit);
+      integrator(node, j->integrator);
       root["bodies"].push_back(node);
     }
   }

@@ -173,6 +173,8 @@ int main(int argc, char** argv)
   for (std::uint64_t k = 1; k <= steps; ++k)
   {
     const auto before = Clock::now();
+    // Pins and spheres that follow scripted frames go where the frames are at the end of the step.
+    particle_sim::scene::applyScriptedFrames(scene, world->simTime() + world->dt(), *world);
     world->step();
     const auto after = Clock::now();
     stepping_seconds += std::chrono::duration<double>(after - before).count();

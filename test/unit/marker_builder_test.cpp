@@ -164,3 +164,60 @@ TEST(MarkerBuilder, RopeIsALineStripWithFreeAndPinnedParticlesApart)
     EXPECT_EQ(removed.markers[id].action, Marker::DELETE);
   }
 }
+
+TEST(MarkerBuilder, ClothAndJellySurfacesAreShadedTriangleListsThatPassRvizChecks)
+{
+  core::World world{core::WorldDef{}};
+  core::ClothGridDef cloth;
+  cloth.name = "cloth";
+  cloth.nu = 4;
+  cloth.nv = 3;
+  cloth.named_pins = {"corner_00"};
+  ASSERT_TRUE(world.addClothGrid(cloth).ok);
+  core::JellyDef jelly;
+  jelly.name = "jelly";
+  jelly.nx = jelly.ny = jelly.nz = 3;
+  ASSERT_TRUE(world.addJelly(jelly).ok);
+  world.step();
+
+  for (bool by_strain : {false, true})
+  {
+    ros_interface::MarkerStyle style;
+    style.color_by_strain = by_strain;
+    const auto array = ros_interface::buildMarkers(world, ros::Time(1.0), style, false, {});
+    ASSERT_EQ(array.markers.size(), 6u);
+    for (const Marker& m : array.markers) expectRvizValid(m);
+    const Marker& surface = array.markers[1];
+    EXPECT_EQ(surface.type, Marker::TRIANGLE_LIST);
+    EXPECT_EQ(surface.points.size() % 3, 0u);
+    EXPECT_EQ(surface.points.size(), 3u * 2u * 2u * 3u);  // 3 x 2 cells, 2 triangles, 3 points
+    ASSERT_EQ(surface.colors.size(), surface.points.size());
+    // A sheet still nearly flat after one step: every vertex nearly the same normal, so the same
+    // shade (or strain colour, blue for no strain).
+    for (const auto& c : surface.colors)
+    {
+      EXPECT_NEAR(c.r, surface.colors[0].r, 1e-3);
+      EXPECT_NEAR(c.b, surface.colors[0].b, 1e-3);
+    }
+    if (by_strain)
+    {
+      EXPECT_NEAR(surface.colors[0].b, 1.0f, 1e-3);
+    }
+    EXPECT_EQ(array.markers[0].action, Marker::DELETE);  // no particle spheres for a surface body
+    EXPECT_EQ(array.markers[2].points.size(), 1u);       // the pinned corner
+    EXPECT_EQ(array.markers[4].type, Marker::TRIANGLE_LIST);
+    EXPECT_EQ(array.markers[4].points.size(), 6u * 4u * 2u * 3u);  // 6 faces of 2 x 2 quads
+  }
+}
+
+TEST(MarkerBuilder, StrainColoursGoFromBlueToRed)
+{
+  const auto none = ros_interface::strainColor(0.0, 0.1);
+  const auto half = ros_interface::strainColor(0.05, 0.1);
+  const auto full = ros_interface::strainColor(0.3, 0.1);
+  EXPECT_EQ(none.b, 1.0f);
+  EXPECT_EQ(none.r, 0.0f);
+  EXPECT_EQ(half.g, 1.0f);
+  EXPECT_EQ(full.r, 1.0f);
+  EXPECT_EQ(full.b, 0.0f);
+}

@@ -5,6 +5,7 @@
 
 #include <filesystem>
 
+#include "particle_sim/scene/obj_mesh.h"
 #include "particle_sim/scene/scene.h"
 
 using namespace particle_sim;
@@ -150,13 +151,15 @@ TEST(SceneFiles, ToYamlRoundTripsEveryDefinition)
   EXPECT_EQ(a.burst_count, b.burst_count);
   EXPECT_EQ(again.world.spheres[0].radius, original.world.spheres[0].radius);
 
-  // Ropes and networks too.
-  for (const char* name : {"rope_bridge", "spring_network"})
+  // Every shipped scene: ropes, networks, cloth (grid and mesh, written back inline), jelly, frames.
+  for (const auto& entry :
+       std::filesystem::directory_iterator(std::string(PARTICLE_SIM_SOURCE_DIR) + "/config/scenes"))
   {
-    ASSERT_TRUE(scene::loadSceneFile(std::string(PARTICLE_SIM_SOURCE_DIR) + "/config/scenes/" + name + ".yaml", original).ok);
+    ASSERT_TRUE(scene::loadSceneFile(entry.path().string(), original).ok) << entry.path();
     const core::Status status = scene::parseScene(scene::toYaml(original), "round-trip", again);
-    ASSERT_TRUE(status.ok) << status.message;
-    EXPECT_EQ(scene::toYaml(again), scene::toYaml(original)) << name;
+    ASSERT_TRUE(status.ok) << entry.path() << ": " << status.message;
+    EXPECT_EQ(scene::toYaml(again), scene::toYaml(original)) << entry.path();
+    EXPECT_EQ(again.frame_pins.size(), original.frame_pins.size()) << entry.path();
   }
 }
 
@@ -231,4 +234,111 @@ TEST(SceneFiles, RefusesBadRopesAndNetworks)
   EXPECT_TRUE(contains(refusal(net + "    particles: [{position: [0, 0, 0]}, {position: [1, 0, 0]}]\n"
                                      "    springs: [{particles: [0, 1], class: twist}]\n"),
                        "class = 'twist' is not a spring class"));
+}
+
+TEST(SceneFiles, ReadsGridClothWithNamedPinsFramePinsAirAndFrames)
+{
+  const scene::SceneDef def = parseOk(
+      "world:\n  air: {drag: 2, wind: [1, 2, 3]}\n"
+      "  spheres:\n    - {name: tool, center: [0, 0, 1], radius: 0.1, frame: tool0}\n"
+      "frames:\n  - {name: gripper, center: [0, 0, 2], radius: 0.5, period: 4}\n"
+      "bodies:\n  - name: c\n    kind: cloth\n    resolution: [4, 3]\n    edge_v: [0, 0, -1]\n"
+      "    shear: {stiffness: 7}\n    pins: [corner_00, 5]\n    max_strain: 0.1\n    strain_iterations: 7\n"
+      "    frame_pins:\n      - {pin: corner_11, frame: gripper, offset: [0, 0, -0.1]}\n");
+  EXPECT_EQ(def.world.air.drag, 2.0);
+  EXPECT_EQ(def.world.air.wind, Eigen::Vector3d(1, 2, 3));
+  ASSERT_EQ(def.frame_spheres.size(), 1u);
+  EXPECT_EQ(def.frame_spheres[0].frame, "tool0");
+  ASSERT_EQ(def.frames.size(), 1u);
+  EXPECT_LT((def.frames[0].position(1.0) - Eigen::Vector3d(0, 0.5, 2)).norm(), 1e-15);  // a quarter turn
+  const auto& c = std::get<core::ClothGridDef>(def.bodies[0]);
+  EXPECT_EQ(c.nu, 4);
+  EXPECT_EQ(c.nv, 3);
+  EXPECT_EQ(c.shear.stiffness, 7.0);
+  EXPECT_EQ(c.named_pins, std::vector<std::string>{"corner_00"});
+  EXPECT_EQ(c.pins, (std::vector<int>{5, 11}));  // 11 = corner_11 of a 4 x 3 grid, from the frame pin
+  EXPECT_EQ(c.strain_limit.max_strain, 0.1);
+  EXPECT_EQ(c.strain_limit.iterations, 7);
+  ASSERT_EQ(def.frame_pins.size(), 1u);
+  EXPECT_EQ(def.frame_pins[0].index, 11);
+  EXPECT_EQ(def.frame_pins[0].offset, Eigen::Vector3d(0, 0, -0.1));
+
+  // Built, the frame pin starts where the scripted frame is at t = 0.
+  std::unique_ptr<core::World> world;
+  ASSERT_TRUE(scene::buildWorld(def, world).ok);
+  EXPECT_TRUE((world->findSpringBody("c")->pinTarget(11) - Eigen::Vector3d(0.5, 0, 1.9)).norm() < 1e-12);
+  ASSERT_TRUE(scene::applyScriptedFrames(def, 2.0, *world).ok);  // half a turn
+  EXPECT_TRUE((world->findSpringBody("c")->pinTarget(11) - Eigen::Vector3d(-0.5, 0, 1.9)).norm() < 1e-12);
+}
+
+TEST(SceneFiles, ReadsMeshClothFromAnObjFileRelativeToTheScene)
+{
+  scene::SceneDef def;
+  const core::Status status =
+      scene::loadSceneFile(std::string(PARTICLE_SIM_SOURCE_DIR) + "/config/scenes/cloth_mesh.yaml", def);
+  ASSERT_TRUE(status.ok) << status.message;
+  const auto& m = std::get<core::MeshClothDef>(def.bodies[0]);
+  EXPECT_EQ(m.vertices.size(), 121u);
+  EXPECT_EQ(m.triangles.size(), 216u);
+  EXPECT_EQ(m.vertices[0], Eigen::Vector3d(0, 0, 1.3));  // the disc centre, moved by origin
+}
+
+TEST(SceneFiles, ReadsJelly)
+{
+  const scene::SceneDef def = parseOk(
+      "bodies:\n  - {name: j, kind: jelly, size: [1, 2, 3], resolution: [2, 3, 4], velocity: [0, 0, -1], "
+      "bend: {stiffness: 0}}\n");
+  const auto& j = std::get<core::JellyDef>(def.bodies[0]);
+  EXPECT_EQ(j.size, Eigen::Vector3d(1, 2, 3));
+  EXPECT_EQ(j.nz, 4);
+  EXPECT_EQ(j.velocity.z(), -1.0);
+  EXPECT_EQ(j.bend.stiffness, 0.0);
+}
+
+TEST(SceneFiles, RefusesBadClothJellyFramesAndMeshes)
+{
+  const std::string cloth = "bodies:\n  - name: c\n    kind: cloth\n";
+  EXPECT_TRUE(contains(refusal(cloth + "    pins: [middle]\n"), "pins[0] = 'middle' is not a pin name"));
+  EXPECT_TRUE(contains(refusal(cloth + "    resolution: [1, 5]\n"), "resolution[0] = 1 is out of range"));
+  EXPECT_TRUE(contains(refusal(cloth + "    resolution: [5]\n"), "resolution must be [nu, nv]"));
+  EXPECT_TRUE(contains(refusal(cloth + "    edge_v: [2, 0, 0]\n"), "must be non-zero and not parallel"));
+  EXPECT_TRUE(contains(refusal(cloth + "    model: baraff\n"), "model = 'baraff' is not a cloth model"));
+  EXPECT_TRUE(contains(refusal(cloth + "    max_strain: -0.1\n"), "max_strain = -0.1 is out of range"));
+  EXPECT_TRUE(contains(refusal(cloth + "    frame_pins: [{pin: corner_99, frame: f}]\n"),
+                       "pin = 'corner_99' is neither an index nor a pin name"));
+  EXPECT_TRUE(contains(refusal(cloth + "    mesh: /nonexistent.obj\n"), "/nonexistent.obj: cannot open the mesh file"));
+  EXPECT_TRUE(contains(refusal(cloth + "    vertices: [[0, 0, 0], [1, 0, 0], [0, 1, 0]]\n    triangles: [[0, 1, 5]]\n"),
+                       "triangles[0] uses vertex 5, out of range"));
+  const std::string jelly = "bodies:\n  - name: j\n    kind: jelly\n";
+  EXPECT_TRUE(contains(refusal(jelly + "    size: [1, 0, 1]\n"), "size[1] = 0 is out of range"));
+  EXPECT_TRUE(contains(refusal(jelly + "    resolution: [100, 100, 100]\n"), "over the cap"));
+  EXPECT_TRUE(contains(refusal("world:\n  air: {drag: -1}\n"), "air.drag = -1 is out of range"));
+  EXPECT_TRUE(contains(refusal("frames:\n  - {name: f, period: 0}\n"), "period = 0 is out of range"));
+  EXPECT_TRUE(contains(refusal("frames:\n  - {name: f}\n  - {name: f}\n"), "name = 'f' is already taken"));
+}
+
+TEST(ObjMesh, ParsesVerticesFacesPolygonsAndTextureCoordinates)
+{
+  scene::ObjMesh mesh;
+  const core::Status status = scene::parseObj(
+      "# a quad and a triangle\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n"
+      "f 1/1 2/2 3/3 4/4\nf -4/1 -2/3 -1/4\n",
+      "quad.obj", mesh);
+  ASSERT_TRUE(status.ok) << status.message;
+  ASSERT_EQ(mesh.vertices.size(), 4u);
+  ASSERT_EQ(mesh.triangles.size(), 3u);  // the quad as a fan of two, then the triangle
+  EXPECT_EQ(mesh.triangles[0], Eigen::Vector3i(0, 1, 2));
+  EXPECT_EQ(mesh.triangles[1], Eigen::Vector3i(0, 2, 3));
+  EXPECT_EQ(mesh.triangles[2], Eigen::Vector3i(0, 2, 3));  // negative indices count back
+  ASSERT_EQ(mesh.uvs.size(), 4u);
+  EXPECT_EQ(mesh.uvs[2], Eigen::Vector2d(1, 1));
+
+  scene::ObjMesh plain;
+  ASSERT_TRUE(scene::parseObj("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1//1 2//1 3//1\n", "plain.obj", plain).ok);
+  EXPECT_TRUE(plain.uvs.empty());  // no texture coordinates in the file
+
+  EXPECT_TRUE(contains(scene::parseObj("v 0 0\n", "bad.obj", mesh).message, "bad.obj:1: a vertex needs three numbers"));
+  EXPECT_TRUE(contains(scene::parseObj("v 0 0 0\nf 1 2 3\n", "bad.obj", mesh).message,
+                       "bad.obj:2: face corner '2' names no vertex"));
+  EXPECT_TRUE(contains(scene::parseObj("v 0 0 0\n", "bad.obj", mesh).message, "no triangles"));
 }

@@ -16,6 +16,7 @@ struct ContactDef
 {
   double restitution = 0.5;  ///< [-] in [0, 1]: share of the normal speed kept after a bounce
   double friction = 0.3;     ///< [-] >= 0: Coulomb coefficient, tangential speed lost <= friction * normal impulse / m
+  double bounce_speed = 0.2;  ///< [m/s] >= 0: slower impacts do not bounce (resting contact stays at rest)
 };
 
 /// The horizontal plane z = height; particles stay above it.
@@ -62,7 +63,7 @@ struct Environment
 ///
 /// For each collider with outward normal n and penetration depth p > 0:
 ///   position  x += (1 + e) p n          (mirror image for e = 1, the surface for e = 0)
-///   velocity  v_n' = -e v_n when moving inward,
+///   velocity  v_n' = -e v_n when moving inward faster than bounce_speed, else 0,
 ///             |v_t| shrinks by at most mu (1 + e) |v_n| (Coulomb friction on the impulse).
 /// The result is always outside the collider that was handled.
 void resolveCollisions(const Environment& env, ParticlePool& pool);

@@ -18,6 +18,8 @@ struct MarkerStyle
   std::string frame_id = "world";
   double particle_size = 0.05;  ///< [m] side of a POINTS square, diameter of a spring body's particle
   double line_width = 0.02;     ///< [m] rope and spring lines
+  bool color_by_strain = false;  ///< colour cloth and jelly surfaces by strain instead of shading them
+  double strain_color_max = 0.1;  ///< [-] strain drawn fully red (0 is blue)
 };
 
 /// Turns the world's state into one MarkerArray: one namespace per body (the body name) with
@@ -26,6 +28,9 @@ struct MarkerStyle
 ///   - `removed`: bodies removed since the last array get a DELETE for each of their ids;
 ///   - spring bodies: free particles as a SPHERE_LIST, a rope as a LINE_STRIP and a network's
 ///     springs as a LINE_LIST, pinned particles as a separate, larger SPHERE_LIST (DELETE if none);
+///   - cloth and jelly: their surface as a TRIANGLE_LIST, one colour per vertex, shaded by the
+///     vertex normal (or coloured by strain when style.color_by_strain); rviz draws triangle lists
+///     from both sides; and their pins;
 ///   - an emitter with no live particle gets a DELETE instead of an empty POINTS list;
 ///   - sphere colliders are drawn in the namespace "_colliders".
 /// Every marker passes rviz's checks: unit quaternion, non-zero scale, alpha > 0, one colour per
@@ -34,9 +39,12 @@ visualization_msgs::MarkerArray buildMarkers(const core::World& world, const ros
                                               const MarkerStyle& style, bool delete_all,
                                               const std::vector<std::string>& removed);
 
+/// Colour of a strain (l − L)/L: blue at 0 (or compressed), through green, to red at `max`.
+std_msgs::ColorRGBA strainColor(double strain, double max);
+
 /// Marker ids used inside a body's namespace.
 constexpr int kParticlesMarkerId = 0;  ///< POINTS (emitters) or SPHERE_LIST (free particles of spring bodies)
-constexpr int kLinesMarkerId = 1;      ///< LINE_STRIP (ropes) or LINE_LIST (springs of a network)
+constexpr int kLinesMarkerId = 1;      ///< LINE_STRIP (ropes), LINE_LIST (networks) or TRIANGLE_LIST (cloth, jelly)
 constexpr int kPinsMarkerId = 2;       ///< SPHERE_LIST of pinned particles, drawn apart
 constexpr int kMarkerIdsPerBody = 3;
 /// Namespace of the collider markers (one SPHERE per sphere collider, id = its index). Body names

@@ -10,6 +10,7 @@ namespace names
 // Topics
 constexpr const char* kMarkersTopic = "markers";  // ~markers, visualization_msgs/MarkerArray
 constexpr const char* kClockTopic = "/clock";     // rosgraph_msgs/Clock
+constexpr const char* kMeshesTopic = "meshes";    // ~meshes, particle_sim/ClothMesh
 
 // Services
 constexpr const char* kSpawnEmitter = "spawn_emitter";
@@ -22,6 +23,9 @@ constexpr const char* kSpawnRope = "spawn_rope";
 constexpr const char* kPinParticle = "pin_particle";
 constexpr const char* kUnpinParticle = "unpin_particle";
 constexpr const char* kSetSpringConstants = "set_spring_constants";
+constexpr const char* kSpawnCloth = "spawn_cloth";
+constexpr const char* kSpawnJelly = "spawn_jelly";
+constexpr const char* kSetWind = "set_wind";
 
 // Parameters
 constexpr const char* kSceneParam = "scene";
@@ -35,5 +39,7 @@ constexpr const char* kPublishClockParam = "publish_clock";
 constexpr const char* kParticleSizeParam = "particle_size";
 constexpr const char* kMaxParticlesParam = "max_particles_per_body";
 constexpr const char* kStatusPeriodParam = "status_period";
+constexpr const char* kColorByStrainParam = "color_by_strain";
+constexpr const char* kStrainColorMaxParam = "strain_color_max";
 }  // namespace names
 }  // namespace particle_sim

@@ -15,12 +15,16 @@
 #include "particle_sim/PinParticle.h"
 #include "particle_sim/RemoveBody.h"
 #include "particle_sim/SetSpringConstants.h"
+#include "particle_sim/SetWind.h"
+#include "particle_sim/SpawnCloth.h"
 #include "particle_sim/SpawnEmitter.h"
+#include "particle_sim/SpawnJelly.h"
 #include "particle_sim/SpawnRope.h"
 #include "particle_sim/Step.h"
 #include "particle_sim/UnpinParticle.h"
 #include "particle_sim/core/world.h"
 #include "particle_sim/ros/marker_builder.h"
+#include "particle_sim/scene/scene.h"
 
 namespace particle_sim
 {
@@ -40,6 +44,8 @@ struct NodeSettings
   double particle_size = 0.05;     ///< ~particle_size [m]
   int max_particles_per_body = 0;  ///< ~max_particles_per_body; 0 = the scene's value
   double status_period = 1.0;      ///< ~status_period [s] of wall time between status lines; 0 = none
+  bool color_by_strain = false;    ///< ~color_by_strain: colour cloth and jelly by strain
+  double strain_color_max = 0.1;   ///< ~strain_color_max [-]: strain drawn fully red
 };
 
 /// The simulator node: owns a core::World, steps it at a fixed rate on steady (wall) time, serves
@@ -83,6 +89,13 @@ private:
   bool pinParticle(PinParticle::Request& req, PinParticle::Response& res);
   bool unpinParticle(UnpinParticle::Request& req, UnpinParticle::Response& res);
   bool setSpringConstants(SetSpringConstants::Request& req, SetSpringConstants::Response& res);
+  bool spawnCloth(SpawnCloth::Request& req, SpawnCloth::Response& res);
+  bool spawnJelly(SpawnJelly::Request& req, SpawnJelly::Response& res);
+  bool setWind(SetWind::Request& req, SetWind::Response& res);
+  // Moves spheres that follow tf frames (scripted frames are applied every step).
+  void updateFrameSpheres();
+  // Broadcasts the scene's scripted frames at the current sim time.
+  void broadcastScriptedFrames(const ros::Time& stamp);
   bool removeBody(RemoveBody::Request& req, RemoveBody::Response& res);
   bool reset(std_srvs::Trigger::Request& req, std_srvs::Trigger::Response& res);
   bool pausePhysics(std_srvs::Trigger::Request& req, std_srvs::Trigger::Response& res);
@@ -93,11 +106,13 @@ private:
   ros::NodeHandle private_node_;
   NodeSettings settings_;
   MarkerStyle style_;
+  scene::SceneDef scene_;  // as loaded: scripted frames and what follows frames
   std::unique_ptr<core::World> world_;
   int substeps_ = 1;
   bool paused_ = false;
 
   ros::Publisher markers_pub_;
+  ros::Publisher meshes_pub_;
   ros::Publisher clock_pub_;
   std::unique_ptr<tf2_ros::TransformBroadcaster> tf_broadcaster_;
   std::vector<ros::ServiceServer> services_;

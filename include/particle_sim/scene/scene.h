@@ -5,7 +5,9 @@
 #include <variant>
 #include <vector>
 
+#include "particle_sim/core/cloth.h"
 #include "particle_sim/core/emitter.h"
+#include "particle_sim/core/jelly.h"
 #include "particle_sim/core/spring_network.h"
 #include "particle_sim/core/status.h"
 #include "particle_sim/core/world.h"
@@ -15,14 +17,56 @@ namespace particle_sim
 namespace scene
 {
 /// One body entry of a scene file, as the core definition it builds.
-using BodyDef = std::variant<core::EmitterDef, core::RopeDef, core::SpringNetworkDef>;
+using BodyDef = std::variant<core::EmitterDef, core::RopeDef, core::SpringNetworkDef, core::ClothGridDef,
+                             core::MeshClothDef, core::JellyDef>;
 
-/// A whole scene: world settings and named bodies, in file order.
+/// A frame the scene moves by itself (a stand-in for a robot's gripper or tool): it goes round a
+/// horizontal circle. The node broadcasts it on tf; pins and spheres can follow it.
+struct ScriptedFrameDef
+{
+  std::string name;
+  Eigen::Vector3d center = Eigen::Vector3d::Zero();  ///< [m] in the sim frame
+  double radius = 0.5;                               ///< [m] >= 0
+  double period = 4.0;                               ///< [s] > 0, one turn
+  double phase = 0.0;                                ///< [rad] angle at t = 0
+
+  /// Position [m] at sim time t [s]: center + radius (cos(2πt/period + phase), sin(...), 0).
+  Eigen::Vector3d position(double t) const;
+};
+
+/// A pinned particle that follows a frame (scripted, or any tf frame in the node) at an offset.
+struct FramePinDef
+{
+  std::string body;
+  int index = 0;
+  std::string frame;
+  Eigen::Vector3d offset = Eigen::Vector3d::Zero();  ///< [m] in the frame
+};
+
+/// A sphere collider that follows a frame (its centre is the frame's origin).
+struct FrameSphereDef
+{
+  std::string sphere;
+  std::string frame;
+};
+
+/// A whole scene: world settings, named bodies in file order, and what follows frames.
 struct SceneDef
 {
   core::WorldDef world;
   std::vector<BodyDef> bodies;
+  std::vector<ScriptedFrameDef> frames;
+  std::vector<FramePinDef> frame_pins;
+  std::vector<FrameSphereDef> frame_spheres;
 };
+
+/// The scripted frame called `name`, or null.
+const ScriptedFrameDef* findFrame(const SceneDef& scene, const std::string& name);
+
+/// Moves everything that follows a scripted frame to where the frame is at sim time `t`: pin
+/// targets (frame position + offset) and sphere centres. Frames that are not scripted are left to
+/// the caller (the node looks them up on tf).
+core::Status applyScriptedFrames(const SceneDef& scene, double t, core::World& world);
 
 /// Parses scene YAML text. Unknown keys, wrong types and out-of-range or non-finite values are
 /// refused with a message that starts with `source:line:` and names the key, the value and what is
