@@ -42,12 +42,13 @@ namespace
 // the penetration depth, reflects the inward normal velocity with restitution e (0 below the
 // bounce speed) and removes tangential velocity by Coulomb friction on the normal impulse.
 void respond(const ContactDef& contact, const Eigen::Vector3d& n, double depth, Eigen::Ref<Eigen::Vector3d> x,
-             Eigen::Ref<Eigen::Vector3d> v)
+             Eigen::Ref<Eigen::Vector3d> v, double start_vn)
 {
   const double vn = v.dot(n);
-  // Slow impacts (a particle resting on the surface, pulled in by one step of gravity) do not
-  // bounce: without this, resting particles would keep a velocity they never move with.
-  const double e = vn < -contact.bounce_speed ? contact.restitution : 0.0;
+  // Slow impacts (a particle resting on the surface, pulled in by one step) do not bounce: without
+  // this, resting particles would keep a velocity they never move with.
+  const bool impact = vn < -contact.bounce_speed && start_vn < -contact.bounce_speed;
+  const double e = impact ? contact.restitution : 0.0;
   x += (1.0 + e) * depth * n;
   if (vn >= 0.0) return;  // already leaving the surface
   const Eigen::Vector3d v_tangent = v - vn * n;
@@ -59,7 +60,7 @@ void respond(const ContactDef& contact, const Eigen::Vector3d& n, double depth, 
 }
 }  // namespace
 
-void resolveCollisions(const Environment& env, ParticlePool& pool)
+void resolveCollisions(const Environment& env, ParticlePool& pool, const Eigen::Matrix3Xd* start_velocity)
 {
   const int n = pool.size();
   for (int i = 0; i < n; ++i)
@@ -67,10 +68,15 @@ void resolveCollisions(const Environment& env, ParticlePool& pool)
     if (pool.inverse_mass[i] == 0.0) continue;  // pinned particles follow their target
     auto x = pool.position.col(i);
     auto v = pool.velocity.col(i);
+    // The approach speed along n at the start of the step (the current one when not given).
+    auto start_vn = [&](const Eigen::Vector3d& n) {
+      return start_velocity ? start_velocity->col(i).dot(n) : v.dot(n);
+    };
 
     // Ground plane z = height, normal +z.
     if (env.ground.enabled && x.z() < env.ground.height)
-      respond(env.ground.contact, Eigen::Vector3d::UnitZ(), env.ground.height - x.z(), x, v);
+      respond(env.ground.contact, Eigen::Vector3d::UnitZ(), env.ground.height - x.z(), x, v,
+              start_vn(Eigen::Vector3d::UnitZ()));
 
     // Spheres: outward normal from the centre through the particle.
     for (const SphereColliderDef& sphere : env.spheres)
@@ -79,7 +85,7 @@ void resolveCollisions(const Environment& env, ParticlePool& pool)
       const double distance = offset.norm();
       if (distance >= sphere.radius) continue;
       const Eigen::Vector3d normal = distance > 1e-12 ? Eigen::Vector3d(offset / distance) : Eigen::Vector3d::UnitZ();
-      respond(sphere.contact, normal, sphere.radius - distance, x, v);
+      respond(sphere.contact, normal, sphere.radius - distance, x, v, start_vn(normal));
     }
   }
 }

@@ -394,11 +394,11 @@ void SpringNetworkBody::step(double dt, const Environment& env)
     if (pinned_[i]) p.position.col(i) = pin_target_.col(i);
   }
   // Restriction forces: collisions, strain limiting, and collisions again for what it moved.
-  resolveCollisions(env, p);
+  resolveCollisions(env, p, &saved_velocity_);
   if (def_.strain_limit.max_strain > 0.0)
   {
     limitStrain(dt);
-    resolveCollisions(env, p);
+    resolveCollisions(env, p, &saved_velocity_);
   }
   for (int i = 0; i < n; ++i) p.age[i] += dt;
   p.previous_position = saved_position_;

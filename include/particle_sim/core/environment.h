@@ -60,13 +60,18 @@ struct Environment
 };
 
 /// Moves every live, non-pinned particle of `pool` that ended a step inside a collider back out.
+/// `start_velocity`, when given, is each particle's velocity at the start of the step: a contact
+/// bounces only if the particle was already moving into the surface then (faster than
+/// bounce_speed), so a particle resting on a surface that an implicit step pulls into it is not
+/// thrown off.
 ///
 /// For each collider with outward normal n and penetration depth p > 0:
 ///   position  x += (1 + e) p n          (mirror image for e = 1, the surface for e = 0)
-///   velocity  v_n' = -e v_n when moving inward faster than bounce_speed, else 0,
+///   velocity  v_n' = -e v_n when moving inward faster than bounce_speed (now and at the start of the
+///             step), else 0,
 ///             |v_t| shrinks by at most mu (1 + e) |v_n| (Coulomb friction on the impulse).
 /// The result is always outside the collider that was handled.
-void resolveCollisions(const Environment& env, ParticlePool& pool);
+void resolveCollisions(const Environment& env, ParticlePool& pool, const Eigen::Matrix3Xd* start_velocity = nullptr);
 
 }  // namespace core
 }  // namespace particle_sim

@@ -33,7 +33,7 @@ const char* toString(NetworkShape shape);
 struct StrainLimitDef
 {
   double max_strain = 0.0;  ///< [-] > 0 turns it on (e.g. 0.1 = 10 %); 0 = off
-  int iterations = 20;      ///< cap on relaxation passes, >= 1
+  int iterations = 50;      ///< cap on relaxation passes, >= 1 (the limit holds exactly only with enough)
 };
 
 /// A body of particles joined by springs. Ropes, cloth and jelly are builders of this one
