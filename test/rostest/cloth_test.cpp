@@ -1,8 +1,10 @@
 // rostest: cloth and jelly through the node's services, checked in ~markers and ~meshes.
 
 #include <Eigen/Geometry>
+#include <geometry_msgs/TransformStamped.h>
 #include <gtest/gtest.h>
 #include <ros/ros.h>
+#include <tf2_ros/transform_broadcaster.h>
 
 #include <cmath>
 #include <map>
@@ -225,6 +227,26 @@ TEST_F(ClothTest, WindPushesTheHangingSheetAlongItsNormal)
   EXPECT_NE(refused.message.find("wind = [0, nan, 0] is not finite"), std::string::npos) << refused.message;
   wind.wind.y = 0.0;
   EXPECT_TRUE(call<SetWind>("set_wind", wind).success);
+}
+
+TEST_F(ClothTest, SphereFollowsItsTfFrame)
+{
+  // The scene's sphere 'ball' follows the tf frame 'ball_frame', broadcast here.
+  tf2_ros::TransformBroadcaster broadcaster;
+  geometry_msgs::TransformStamped tf;
+  tf.header.frame_id = "world";
+  tf.child_frame_id = "ball_frame";
+  tf.transform.translation.x = -2.0;
+  tf.transform.translation.y = 1.5;
+  tf.transform.translation.z = 0.75;
+  tf.transform.rotation.w = 1.0;
+  EXPECT_TRUE(listener_.waitFor([&] {
+    tf.header.stamp = ros::Time::now();
+    broadcaster.sendTransform(tf);
+    const Marker ball = listener_.latest("_colliders", 0);
+    return ball.action == Marker::ADD && std::abs(ball.pose.position.x + 2.0) < 1e-9 &&
+           std::abs(ball.pose.position.y - 1.5) < 1e-9 && std::abs(ball.pose.position.z - 0.75) < 1e-9;
+  })) << "the sphere marker is at " << listener_.latest("_colliders", 0).pose.position.x;
 }
 
 TEST_F(ClothTest, BadClothAndJellyRequestsAreRefusedNamingTheField)
