@@ -2,7 +2,7 @@
 # Sourced, not run.
 
 PARTICLE_SIM_ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-PARTICLE_SIM_BUILD="$PARTICLE_SIM_ROOT/build"
+PARTICLE_SIM_BUILD="${PARTICLE_SIM_BUILD:-$PARTICLE_SIM_ROOT/build}"  # another build directory: set it before
 
 # Debian packages the package needs to build, run and test (ROS 1 from Debian's own archive).
 PARTICLE_SIM_PACKAGES=(
@@ -10,6 +10,9 @@ PARTICLE_SIM_PACKAGES=(
   ros-geometry-msgs ros-shape-msgs ros-std-msgs ros-std-srvs libros-rosgraph-msgs-dev ros-message-generation
   libyaml-cpp-dev libeigen3-dev libgtest-dev librostest-dev python3-rostest python3-rospy
   python3-roslaunch python3-rosservice python3-rostopic rosbash
+  libdynamic-reconfigure-config-init-mutex-dev python3-dynamic-reconfigure libdiagnostic-updater-dev
+  ros-diagnostic-msgs libnodelet-dev libnodeletlib-dev libnodeletlib-tools libbondcpp-dev pluginlib-dev
+  librosbag-dev python3-rosbag python3-rosnode python3-tf2-msgs
 )
 
 # ROS tools are Python programs that need Debian's python3, not a pyenv one found first on PATH.
@@ -40,7 +43,7 @@ build_package() {
   if [ ! -f "$PARTICLE_SIM_BUILD/CMakeCache.txt" ]; then
     log "configuring into build/"
     cmake -S "$PARTICLE_SIM_ROOT" -B "$PARTICLE_SIM_BUILD" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-      -DPYTHON_EXECUTABLE=/usr/bin/python3 -DCATKIN_DEVEL_PREFIX="$PARTICLE_SIM_BUILD/devel" >/dev/null
+      -DPYTHON_EXECUTABLE=/usr/bin/python3 -DPython3_EXECUTABLE=/usr/bin/python3 -DCATKIN_DEVEL_PREFIX="$PARTICLE_SIM_BUILD/devel" >/dev/null
   fi
   log "building"
   cmake --build "$PARTICLE_SIM_BUILD" -- -j"$(nproc)" "$@"

@@ -2,6 +2,7 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <cmath>
 #include <map>
 #include <utility>
 
@@ -34,6 +35,43 @@ Status checkCommon(const std::string& name, const SpringConstants& stretch, cons
 void addPins(const std::vector<int>& pins, int n, std::vector<int>& out)
 {
   for (int pin : pins) out.push_back(pin < 0 ? n + pin : pin);
+}
+}  // namespace
+
+const char* toString(ClothModel model) { return model == ClothModel::Springs ? "springs" : "baraff_witkin"; }
+
+bool parseClothModel(const std::string& text, ClothModel& model)
+{
+  if (text == "springs")
+    model = ClothModel::Springs;
+  else if (text == "baraff_witkin")
+    model = ClothModel::BaraffWitkin;
+  else
+    return false;
+  return true;
+}
+
+namespace
+{
+// The Baraff–Witkin energies of a cloth whose triangles have rest coordinates `uvs` [m].
+void addBaraffWitkin(const std::vector<Eigen::Vector2d>& uvs, const SpringConstants& stretch,
+                     const SpringConstants& shear, const SpringConstants& bend, double b_u, double b_v,
+                     SpringNetworkDef& net)
+{
+  BaraffWitkinDef& bw = net.baraff_witkin;
+  std::string error;
+  buildBaraffWitkin(net.positions, uvs, net.triangles, bw, error);  // validated before
+  bw.stretch = stretch;
+  bw.shear = shear;
+  bw.bend = bend;
+  bw.b_u = b_u;
+  bw.b_v = b_v;
+}
+
+Status checkBaraffWitkinRest(double b_u, double b_v)
+{
+  if (Status s = checkPositive("b_u", b_u); !s) return s;
+  return checkPositive("b_v", b_v);
 }
 }  // namespace
 
@@ -78,6 +116,7 @@ Status validate(const ClothGridDef& def, int max_particles)
                            std::to_string(static_cast<long long>(def.nu) * def.nv) +
                            " particles, over the cap of " + std::to_string(max_particles));
   if (Status s = checkPinIndices(def.pins, def.nu * def.nv); !s) return s;
+  if (Status s = checkBaraffWitkinRest(def.b_u, def.b_v); !s) return s;
   std::vector<int> ignored;
   for (std::size_t k = 0; k < def.named_pins.size(); ++k)
   {
@@ -105,21 +144,27 @@ SpringNetworkDef buildClothGrid(const ClothGridDef& def)
                               def.edge_v * (static_cast<double>(b) / (nv - 1)));
   net.masses.assign(n, def.mass / n);
 
-  // Provot's springs: stretch to the neighbours, shear across each cell, bend two apart.
+  // Provot's springs: stretch to the neighbours, shear across each cell, bend two apart (none for
+  // a Baraff–Witkin cloth, which gets its energies from the triangles below).
   const std::vector<Eigen::Vector3d>& x = net.positions;
+  const bool springs = def.model == ClothModel::Springs;
   for (int b = 0; b < nv; ++b)
   {
     for (int a = 0; a < nu; ++a)
     {
+      if (a + 1 < nu && b + 1 < nv)
+      {
+        // Two triangles per cell, both wound like (edge_u, edge_v).
+        net.triangles.emplace_back(index(a, b), index(a + 1, b), index(a + 1, b + 1));
+        net.triangles.emplace_back(index(a, b), index(a + 1, b + 1), index(a, b + 1));
+      }
+      if (!springs) continue;
       if (a + 1 < nu) net.springs.push_back(makeSpring(x, index(a, b), index(a + 1, b), def.stretch, SpringClass::Stretch));
       if (b + 1 < nv) net.springs.push_back(makeSpring(x, index(a, b), index(a, b + 1), def.stretch, SpringClass::Stretch));
       if (a + 1 < nu && b + 1 < nv)
       {
         net.springs.push_back(makeSpring(x, index(a, b), index(a + 1, b + 1), def.shear, SpringClass::Shear));
         net.springs.push_back(makeSpring(x, index(a + 1, b), index(a, b + 1), def.shear, SpringClass::Shear));
-        // Two triangles per cell, both wound like (edge_u, edge_v).
-        net.triangles.emplace_back(index(a, b), index(a + 1, b), index(a + 1, b + 1));
-        net.triangles.emplace_back(index(a, b), index(a + 1, b + 1), index(a, b + 1));
       }
       if (def.bend.stiffness > 0.0)
       {
@@ -127,6 +172,17 @@ SpringNetworkDef buildClothGrid(const ClothGridDef& def)
         if (b + 2 < nv) net.springs.push_back(makeSpring(x, index(a, b), index(a, b + 2), def.bend, SpringClass::Bend));
       }
     }
+  }
+
+  // Baraff–Witkin: (u, v) of each particle are its rest coordinates in the cloth's plane, u along
+  // edge_u and v perpendicular to it, so the cloth starts at rest.
+  if (!springs)
+  {
+    const Eigen::Vector3d e1 = def.edge_u.normalized();
+    const Eigen::Vector3d e2 = (def.edge_v - def.edge_v.dot(e1) * e1).normalized();
+    std::vector<Eigen::Vector2d> uvs;
+    for (const Eigen::Vector3d& p : net.positions) uvs.emplace_back((p - def.origin).dot(e1), (p - def.origin).dot(e2));
+    addBaraffWitkin(uvs, def.stretch, def.shear, def.bend, def.b_u, def.b_v, net);
   }
 
   // Pins by index and by name, each particle once.
@@ -164,7 +220,19 @@ Status validate(const MeshClothDef& def, int max_particles)
     if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2])
       return Status::failure("triangles[" + std::to_string(k) + "] repeats a vertex");
   }
-  return checkPinIndices(def.pins, n);
+  if (Status s = checkPinIndices(def.pins, n); !s) return s;
+  if (def.model == ClothModel::BaraffWitkin)
+  {
+    if (Status s = checkSpringConstants("shear.", def.shear.stiffness, def.shear.damping); !s) return s;
+    if (Status s = checkBaraffWitkinRest(def.b_u, def.b_v); !s) return s;
+    if (def.uvs.size() != def.vertices.size())
+      return Status::failure("model = baraff_witkin needs texture coordinates (vt) for every vertex; the mesh has " +
+                             std::to_string(def.uvs.size()) + " for " + std::to_string(n) + " vertices");
+    BaraffWitkinDef probe;
+    std::string error;
+    if (!buildBaraffWitkin(def.vertices, def.uvs, def.triangles, probe, error)) return Status::failure(error);
+  }
+  return Status::success();
 }
 
 SpringNetworkDef buildMeshCloth(const MeshClothDef& def)
@@ -188,6 +256,23 @@ SpringNetworkDef buildMeshCloth(const MeshClothDef& def)
       const int i = t[c], j = t[(c + 1) % 3], k = t[(c + 2) % 3];
       opposite[{std::min(i, j), std::max(i, j)}].push_back(k);
     }
+  }
+  if (def.model == ClothModel::BaraffWitkin)
+  {
+    // Texture coordinates scaled so that the (u, v) area equals the mesh's area.
+    double mesh_area = 0.0, uv_area = 0.0;
+    for (const Eigen::Vector3i& t : def.triangles)
+    {
+      mesh_area += 0.5 * (def.vertices[t[1]] - def.vertices[t[0]]).cross(def.vertices[t[2]] - def.vertices[t[0]]).norm();
+      const Eigen::Vector2d a = def.uvs[t[1]] - def.uvs[t[0]], b = def.uvs[t[2]] - def.uvs[t[0]];
+      uv_area += 0.5 * std::abs(a.x() * b.y() - a.y() * b.x());
+    }
+    const double scale = std::sqrt(mesh_area / uv_area);
+    std::vector<Eigen::Vector2d> uvs;
+    for (const Eigen::Vector2d& uv : def.uvs) uvs.push_back(scale * uv);
+    addBaraffWitkin(uvs, def.stretch, def.shear, def.bend, def.b_u, def.b_v, net);
+    addPins(def.pins, n, net.pins);
+    return net;
   }
   for (const auto& [edge, across] : opposite)
   {
@@ -223,6 +308,7 @@ void vertexStrains(const SpringNetworkBody& body, std::vector<double>& strains)
 {
   const ParticlePool& p = body.particles();
   strains.assign(p.size(), 0.0);
+  if (body.baraffWitkin()) body.baraffWitkin()->vertexStrains(p.position, strains);
   for (const Spring& s : body.springs())
   {
     if (s.spring_class == SpringClass::Bend || s.rest_length == 0.0) continue;

@@ -60,7 +60,24 @@ void respond(const ContactDef& contact, const Eigen::Vector3d& n, double depth, 
 }
 }  // namespace
 
-void resolveCollisions(const Environment& env, ParticlePool& pool, const Eigen::Matrix3Xd* start_velocity)
+namespace
+{
+// The first s in (0, 1] where the segment a + s (b − a) enters the sphere, or −1 when it does not
+// (both ends outside).
+double entryOnSegment(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const SphereColliderDef& sphere)
+{
+  const Eigen::Vector3d d = b - a, f = a - sphere.center;
+  const double qa = d.squaredNorm(), qb = 2.0 * f.dot(d), qc = f.squaredNorm() - sphere.radius * sphere.radius;
+  if (qa == 0.0 || qc < 0.0) return -1.0;
+  const double discriminant = qb * qb - 4.0 * qa * qc;
+  if (discriminant < 0.0) return -1.0;
+  const double s = (-qb - std::sqrt(discriminant)) / (2.0 * qa);
+  return s > 0.0 && s <= 1.0 ? s : -1.0;
+}
+}  // namespace
+
+void resolveCollisions(const Environment& env, ParticlePool& pool, const Eigen::Matrix3Xd* start_velocity,
+                       const Eigen::Matrix3Xd* start_position)
 {
   const int n = pool.size();
   for (int i = 0; i < n; ++i)
@@ -81,6 +98,18 @@ void resolveCollisions(const Environment& env, ParticlePool& pool, const Eigen::
     // Spheres: outward normal from the centre through the particle.
     for (const SphereColliderDef& sphere : env.spheres)
     {
+      // A path that entered the sphere (and maybe left it again): back to where it entered, just
+      // inside, so that the contact below bounces it there rather than pushing it out of the far
+      // side.
+      if (start_position)
+      {
+        const double s = entryOnSegment(start_position->col(i), x, sphere);
+        if (s > 0.0)
+        {
+          const Eigen::Vector3d entry = start_position->col(i) + s * (x - start_position->col(i));
+          x = entry + 1e-9 * sphere.radius * (sphere.center - entry).normalized();
+        }
+      }
       const Eigen::Vector3d offset = x - sphere.center;
       const double distance = offset.norm();
       if (distance >= sphere.radius) continue;

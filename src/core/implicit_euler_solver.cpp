@@ -1,6 +1,7 @@
 #include "particle_sim/core/implicit_euler_solver.h"
 
 #include <Eigen/LU>
+#include <algorithm>
 #include <cmath>
 
 namespace particle_sim
@@ -12,24 +13,63 @@ namespace
 double dot(const Eigen::Matrix3Xd& a, const Eigen::Matrix3Xd& b) { return a.cwiseProduct(b).sum(); }
 }  // namespace
 
-void ImplicitEulerSolver::resize(int particles, int springs)
+void ImplicitEulerSolver::setPattern(int particles, const std::vector<std::pair<int, int>>& coupled_pairs)
 {
-  dfdx_.assign(springs, Eigen::Matrix3d::Zero());
-  system_block_.assign(springs, Eigen::Matrix3d::Zero());
+  // Columns of each row: the particle itself and every particle it is coupled with, sorted, once.
+  std::vector<std::vector<int>> columns(particles);
+  for (int i = 0; i < particles; ++i) columns[i].push_back(i);
+  for (const auto& [i, j] : coupled_pairs)
+  {
+    columns[i].push_back(j);
+    columns[j].push_back(i);
+  }
+  row_start_.assign(particles + 1, 0);
+  block_row_.clear();
+  block_column_.clear();
+  diagonal_block_.assign(particles, -1);
+  for (int i = 0; i < particles; ++i)
+  {
+    std::sort(columns[i].begin(), columns[i].end());
+    columns[i].erase(std::unique(columns[i].begin(), columns[i].end()), columns[i].end());
+    for (int j : columns[i])
+    {
+      if (j == i) diagonal_block_[i] = static_cast<int>(block_row_.size());
+      block_row_.push_back(i);
+      block_column_.push_back(j);
+    }
+    row_start_[i + 1] = static_cast<int>(block_row_.size());
+  }
+  blocks_.assign(block_row_.size(), Eigen::Matrix3d::Zero());
   inverse_diagonal_.assign(particles, Eigen::Matrix3d::Identity());
   for (Eigen::Matrix3Xd* m : {&delta_v_, &rhs_, &residual_, &direction_, &product_, &preconditioned_})
     m->setZero(3, particles);
 }
 
-void ImplicitEulerSolver::multiply(const std::vector<Spring>& springs, const Eigen::VectorXd& mass,
-                                   const Eigen::Matrix3Xd& p, Eigen::Matrix3Xd& out) const
+int ImplicitEulerSolver::blockIndex(int i, int j) const
 {
-  for (int i = 0; i < p.cols(); ++i) out.col(i) = mass[i] * p.col(i);
-  for (std::size_t s = 0; s < springs.size(); ++s)
+  const auto first = block_column_.begin() + row_start_[i], last = block_column_.begin() + row_start_[i + 1];
+  const auto it = std::lower_bound(first, last, j);
+  return it != last && *it == j ? static_cast<int>(it - block_column_.begin()) : -1;
+}
+
+void ImplicitEulerSolver::begin(double h, const Eigen::VectorXd& mass, const Eigen::Matrix3Xd& force,
+                                const Eigen::Matrix3Xd* v0)
+{
+  h_ = h;
+  v0_ = v0;
+  for (Eigen::Matrix3d& block : blocks_) block.setZero();
+  for (int i = 0; i < static_cast<int>(diagonal_block_.size()); ++i)
+    blocks_[diagonal_block_[i]] = mass[i] * Eigen::Matrix3d::Identity();
+  rhs_ = h * force;
+}
+
+void ImplicitEulerSolver::multiply(const Eigen::Matrix3Xd& p, Eigen::Matrix3Xd& out) const
+{
+  for (int i = 0; i < static_cast<int>(diagonal_block_.size()); ++i)
   {
-    const Eigen::Vector3d term = system_block_[s] * (p.col(springs[s].i) - p.col(springs[s].j));
-    out.col(springs[s].i) -= term;
-    out.col(springs[s].j) += term;
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    for (int k = row_start_[i]; k < row_start_[i + 1]; ++k) sum.noalias() += blocks_[k] * p.col(block_column_[k]);
+    out.col(i) = sum;
   }
 }
 
@@ -43,49 +83,32 @@ void ImplicitEulerSolver::filter(const std::vector<char>& pinned, Eigen::Matrix3
 
 void ImplicitEulerSolver::precondition(const Eigen::Matrix3Xd& r, Eigen::Matrix3Xd& out) const
 {
-  for (int i = 0; i < r.cols(); ++i) out.col(i) = inverse_diagonal_[i] * r.col(i);
+  for (int i = 0; i < r.cols(); ++i) out.col(i).noalias() = inverse_diagonal_[i] * r.col(i);
 }
 
-SolverReport ImplicitEulerSolver::step(double h, const std::vector<Spring>& springs, const Eigen::VectorXd& mass,
-                                       const std::vector<char>& pinned, const Eigen::Matrix3Xd& force,
-                                       double tolerance, int max_iterations, Eigen::Matrix3Xd& x,
-                                       Eigen::Matrix3Xd& v)
+SolverReport ImplicitEulerSolver::solve(const std::vector<char>& pinned, double tolerance, int max_iterations,
+                                        Eigen::Matrix3Xd& x, Eigen::Matrix3Xd& v)
 {
   const int n = static_cast<int>(x.cols());
+  for (int i = 0; i < n; ++i) inverse_diagonal_[i] = blocks_[diagonal_block_[i]].inverse();
 
-  // 1. Per-spring Jacobian blocks, the system blocks S and the right-hand side
-  //    b = h (f0 + h ∂f/∂x v0).
-  rhs_ = h * force;
-  for (int i = 0; i < n; ++i) inverse_diagonal_[i] = mass[i] * Eigen::Matrix3d::Identity();
-  for (std::size_t s = 0; s < springs.size(); ++s)
-  {
-    const Spring& spring = springs[s];
-    Eigen::Matrix3d dfdv;
-    springJacobians(x.col(spring.i), x.col(spring.j), spring.rest_length, spring.stiffness, spring.damping, true,
-                    dfdx_[s], dfdv);
-    system_block_[s] = h * dfdv + h * h * dfdx_[s];
-    const Eigen::Vector3d kv = h * h * (dfdx_[s] * (v.col(spring.i) - v.col(spring.j)));
-    rhs_.col(spring.i) += kv;
-    rhs_.col(spring.j) -= kv;
-    // The diagonal blocks of A gain −S at both ends.
-    inverse_diagonal_[spring.i] -= system_block_[s];
-    inverse_diagonal_[spring.j] -= system_block_[s];
-  }
-  for (int i = 0; i < n; ++i) inverse_diagonal_[i] = inverse_diagonal_[i].inverse().eval();
-
-  // 2. Modified preconditioned CG from Δv = 0, with pinned rows filtered out.
+  // Modified preconditioned CG (Baraff & Witkin 1998, section 5.3), warm started from the last
+  // step's Δv, with pinned rows filtered out of the start, every residual and every direction.
   SolverReport report;
-  delta_v_.setZero();
+  filter(pinned, delta_v_);
   residual_ = rhs_;
   filter(pinned, residual_);
   const double rhs_norm = std::sqrt(dot(residual_, residual_));
+  multiply(delta_v_, product_);
+  residual_ -= product_;
+  filter(pinned, residual_);
   precondition(residual_, direction_);
   filter(pinned, direction_);
   double delta_new = dot(residual_, direction_);
-  double residual_norm = rhs_norm;
+  double residual_norm = std::sqrt(dot(residual_, residual_));
   while (residual_norm > tolerance * rhs_norm && report.iterations < max_iterations)
   {
-    multiply(springs, mass, direction_, product_);
+    multiply(direction_, product_);
     filter(pinned, product_);
     const double curvature = dot(direction_, product_);
     if (!(curvature > 0.0))
@@ -107,10 +130,9 @@ SolverReport ImplicitEulerSolver::step(double h, const std::vector<Spring>& spri
   report.relative_residual = rhs_norm > 0.0 ? residual_norm / rhs_norm : 0.0;
   report.converged = residual_norm <= tolerance * rhs_norm;
 
-  // 3. v1 = v0 + Δv, x1 = x0 + h v1 (pinned particles keep the velocity that carries them to
-  //    their target, since their Δv is 0).
+  // v1 = v0 + Δv, x1 = x0 + h v1.
   v += delta_v_;
-  x += h * v;
+  x += h_ * v;
   return report;
 }
 

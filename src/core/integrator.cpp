@@ -2,6 +2,9 @@
 
 #include "particle_sim/core/validation.h"
 
+#include <cmath>
+#include <limits>
+
 namespace particle_sim
 {
 namespace core
@@ -18,16 +21,34 @@ const char* toString(IntegratorType type)
       return "implicit_euler";
     case IntegratorType::Rk4:
       return "rk4";
+    case IntegratorType::Auto:
+      return "auto";
   }
   return "unknown";
 }
 
-const char* integratorTypeNames() { return "symplectic_euler, verlet, implicit_euler, rk4"; }
+double stabilityLimit(IntegratorType type)
+{
+  switch (type)
+  {
+    case IntegratorType::SymplecticEuler:
+    case IntegratorType::Verlet:
+      return 2.0;
+    case IntegratorType::Rk4:
+      return 2.0 * std::sqrt(2.0);
+    case IntegratorType::ImplicitEuler:
+    case IntegratorType::Auto:
+      break;
+  }
+  return std::numeric_limits<double>::infinity();
+}
+
+const char* integratorTypeNames() { return "symplectic_euler, verlet, implicit_euler, rk4, auto"; }
 
 bool parseIntegratorType(const std::string& text, IntegratorType& type)
 {
   for (IntegratorType candidate : {IntegratorType::SymplecticEuler, IntegratorType::Verlet,
-                                   IntegratorType::ImplicitEuler, IntegratorType::Rk4})
+                                   IntegratorType::ImplicitEuler, IntegratorType::Rk4, IntegratorType::Auto})
   {
     if (text == toString(candidate))
     {
@@ -42,7 +63,8 @@ Status validate(const IntegratorDef& def)
 {
   if (Status s = checkRange("verlet_damping", def.verlet_damping, 0.0, 1.0); !s) return s;
   if (Status s = checkPositive("cg_tolerance", def.cg_tolerance); !s) return s;
-  return checkIntRange("cg_max_iterations", def.cg_max_iterations, 1, 1000000);
+  if (Status s = checkIntRange("cg_max_iterations", def.cg_max_iterations, 1, 1000000); !s) return s;
+  return checkIntRange("max_substeps", def.max_substeps, 1, 1 << 20);
 }
 
 }  // namespace core

@@ -97,6 +97,20 @@ Status validate(const SpringNetworkDef& def, int max_particles)
       return Status::failure(indexed("triangles", k) + " repeats a particle: a triangle needs three different ones");
   }
   if (Status s = validate(def.strain_limit); !s) return s;
+  const BaraffWitkinDef& bw = def.baraff_witkin;
+  for (const BwTriangle& t : bw.triangles)
+    for (int c : t.v)
+      if (Status s = checkIndex("baraff_witkin triangle corner", c, n); !s) return s;
+  for (const BwBend& b : bw.bends)
+    for (int c : b.v)
+      if (Status s = checkIndex("baraff_witkin bend corner", c, n); !s) return s;
+  if (bw.bend_weights.size() != bw.bends.size())
+    return Status::failure("baraff_witkin: one bend weight per bend is needed");
+  if (Status s = checkSpringConstants("stretch.", bw.stretch.stiffness, bw.stretch.damping); !s) return s;
+  if (Status s = checkSpringConstants("shear.", bw.shear.stiffness, bw.shear.damping); !s) return s;
+  if (Status s = checkSpringConstants("bend.", bw.bend.stiffness, bw.bend.damping); !s) return s;
+  if (Status s = checkPositive("b_u", bw.b_u); !s) return s;
+  if (Status s = checkPositive("b_v", bw.b_v); !s) return s;
   return validate(def.integrator);
 }
 
@@ -111,6 +125,8 @@ SpringNetworkBody::SpringNetworkBody(const SpringNetworkDef& def) : Body(def.nam
   saved_position_.setZero(3, n);
   saved_velocity_.setZero(3, n);
   unlimited_position_.setZero(3, n);
+  implicit_x0_.setZero(3, n);
+  implicit_v0_.setZero(3, n);
   rk_x_.setZero(3, n);
   rk_v_.setZero(3, n);
   for (int k = 0; k < 4; ++k)
@@ -118,7 +134,35 @@ SpringNetworkBody::SpringNetworkBody(const SpringNetworkDef& def) : Body(def.nam
     rk_kx_[k].setZero(3, n);
     rk_kv_[k].setZero(3, n);
   }
-  implicit_solver_.resize(n, static_cast<int>(def_.springs.size()));
+  // The implicit system couples the two ends of every spring; each spring keeps the indices of
+  // its four blocks (ii, ij, ji, jj).
+  // Baraff–Witkin elements couple the corners of each triangle and of each bend pair.
+  std::vector<std::pair<int, int>> pairs;
+  for (const Spring& spring : def_.springs) pairs.emplace_back(spring.i, spring.j);
+  if (!def_.baraff_witkin.empty())
+  {
+    baraff_witkin_.emplace(def_.baraff_witkin);
+    baraff_witkin_->coupledPairs(pairs);
+  }
+  implicit_solver_.setPattern(n, pairs);
+  if (baraff_witkin_) baraff_witkin_->setPattern(implicit_solver_);
+  step_target_.setZero(3, n);
+
+  // The size of the body's energy, for the blow-up check: total mass · extent.
+  Eigen::Vector3d low = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()), high = -low;
+  double total_mass = 0.0;
+  for (int i = 0; i < n; ++i)
+  {
+    low = low.cwiseMin(def_.positions[i]);
+    high = high.cwiseMax(def_.positions[i]);
+    total_mass += def_.masses[i];
+  }
+  energy_scale_ = total_mass * std::max((high - low).norm(), 1e-3);
+  for (const Spring& spring : def_.springs)
+  {
+    spring_blocks_.push_back({implicit_solver_.blockIndex(spring.i, spring.i), implicit_solver_.blockIndex(spring.i, spring.j),
+                              implicit_solver_.blockIndex(spring.j, spring.i), implicit_solver_.blockIndex(spring.j, spring.j)});
+  }
   reset();
 }
 
@@ -143,10 +187,24 @@ void SpringNetworkBody::reset()
     pin_target_.col(index) = def_.positions[index];
   }
   springs_ = def_.springs;
+  if (baraff_witkin_)
+  {
+    for (SpringClass c : {SpringClass::Stretch, SpringClass::Shear, SpringClass::Bend})
+    {
+      const BaraffWitkinDef& bw = def_.baraff_witkin;
+      const SpringConstants& k = c == SpringClass::Stretch ? bw.stretch : c == SpringClass::Shear ? bw.shear : bw.bend;
+      baraff_witkin_->setConstants(c, k.stiffness, k.damping);
+    }
+  }
   integrator_ = def_.integrator;
+  updateStabilityBound();
+  stability_events_ = 0;
+  last_stability_event_.clear();
+  last_substeps_ = 1;
   verlet_started_ = false;
   last_solve_ = SolverReport{};
   frozen_reason_.clear();
+  implicit_solver_.clearWarmStart();
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -159,6 +217,7 @@ Status SpringNetworkBody::pin(int index, const Eigen::Vector3d& target)
   pinned_[index] = 1;
   particles_.inverse_mass[index] = 0.0;
   pin_target_.col(index) = target;
+  updateStabilityBound();
   return Status::success();
 }
 
@@ -177,6 +236,7 @@ Status SpringNetworkBody::unpin(int index)
   if (!pinned_[index]) return Status::failure("index = " + std::to_string(index) + " is not pinned");
   pinned_[index] = 0;
   particles_.inverse_mass[index] = 1.0 / mass_[index];
+  updateStabilityBound();
   return Status::success();
 }
 
@@ -205,6 +265,8 @@ int SpringNetworkBody::nearestParticle(const Eigen::Vector3d& point) const
 
 bool SpringNetworkBody::hasSpringClass(SpringClass spring_class) const
 {
+  if (baraff_witkin_ && (spring_class != SpringClass::Bend || !baraff_witkin_->definition().bends.empty()))
+    return true;
   for (const Spring& spring : springs_)
   {
     if (spring.spring_class == spring_class) return true;
@@ -224,13 +286,25 @@ Status SpringNetworkBody::setSpringConstants(std::optional<SpringClass> spring_c
     spring.stiffness = stiffness;
     spring.damping = damping;
   }
+  if (baraff_witkin_)
+  {
+    for (SpringClass c : {SpringClass::Stretch, SpringClass::Shear, SpringClass::Bend})
+    {
+      if (!spring_class || *spring_class == c) baraff_witkin_->setConstants(c, stiffness, damping);
+    }
+  }
+  updateStabilityBound();
   return Status::success();
 }
 
 Status SpringNetworkBody::setIntegrator(const IntegratorDef& integrator)
 {
   if (Status s = validate(integrator); !s) return s;
-  if (integrator.type != integrator_.type) verlet_started_ = false;
+  if (integrator.type != integrator_.type)
+  {
+    verlet_started_ = false;
+    implicit_solver_.clearWarmStart();
+  }
   integrator_ = integrator;
   return Status::success();
 }
@@ -249,7 +323,13 @@ void SpringNetworkBody::computeForces(const Eigen::Matrix3Xd& x, const Eigen::Ma
     force.col(s.i) += f;
     force.col(s.j) -= f;
   }
+  if (baraff_witkin_) baraff_witkin_->addForces(x, v, force);
   addAirForces(x, v, force);
+  // Global damping (Environment::damping): f −= damping · m · v (explicit, also in implicit steps).
+  if (damping_ != 0.0)
+  {
+    for (int i = 0; i < x.cols(); ++i) force.col(i) -= damping_ * mass_[i] * v.col(i);
+  }
 }
 
 void SpringNetworkBody::addAirForces(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v,
@@ -271,7 +351,7 @@ void SpringNetworkBody::addAirForces(const Eigen::Matrix3Xd& x, const Eigen::Mat
 
 double SpringNetworkBody::maxStrain() const
 {
-  double strain = 0.0;
+  double strain = baraff_witkin_ ? baraff_witkin_->maxStrain(particles_.position) : 0.0;
   for (const Spring& s : springs_)
   {
     if (s.spring_class == SpringClass::Bend || s.rest_length == 0.0) continue;
@@ -340,6 +420,7 @@ double SpringNetworkBody::potentialEnergy(const Eigen::Vector3d& gravity) const
   {
     if (!pinned_[i]) energy -= mass_[i] * gravity.dot(particles_.position.col(i));
   }
+  if (baraff_witkin_) energy += baraff_witkin_->energy(particles_.position);
   return energy;
 }
 
@@ -360,31 +441,115 @@ void SpringNetworkBody::step(double dt, const Environment& env)
 {
   if (frozen()) return;
   air_ = def_.triangles.empty() ? AirDef{} : env.air;
+  damping_ = env.damping;
   ParticlePool& p = particles_;
   const int n = p.size();
   saved_position_ = p.position;
   saved_velocity_ = p.velocity;
+  step_target_ = pin_target_;
+  const bool verlet_was_started = verlet_started_;
+  const IntegratorType type = chooseIntegrator(dt);
+  const bool explicit_method = type != IntegratorType::ImplicitEuler;
 
-  // Pinned particles travel in a straight line to their target during the step: give them that
-  // velocity now (every integrator then moves them there, as their acceleration is 0).
+  // See instability coming: an explicit method gets enough substeps for h (ω_max + c_max) to stay
+  // within 90 % of its stability limit.
+  int substeps = 1;
+  if (explicit_method)
+  {
+    const double needed = dt * (omega_bound_ + dampingBound()) / (0.9 * stabilityLimit(type));
+    substeps = static_cast<int>(std::min<double>(std::ceil(needed), integrator_.max_substeps));
+    substeps = std::max(substeps, 1);
+    if (substeps > 1 && substeps != last_substeps_)
+      recordEvent(std::string(toString(type)) + " needs h (omega + c) <= " + formatValue(stabilityLimit(type)) +
+                  ": dt = " + formatValue(dt) + " s split into " + std::to_string(substeps) +
+                  " substeps (omega_max = " + formatValue(omega_bound_) + " 1/s)");
+  }
+  const double energy_before = explicit_method ? mechanicalEnergy(env.gravity) : 0.0;
+  const double allowed_growth = 100.0 * (std::abs(energy_before) + energy_scale_ * (env.gravity.norm() + 1.0));
+
+  for (;;)
+  {
+    // Pinned particles approach their step target in equal parts, one per substep.
+    for (int k = 0; k < substeps; ++k)
+    {
+      const double s = static_cast<double>(k + 1) / substeps;
+      for (int i = 0; i < n; ++i)
+      {
+        if (!pinned_[i]) continue;
+        pin_target_.col(i) = k + 1 == substeps
+                                 ? Eigen::Vector3d(step_target_.col(i))  // exactly on target at the end
+                                 : Eigen::Vector3d(saved_position_.col(i) +
+                                                   s * (step_target_.col(i) - saved_position_.col(i)));
+      }
+      substep(dt / substeps, type, env);
+    }
+    pin_target_ = step_target_;
+
+    // Blow-up check of explicit methods: roll back and retry with twice the substeps.
+    const bool finite = p.position.allFinite() && p.velocity.allFinite();
+    const bool blew_up = explicit_method && (!finite || mechanicalEnergy(env.gravity) > energy_before + allowed_growth);
+    if (!blew_up) break;
+    p.position = saved_position_;
+    p.velocity = saved_velocity_;
+    verlet_started_ = verlet_was_started;
+    if (substeps >= integrator_.max_substeps)
+    {
+      frozen_reason_ = std::string(toString(type)) + " blew up at dt = " + formatValue(dt) + " s even with " +
+                       std::to_string(substeps) + " substeps (integrator.max_substeps); the body is frozen at its " +
+                       "last good state";
+      recordEvent(frozen_reason_);
+      p.previous_position = saved_position_;
+      return;
+    }
+    substeps = std::min(2 * substeps, integrator_.max_substeps);
+    recordEvent(std::string(toString(type)) + " blew up at dt = " + formatValue(dt) + " s; step rolled back and " +
+                "retried with " + std::to_string(substeps) + " substeps");
+  }
+  last_substeps_ = substeps;
+  last_integrator_ = type;
+  for (int i = 0; i < n; ++i) p.age[i] += dt;
+  p.previous_position = saved_position_;
+
+  // A non-finite state or a failed solve is never kept: go back to the last good state and stop
+  // this body.
+  if (!p.position.allFinite() || !p.velocity.allFinite() || last_solve_.breakdown)
+  {
+    p.position = saved_position_;
+    p.velocity = saved_velocity_;
+    frozen_reason_ = std::string(last_solve_.breakdown ? "the implicit solve failed (CG breakdown)"
+                                                       : "state became non-finite") +
+                     " under " + toString(type) + " at dt = " + formatValue(dt) +
+                     " s; the body is frozen at its last good state";
+    recordEvent(frozen_reason_);
+  }
+}
+
+void SpringNetworkBody::substep(double h, IntegratorType type, const Environment& env)
+{
+  ParticlePool& p = particles_;
+  const int n = p.size();
+
+  // Pinned particles travel in a straight line to their target: give them that velocity now
+  // (every integrator then moves them there, as their acceleration is 0).
   for (int i = 0; i < n; ++i)
   {
-    if (pinned_[i]) p.velocity.col(i) = (pin_target_.col(i) - p.position.col(i)) / dt;
+    if (pinned_[i]) p.velocity.col(i) = (pin_target_.col(i) - p.position.col(i)) / h;
   }
 
-  switch (integrator_.type)
+  switch (type)
   {
     case IntegratorType::SymplecticEuler:
-      stepSymplecticEuler(dt, env.gravity);
+      stepSymplecticEuler(h, env.gravity);
       break;
     case IntegratorType::Verlet:
-      stepVerlet(dt, env.gravity);
+      stepVerlet(h, env.gravity);
       break;
     case IntegratorType::ImplicitEuler:
-      stepImplicitEuler(dt, env.gravity);
+    case IntegratorType::Auto:  // resolved before; implicit is the safe reading
+      stepImplicitEuler(h, env.gravity);
       break;
     case IntegratorType::Rk4:
-      stepRk4(dt, env.gravity);
+      stepRk4(h, env.gravity);
       break;
   }
 
@@ -397,24 +562,63 @@ void SpringNetworkBody::step(double dt, const Environment& env)
   resolveCollisions(env, p, &saved_velocity_);
   if (def_.strain_limit.max_strain > 0.0)
   {
-    limitStrain(dt);
+    limitStrain(h);
     resolveCollisions(env, p, &saved_velocity_);
   }
-  for (int i = 0; i < n; ++i) p.age[i] += dt;
-  p.previous_position = saved_position_;
+}
 
-  // A non-finite state or a failed solve is never kept: go back to the last good state and stop
-  // this body.
-  if (!p.position.allFinite() || !p.velocity.allFinite() || last_solve_.breakdown)
+void SpringNetworkBody::recordEvent(std::string event)
+{
+  ++stability_events_;
+  last_stability_event_ = std::move(event);
+}
+
+void SpringNetworkBody::updateStabilityBound()
+{
+  // Gershgorin: each element adds k |∂C/∂x_i| Σ_n |∂C/∂x_n| to row i (springs: 2 k at both ends),
+  // alike for damping; the bound is the largest row over the mass of its (free) particle.
+  const int n = particles_.size();
+  std::vector<double> stiffness_rows(n, 0.0), damping_rows(n, 0.0);
+  for (const Spring& s : springs_)
   {
-    p.position = saved_position_;
-    p.velocity = saved_velocity_;
-    p.previous_position = saved_position_;
-    frozen_reason_ = std::string(last_solve_.breakdown ? "the implicit solve failed (CG breakdown)"
-                                                       : "state became non-finite") +
-                     " under " + toString(integrator_.type) + " at dt = " + formatValue(dt) +
-                     " s; the body is frozen at its last good state";
+    for (int end : {s.i, s.j})
+    {
+      stiffness_rows[end] += 2.0 * s.stiffness;
+      damping_rows[end] += 2.0 * s.damping;
+    }
   }
+  if (baraff_witkin_) baraff_witkin_->addStabilityRows(def_.positions, stiffness_rows, damping_rows);
+  omega_bound_ = 0.0;
+  damping_bound_ = 0.0;
+  for (int i = 0; i < n; ++i)
+  {
+    if (pinned_[i]) continue;
+    omega_bound_ = std::max(omega_bound_, std::sqrt(stiffness_rows[i] / mass_[i]));
+    damping_bound_ = std::max(damping_bound_, damping_rows[i] / mass_[i]);
+  }
+  auto_choice_.clear();  // re-decide and re-explain at the next step
+}
+
+IntegratorType SpringNetworkBody::chooseIntegrator(double dt)
+{
+  if (integrator_.type != IntegratorType::Auto) return integrator_.type;
+  // Verlet where one step is stable with a factor 2 of margin; implicit Euler otherwise.
+  const double product = dt * (omega_bound_ + dampingBound());
+  const double limit = 0.5 * stabilityLimit(IntegratorType::Verlet);
+  const IntegratorType choice = product <= limit ? IntegratorType::Verlet : IntegratorType::ImplicitEuler;
+  if (auto_choice_.empty() || choice != last_integrator_)
+  {
+    if (choice != last_integrator_)
+    {
+      verlet_started_ = false;
+      implicit_solver_.clearWarmStart();
+    }
+    auto_choice_ = std::string(toString(choice)) + ": h (omega_max + c_max) = " + formatValue(product) +
+                   (choice == IntegratorType::Verlet ? " <= " : " > ") + formatValue(limit) +
+                   " (half of Verlet's limit 2; omega_max = " + formatValue(omega_bound_) + " 1/s, c_max = " +
+                   formatValue(dampingBound()) + " 1/s, dt = " + formatValue(dt) + " s)";
+  }
+  return choice;
 }
 
 // The lecture's loop: v += h f(x, v) / m, then x += h v with the new v.
@@ -446,12 +650,83 @@ void SpringNetworkBody::stepVerlet(double h, const Eigen::Vector3d& gravity)
   last_solve_ = SolverReport{};
 }
 
+void SpringNetworkBody::assembleImplicit(const Eigen::Matrix3Xd& x)
+{
+  // Springs: ∂f_i/∂x_i = ∂f_j/∂x_j = −∂f_i/∂x_j = −∂f_j/∂x_i (definite form), alike for v.
+  for (std::size_t s = 0; s < springs_.size(); ++s)
+  {
+    const Spring& spring = springs_[s];
+    Eigen::Matrix3d dfdx, dfdv;
+    springJacobians(x.col(spring.i), x.col(spring.j), spring.rest_length, spring.stiffness, spring.damping, true, dfdx,
+                    dfdv);
+    const auto& blocks = spring_blocks_[s];
+    implicit_solver_.addBlock(blocks[0], dfdx, dfdv);
+    implicit_solver_.addBlock(blocks[1], -dfdx, -dfdv);
+    implicit_solver_.addBlock(blocks[2], -dfdx, -dfdv);
+    implicit_solver_.addBlock(blocks[3], dfdx, dfdv);
+  }
+  // Baraff–Witkin conditions, in their definite form.
+  if (baraff_witkin_) baraff_witkin_->addJacobians(x, implicit_solver_);
+  // Global damping f = −c m v: ∂f_i/∂v_i = −c m_i I.
+  if (damping_ != 0.0)
+  {
+    for (int i = 0; i < x.cols(); ++i)
+      implicit_solver_.addToDiagonal(i, Eigen::Matrix3d::Zero(), -damping_ * mass_[i] * Eigen::Matrix3d::Identity());
+  }
+}
+
 void SpringNetworkBody::stepImplicitEuler(double h, const Eigen::Vector3d& gravity)
 {
   ParticlePool& p = particles_;
+  const int n = p.size();
+
+  // Without moving pins or wind nothing does work on the body, so its energy must not grow.
+  bool conservative = air_.drag == 0.0 || air_.wind.isZero();
+  for (int i = 0; i < n && conservative; ++i) conservative = !pinned_[i] || p.velocity.col(i).isZero();
+  const double energy_before = conservative ? mechanicalEnergy(gravity) : 0.0;
+  implicit_x0_ = p.position;
+  implicit_v0_ = p.velocity;
+
+  // 1. Baraff & Witkin's step: one linearisation at (x0, v0).
   computeForces(p.position, p.velocity, gravity, force_);
-  last_solve_ = implicit_solver_.step(h, springs_, mass_, pinned_, force_, integrator_.cg_tolerance,
-                                      integrator_.cg_max_iterations, p.position, p.velocity);
+  implicit_solver_.begin(h, mass_, force_, &implicit_v0_);
+  assembleImplicit(p.position);
+  last_solve_ = implicit_solver_.solve(pinned_, integrator_.cg_tolerance, integrator_.cg_max_iterations, p.position,
+                                       p.velocity);
+  if (!conservative || last_solve_.breakdown) return;
+
+  // 2. If that one linearisation gained energy (large rotations or stretches in one step), Newton
+  //    iterations of full backward Euler: solve (M − h ∂f/∂v − h² ∂f/∂x) δ = h f(x_k, v_k) − M (v_k − v0)
+  //    at x_k = x0 + h v_k, then v_{k+1} = v_k + δ.
+  const double tolerance = 1e-12 * (1.0 + std::abs(energy_before));
+  int newton = 0;
+  for (; newton < kNewtonIterations && mechanicalEnergy(gravity) > energy_before + tolerance; ++newton)
+  {
+    computeForces(p.position, p.velocity, gravity, force_);
+    for (int i = 0; i < n; ++i) force_.col(i) -= mass_[i] * (p.velocity.col(i) - implicit_v0_.col(i)) / h;
+    implicit_solver_.begin(h, mass_, force_, nullptr);
+    assembleImplicit(p.position);
+    p.position = implicit_x0_;  // the solve sets x = x0 + h v_{k+1}
+    last_solve_ = implicit_solver_.solve(pinned_, integrator_.cg_tolerance, integrator_.cg_max_iterations,
+                                         p.position, p.velocity);
+    if (last_solve_.breakdown) return;
+  }
+
+  // 3. Still more energy than before (a non-convex energy can do that even to backward Euler): the
+  //    excess is taken out of the kinetic energy, and reported.
+  const double energy_after = mechanicalEnergy(gravity);
+  if (energy_after > energy_before + tolerance)
+  {
+    const double kinetic = kineticEnergy();
+    const double allowed = std::max(0.0, kinetic - (energy_after - energy_before));
+    const double scale = kinetic > 0.0 ? std::sqrt(allowed / kinetic) : 0.0;
+    for (int i = 0; i < n; ++i)
+    {
+      if (!pinned_[i]) p.velocity.col(i) *= scale;
+    }
+    recordEvent("implicit_euler would have gained " + formatValue(energy_after - energy_before) + " J in one step (" +
+                std::to_string(newton) + " Newton iterations); velocities scaled by " + formatValue(scale));
+  }
 }
 
 // Classical fourth-order Runge–Kutta on (x, v) with derivative (v, a(x, v)).

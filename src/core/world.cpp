@@ -65,6 +65,20 @@ Status World::setWind(const Eigen::Vector3d& wind)
   return Status::success();
 }
 
+Status World::setGravity(const Eigen::Vector3d& gravity)
+{
+  if (Status s = checkFinite("gravity", gravity); !s) return s;
+  env_.gravity = gravity;
+  return Status::success();
+}
+
+Status World::setGlobalDamping(double damping)
+{
+  if (Status s = checkMin("damping", damping, 0.0); !s) return s;
+  env_.damping = damping;
+  return Status::success();
+}
+
 void World::step()
 {
   for (const std::unique_ptr<Body>& body : bodies_) body->step(def_.dt, env_);

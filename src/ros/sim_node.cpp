@@ -1,5 +1,6 @@
 #include "particle_sim/ros/sim_node.h"
 
+#include <diagnostic_msgs/DiagnosticStatus.h>
 #include <geometry_msgs/TransformStamped.h>
 #include <rosgraph_msgs/Clock.h>
 
@@ -44,12 +45,25 @@ core::Status parseIntegratorField(const std::string& name, core::IntegratorDef& 
                                core::integratorTypeNames());
 }
 
+geometry_msgs::Vector3 toVector3(const Eigen::Vector3d& v)
+{
+  geometry_msgs::Vector3 out;
+  out.x = v.x();
+  out.y = v.y();
+  out.z = v.z();
+  return out;
+}
+
 int clampCount(std::uint32_t value) { return static_cast<int>(std::min<std::uint32_t>(value, 2000000000u)); }
 }  // namespace
 
-SimNode::SimNode(ros::NodeHandle node, ros::NodeHandle private_node)
-  : node_(std::move(node)), private_node_(std::move(private_node))
+SimNode::SimNode(ros::NodeHandle node, ros::NodeHandle private_node, const std::string& name)
+  : node_(std::move(node)), private_node_(std::move(private_node)), name_(name)
 {
+  // Every callback of ours (services, dynamic_reconfigure) waits in our own queue until run()
+  // serves it between two ticks, whichever thread runs us.
+  node_.setCallbackQueue(&callback_queue_);
+  private_node_.setCallbackQueue(&callback_queue_);
 }
 
 bool SimNode::initialize()
@@ -62,12 +76,15 @@ bool SimNode::initialize()
   private_node_.param(names::kPausedParam, s.paused, s.paused);
   private_node_.param(names::kFrameIdParam, s.frame_id, s.frame_id);
   private_node_.param(names::kParentFrameIdParam, s.parent_frame_id, s.parent_frame_id);
+  private_node_.param(names::kFrameOffsetParam, s.frame_offset, s.frame_offset);
   private_node_.param(names::kPublishClockParam, s.publish_clock, s.publish_clock);
   private_node_.param(names::kParticleSizeParam, s.particle_size, s.particle_size);
   private_node_.param(names::kMaxParticlesParam, s.max_particles_per_body, s.max_particles_per_body);
   private_node_.param(names::kStatusPeriodParam, s.status_period, s.status_period);
   private_node_.param(names::kColorByStrainParam, s.color_by_strain, s.color_by_strain);
   private_node_.param(names::kStrainColorMaxParam, s.strain_color_max, s.strain_color_max);
+  private_node_.param(names::kDiagnosticPeriodParam, s.diagnostic_period, s.diagnostic_period);
+  private_node_.param(names::kDiagnosticMaxStrainParam, s.diagnostic_max_strain, s.diagnostic_max_strain);
 
   // Parameters are checked before anything starts; a bad one stops the node with its reason.
   auto refuse = [](const std::string& message) {
@@ -81,9 +98,20 @@ bool SimNode::initialize()
   if (!(s.particle_size > 0.0 && std::isfinite(s.particle_size)))
     return refuse("~particle_size = " + std::to_string(s.particle_size) + " must be > 0 m");
   if (s.frame_id.empty()) return refuse("~frame_id is empty");
+  if (s.parent_frame_id.empty() || s.parent_frame_id == s.frame_id)
+    return refuse("~parent_frame_id = '" + s.parent_frame_id + "' must be set and differ from ~frame_id");
+  if (s.frame_offset.size() != 3 || !std::all_of(s.frame_offset.begin(), s.frame_offset.end(),
+                                                 [](double v) { return std::isfinite(v); }))
+    return refuse("~frame_offset must be a list of 3 finite numbers [x, y, z] in m");
 
   if (!(s.strain_color_max > 0.0 && std::isfinite(s.strain_color_max)))
     return refuse("~strain_color_max = " + std::to_string(s.strain_color_max) + " must be > 0");
+  if (!(s.real_time_factor <= 1000.0))
+    return refuse("~real_time_factor = " + std::to_string(s.real_time_factor) + " is out of range: must be <= 1000");
+  if (!(s.diagnostic_period > 0.0 && std::isfinite(s.diagnostic_period)))
+    return refuse("~diagnostic_period = " + std::to_string(s.diagnostic_period) + " must be > 0 s");
+  if (!(s.diagnostic_max_strain > 0.0 && std::isfinite(s.diagnostic_max_strain)))
+    return refuse("~diagnostic_max_strain = " + std::to_string(s.diagnostic_max_strain) + " must be > 0");
 
   scene::SceneDef& scene = scene_;
   if (!s.scene_path.empty())
@@ -99,12 +127,8 @@ bool SimNode::initialize()
     if (!scene::findFrame(scene, pin.frame)) frame_pins_.push_back({pin.body, pin.index, pin.frame, pin.offset});
   }
 
-  // The publish period must be a whole number of physics steps.
-  const double period = 1.0 / s.rate;
-  substeps_ = std::max(1, static_cast<int>(std::lround(period / world_->dt())));
-  if (std::abs(substeps_ * world_->dt() - period) > 1e-9 * period)
-    ROS_WARN_NAMED("sim", "1/~rate = %g s is not a whole number of steps of dt = %g s; using %d substeps (%g s)",
-                   period, world_->dt(), substeps_, substeps_ * world_->dt());
+  updateSubsteps();
+  default_integrator_ = world_->definition().integrator;
   paused_ = s.paused;
   style_.frame_id = s.frame_id;
   style_.particle_size = s.particle_size;
@@ -113,6 +137,7 @@ bool SimNode::initialize()
 
   markers_pub_ = private_node_.advertise<visualization_msgs::MarkerArray>(names::kMarkersTopic, 10);
   meshes_pub_ = private_node_.advertise<ClothMesh>(names::kMeshesTopic, 10);
+  status_pub_ = private_node_.advertise<SimStatus>(names::kStatusTopic, 10);
   if (s.publish_clock) clock_pub_ = node_.advertise<rosgraph_msgs::Clock>(names::kClockTopic, 10);
   tf_broadcaster_ = std::make_unique<tf2_ros::TransformBroadcaster>();
 
@@ -131,6 +156,23 @@ bool SimNode::initialize()
   services_.push_back(private_node_.advertiseService(names::kSpawnJelly, &SimNode::spawnJelly, this));
   services_.push_back(private_node_.advertiseService(names::kSetWind, &SimNode::setWind, this));
 
+  // dynamic_reconfigure starts from the world as built (the scene's gravity, wind, ...) and the
+  // parameters read above: the config is pushed before the callback is set, so that the
+  // callback's first call applies what is already there.
+  reconfigure_server_ = std::make_unique<dynamic_reconfigure::Server<SimConfig>>(reconfigure_mutex_, private_node_);
+  config_ = currentConfig();
+  reconfigure_server_->updateConfig(config_);
+  reconfigure_server_->setCallback(
+      [this](SimConfig& config, std::uint32_t level) { reconfigure(config, level); });
+
+  // Diagnostics, updated on wall time by run() (diagnostic_updater's own update() runs on ROS time,
+  // which stands still while paused).
+  diagnostics_ = std::make_unique<diagnostic_updater::Updater>(node_, private_node_, name_);
+  diagnostics_->setHardwareID(name_);
+  diagnostics_->add("simulation", this, &SimNode::produceDiagnostics);
+  status_window_.restart(world_->simTime(), paused_);
+  diagnostics_window_.restart(world_->simTime(), paused_);
+
   ROS_INFO_NAMED("sim",
                  "particle_sim: scene '%s', %zu bodies, dt = %g s, %d substeps per tick at %g Hz, real-time factor %g%s, "
                  "frame '%s'",
@@ -139,27 +181,38 @@ bool SimNode::initialize()
   return true;
 }
 
+void SimNode::updateSubsteps()
+{
+  // The publish period must be a whole number of physics steps.
+  const double period = 1.0 / settings_.rate;
+  substeps_ = std::max(1, static_cast<int>(std::lround(period / world_->dt())));
+  if (std::abs(substeps_ * world_->dt() - period) > 1e-9 * period)
+    ROS_WARN_NAMED("sim", "1/~rate = %g s is not a whole number of steps of dt = %g s; using %d substeps (%g s)",
+                   period, world_->dt(), substeps_, substeps_ * world_->dt());
+}
+
 void SimNode::run()
 {
-  // The loop runs on steady time, never ros::Rate (which would wait on our own /clock). Each tick
-  // covers substeps * dt of sim time, i.e. that much wall time divided by the real-time factor.
-  const double sim_per_tick = substeps_ * world_->dt();
-  const auto wall_period = std::chrono::duration<double>(
-      settings_.real_time_factor > 0.0 ? sim_per_tick / settings_.real_time_factor : 0.0);
-  const auto paused_period = std::chrono::duration<double>(1.0 / settings_.rate);
-
   auto next_tick = SteadyClock::now();
-  auto last_status = SteadyClock::now();
-  while (ros::ok())
+  while (ros::ok() && !stop_requested_)
   {
-    ros::spinOnce();  // services run here, between steps
+    callback_queue_.callAvailable();  // services and dynamic_reconfigure run here, between steps
     tick();
 
-    if (settings_.status_period > 0.0 && secondsSince(last_status) >= settings_.status_period)
+    if (settings_.status_period > 0.0 && secondsSince(status_window_.start) >= settings_.status_period) printStatus();
+    if (secondsSince(diagnostics_window_.start) >= settings_.diagnostic_period)
     {
-      printStatus(secondsSince(last_status));
-      last_status = SteadyClock::now();
+      diagnostics_->force_update();
+      diagnostics_window_.restart(world_->simTime(), paused_);
     }
+
+    // The loop runs on steady time, never ros::Rate (which would wait on our own /clock). Each
+    // tick covers substeps * dt of sim time, i.e. that much wall time divided by the real-time
+    // factor (both may change at run time).
+    const double sim_per_tick = substeps_ * world_->dt();
+    const auto wall_period = std::chrono::duration<double>(
+        settings_.real_time_factor > 0.0 ? sim_per_tick / settings_.real_time_factor : 0.0);
+    const auto paused_period = std::chrono::duration<double>(1.0 / settings_.rate);
 
     // Sleep until the next tick; if we fell more than a tick behind, do not try to catch up.
     next_tick += std::chrono::duration_cast<SteadyClock::duration>(paused_ ? paused_period : wall_period);
@@ -194,8 +247,12 @@ void SimNode::stepPhysics(std::uint64_t steps)
     scene::applyScriptedFrames(scene_, world_->simTime() + world_->dt(), *world_);
     world_->step();
   }
-  step_seconds_since_status_ += secondsSince(start);
-  steps_since_status_ += steps;
+  const double seconds = secondsSince(start);
+  for (Window* window : {&status_window_, &diagnostics_window_})
+  {
+    window->step_seconds += seconds;
+    window->steps += steps;
+  }
 
   // A body that froze (non-finite state) is reported once; the rest of the world goes on.
   for (const auto& body : world_->bodies())
@@ -297,22 +354,25 @@ void SimNode::publish()
   const double sim_time = world_->simTime();
   const ros::Time stamp(sim_time);
 
-  // /clock: from sim time, never 0, only when it moved.
-  if (settings_.publish_clock && sim_time > 0.0 && sim_time != last_clock_time_)
+  // /clock: from sim time, never 0, only when it moved (forward: sim time never goes back).
+  if (settings_.publish_clock && sim_time > 0.0 && sim_time > last_clock_time_)
   {
-    rosgraph_msgs::Clock clock;
-    clock.clock = stamp;
+    auto clock = boost::make_shared<rosgraph_msgs::Clock>();
+    clock->clock = stamp;
     clock_pub_.publish(clock);
     last_clock_time_ = sim_time;
   }
 
   // tf: the sim frame under its parent, re-sent only with a newer stamp (no TF_REPEATED_DATA).
-  if (sim_time != last_tf_time_)
+  if (sim_time > last_tf_time_)
   {
     geometry_msgs::TransformStamped transform;
     transform.header.stamp = stamp;
     transform.header.frame_id = settings_.parent_frame_id;
     transform.child_frame_id = settings_.frame_id;
+    transform.transform.translation.x = settings_.frame_offset[0];
+    transform.transform.translation.y = settings_.frame_offset[1];
+    transform.transform.translation.z = settings_.frame_offset[2];
     transform.transform.rotation.w = 1.0;
     tf_broadcaster_->sendTransform(transform);
     broadcastScriptedFrames(stamp);
@@ -331,6 +391,10 @@ void SimNode::publish()
     }
   }
 
+  // Status, only when someone listens. Messages are published as shared pointers and never
+  // touched again, so that a nodelet in the same process gets them without a copy.
+  if (status_pub_.getNumSubscribers() > 0) status_pub_.publish(buildStatus(stamp));
+
   // Markers are only built when someone listens.
   if (markers_pub_.getNumSubscribers() == 0) return;
   auto markers = boost::make_shared<visualization_msgs::MarkerArray>(
@@ -340,11 +404,13 @@ void SimNode::publish()
   removed_bodies_.clear();
 }
 
-void SimNode::printStatus(double wall_elapsed)
+void SimNode::printStatus()
 {
   const double sim_time = world_->simTime();
-  const double rtf = wall_elapsed > 0.0 ? (sim_time - sim_time_at_status_) / wall_elapsed : 0.0;
-  const double step_us = steps_since_status_ ? 1e6 * step_seconds_since_status_ / steps_since_status_ : 0.0;
+  const double wall_elapsed = secondsSince(status_window_.start);
+  const double rtf = wall_elapsed > 0.0 ? (sim_time - status_window_.sim_time_at_start) / wall_elapsed : 0.0;
+  const double step_us =
+      status_window_.steps ? 1e6 * status_window_.step_seconds / static_cast<double>(status_window_.steps) : 0.0;
   // The implicit solves of the last step: most CG iterations and worst relative residual.
   int cg_iterations = 0;
   double cg_residual = 0.0;
@@ -362,9 +428,7 @@ void SimNode::printStatus(double wall_elapsed)
   if (any_implicit) std::snprintf(solver, sizeof(solver), " | CG %d iterations, residual %.1e", cg_iterations, cg_residual);
   ROS_INFO_NAMED("status", "sim time %.3f s | real-time factor %.2f | live particles %d | step %.1f us%s%s", sim_time,
                  rtf, world_->particleCount(), step_us, solver, paused_ ? " | paused" : "");
-  sim_time_at_status_ = sim_time;
-  steps_since_status_ = 0;
-  step_seconds_since_status_ = 0.0;
+  status_window_.restart(sim_time, paused_);
 }
 
 bool SimNode::spawnEmitter(SpawnEmitter::Request& req, SpawnEmitter::Response& res)
@@ -408,7 +472,7 @@ bool SimNode::spawnRope(SpawnRope::Request& req, SpawnRope::Response& res)
   def.bend_stiffness = req.bend_stiffness;
   def.bend_damping = req.bend_damping;
   def.pins.assign(req.pins.begin(), req.pins.end());
-  def.integrator = world_->definition().integrator;
+  def.integrator = default_integrator_;
   if (core::Status s = parseIntegratorField(req.integrator, def.integrator); !s) return answer(res, s);
   core::Status status = world_->addRope(def);
   if (status)
@@ -490,29 +554,174 @@ bool SimNode::unpinParticle(UnpinParticle::Request& req, UnpinParticle::Response
   return answer(res, status);
 }
 
-bool SimNode::setSpringConstants(SetSpringConstants::Request& req, SetSpringConstants::Response& res)
+core::Status SimNode::applySpringConstants(const std::string& body_name, const std::string& class_name,
+                                           double stiffness, double damping)
 {
-  core::SpringNetworkBody* body = world_->findSpringBody(req.body);
-  if (!body)
-    return answer(res, core::Status::failure("body = '" + req.body + "': no rope or spring network has that name"));
+  core::SpringNetworkBody* body = world_->findSpringBody(body_name);
+  if (!body) return core::Status::failure("body = '" + body_name + "': no rope or spring network has that name");
   std::optional<core::SpringClass> spring_class;
-  if (req.spring_class != "all")
+  if (class_name != "all")
   {
     core::SpringClass parsed;
-    if (!core::parseSpringClass(req.spring_class, parsed))
-      return answer(res, core::Status::failure("spring_class = '" + req.spring_class +
-                                               "' is not a spring class; allowed: stretch, shear, bend, all"));
+    if (!core::parseSpringClass(class_name, parsed))
+      return core::Status::failure("spring_class = '" + class_name +
+                                   "' is not a spring class; allowed: stretch, shear, bend, all");
     spring_class = parsed;
   }
-  core::Status status = body->setSpringConstants(spring_class, req.stiffness, req.damping);
+  core::Status status = body->setSpringConstants(spring_class, stiffness, damping);
   if (status)
   {
     std::ostringstream message;
-    message << "set " << req.spring_class << " springs of '" << req.body << "' to " << req.stiffness << " N/m, "
-            << req.damping << " N·s/m";
+    message << "set " << class_name << " springs of '" << body_name << "' to " << stiffness << " N/m, " << damping
+            << " N·s/m";
     status.message = message.str();
   }
+  return status;
+}
+
+bool SimNode::readSpringConstants(const std::string& body_name, const std::string& class_name, double& stiffness,
+                                  double& damping) const
+{
+  const core::SpringNetworkBody* body = world_->findSpringBody(body_name);
+  if (!body) return false;
+  core::SpringClass spring_class = core::SpringClass::Stretch;
+  const bool any = class_name == "all";
+  if (!any && !core::parseSpringClass(class_name, spring_class)) return false;
+  for (const core::Spring& spring : body->springs())
+  {
+    if (!any && spring.spring_class != spring_class) continue;
+    stiffness = spring.stiffness;
+    damping = spring.damping;
+    return true;
+  }
+  return false;
+}
+
+bool SimNode::setSpringConstants(SetSpringConstants::Request& req, SetSpringConstants::Response& res)
+{
+  const core::Status status = applySpringConstants(req.body, req.spring_class, req.stiffness, req.damping);
+  if (status)
+  {
+    // dynamic_reconfigure (rqt) shows the body just changed.
+    config_.body = req.body;
+    config_.spring_class = req.spring_class;
+    config_.stiffness = req.stiffness;
+    config_.damping = req.damping;
+    reconfigure_server_->updateConfig(config_);
+  }
   return answer(res, status);
+}
+
+SimConfig SimNode::currentConfig() const
+{
+  SimConfig config = config_;
+  const core::Environment& env = world_->environment();
+  config.gravity_x = env.gravity.x();
+  config.gravity_y = env.gravity.y();
+  config.gravity_z = env.gravity.z();
+  config.global_damping = env.damping;
+  config.wind_x = env.air.wind.x();
+  config.wind_y = env.air.wind.y();
+  config.wind_z = env.air.wind.z();
+  config.real_time_factor = settings_.real_time_factor;
+  config.rate = settings_.rate;
+  config.integrator = core::toString(default_integrator_.type);
+  // Show the first spring body, if there is one, so that rqt has something to edit.
+  if (config.body.empty() || !world_->findSpringBody(config.body))
+  {
+    config.body.clear();
+    for (const auto& body : world_->bodies())
+    {
+      if (body->kind() != core::BodyKind::SpringNetwork) continue;
+      config.body = body->name();
+      break;
+    }
+  }
+  if (config.spring_class.empty()) config.spring_class = "stretch";
+  if (!readSpringConstants(config.body, config.spring_class, config.stiffness, config.damping) &&
+      !readSpringConstants(config.body, "all", config.stiffness, config.damping))
+  {
+    config.stiffness = 0.0;
+    config.damping = 0.0;
+  }
+  return config;
+}
+
+void SimNode::reconfigure(SimConfig& config, std::uint32_t level)
+{
+  // Runs in run()'s callAvailable(), between two steps. A value the world refuses is put back, so
+  // rqt always shows what the simulation uses.
+  auto refuse = [](const std::string& what, const core::Status& status) {
+    ROS_WARN_NAMED("reconfigure", "%s refused: %s", what.c_str(), status.message.c_str());
+  };
+  if (level & 1u)
+  {
+    if (core::Status s = world_->setGravity({config.gravity_x, config.gravity_y, config.gravity_z}); !s)
+    {
+      refuse("gravity", s);
+      config.gravity_x = config_.gravity_x, config.gravity_y = config_.gravity_y, config.gravity_z = config_.gravity_z;
+    }
+    if (core::Status s = world_->setGlobalDamping(config.global_damping); !s)
+    {
+      refuse("global_damping", s);
+      config.global_damping = config_.global_damping;
+    }
+    if (core::Status s = world_->setWind({config.wind_x, config.wind_y, config.wind_z}); !s)
+    {
+      refuse("wind", s);
+      config.wind_x = config_.wind_x, config.wind_y = config_.wind_y, config.wind_z = config_.wind_z;
+    }
+  }
+  if (level & 2u)
+  {
+    settings_.real_time_factor = config.real_time_factor;
+    if (config.rate != settings_.rate)
+    {
+      settings_.rate = config.rate;
+      updateSubsteps();
+    }
+  }
+  if (level & 4u)
+  {
+    core::IntegratorType type;
+    if (core::parseIntegratorType(config.integrator, type))
+      default_integrator_.type = type;
+    else
+    {
+      refuse("integrator", core::Status::failure("integrator = '" + config.integrator + "' is not an integrator; allowed: " +
+                                                 core::integratorTypeNames()));
+      config.integrator = config_.integrator;
+    }
+  }
+  if (level & 8u)
+  {
+    // New constants are applied to the body shown; choosing another body or class (constants
+    // unchanged) shows that one's constants.
+    const bool constants_changed = config.stiffness != config_.stiffness || config.damping != config_.damping;
+    const bool selection_changed = config.body != config_.body || config.spring_class != config_.spring_class;
+    if (constants_changed && !config.body.empty())
+    {
+      const core::Status s = applySpringConstants(config.body, config.spring_class, config.stiffness, config.damping);
+      if (s)
+        ROS_INFO_NAMED("reconfigure", "%s", s.message.c_str());
+      else
+      {
+        refuse("spring constants", s);
+        config.body = config_.body, config.spring_class = config_.spring_class;
+        config.stiffness = config_.stiffness, config.damping = config_.damping;
+      }
+    }
+    else if (selection_changed && !config.body.empty())
+    {
+      if (!readSpringConstants(config.body, config.spring_class, config.stiffness, config.damping))
+      {
+        refuse("body", core::Status::failure("body = '" + config.body + "' has no " + config.spring_class +
+                                             " springs (or is not a rope, cloth, jelly or spring network)"));
+        config.body = config_.body, config.spring_class = config_.spring_class;
+      }
+    }
+  }
+  config_ = config;
 }
 
 bool SimNode::spawnCloth(SpawnCloth::Request& req, SpawnCloth::Response& res)
@@ -531,7 +740,7 @@ bool SimNode::spawnCloth(SpawnCloth::Request& req, SpawnCloth::Response& res)
   def.pins.assign(req.pins.begin(), req.pins.end());
   def.named_pins = req.named_pins;
   def.strain_limit.max_strain = req.max_strain;
-  def.integrator = world_->definition().integrator;
+  def.integrator = default_integrator_;
   if (core::Status s = parseIntegratorField(req.integrator, def.integrator); !s) return answer(res, s);
   core::Status status = world_->addClothGrid(def);
   if (status)
@@ -558,7 +767,7 @@ bool SimNode::spawnJelly(SpawnJelly::Request& req, SpawnJelly::Response& res)
   def.velocity = {req.velocity.x, req.velocity.y, req.velocity.z};
   def.pins.assign(req.pins.begin(), req.pins.end());
   def.strain_limit.max_strain = req.max_strain;
-  def.integrator = world_->definition().integrator;
+  def.integrator = default_integrator_;
   if (core::Status s = parseIntegratorField(req.integrator, def.integrator); !s) return answer(res, s);
   core::Status status = world_->addJelly(def);
   if (status)
@@ -597,6 +806,8 @@ bool SimNode::reset(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& re
 {
   world_->reset();
   delete_all_pending_ = true;
+  config_ = currentConfig();  // spring constants are back to the built ones
+  reconfigure_server_->updateConfig(config_);
   std::ostringstream message;
   message << "reset every body; sim time goes on from " << world_->simTime() << " s";
   return answer(res, core::Status::success(message.str()));
@@ -605,6 +816,7 @@ bool SimNode::reset(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& re
 bool SimNode::pausePhysics(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res)
 {
   paused_ = true;
+  status_window_.paused = diagnostics_window_.paused = true;
   return answer(res, core::Status::success("paused at sim time " + std::to_string(world_->simTime()) + " s"));
 }
 
@@ -630,6 +842,136 @@ bool SimNode::step(Step::Request& req, Step::Response& res)
   }
   res.sim_time = world_->simTime();
   return true;
+}
+
+SimStatus::Ptr SimNode::buildStatus(const ros::Time& stamp) const
+{
+  auto status = boost::make_shared<SimStatus>();
+  status->header.stamp = stamp;
+  status->header.frame_id = settings_.frame_id;
+  status->sim_time = world_->simTime();
+  status->step_count = world_->stepCount();
+  status->paused = paused_;
+  status->real_time_factor = settings_.real_time_factor;
+  const core::Environment& env = world_->environment();
+  status->gravity = toVector3(env.gravity);
+  status->global_damping = env.damping;
+  status->wind = toVector3(env.air.wind);
+  status->bodies.reserve(world_->bodies().size());
+  for (const auto& body : world_->bodies())
+  {
+    BodyStatus b;
+    b.name = body->name();
+    b.particle_count = static_cast<std::uint32_t>(body->particles().size());
+    if (body->kind() == core::BodyKind::Emitter)
+    {
+      const auto& emitter = static_cast<const core::EmitterBody&>(*body);
+      b.type = "emitter";
+      b.model = core::toString(emitter.definition().type);
+      // Free particles of equal mass: kinetic and gravitational potential energy.
+      const core::ParticlePool& p = emitter.particles();
+      const double m = emitter.definition().particle_mass;
+      for (int i = 0; i < p.size(); ++i)
+      {
+        b.kinetic_energy += 0.5 * m * p.velocity.col(i).squaredNorm();
+        b.potential_energy -= m * env.gravity.dot(p.position.col(i));
+      }
+    }
+    else if (body->kind() == core::BodyKind::SpringNetwork)
+    {
+      const auto& spring_body = static_cast<const core::SpringNetworkBody&>(*body);
+      b.type = core::toString(spring_body.shape());
+      b.model = spring_body.definition().baraff_witkin.empty() ? core::toString(core::ClothModel::Springs)
+                                                                : core::toString(core::ClothModel::BaraffWitkin);
+      b.integrator = core::toString(spring_body.integrator().type);
+      b.kinetic_energy = spring_body.kineticEnergy();
+      b.potential_energy = spring_body.potentialEnergy(env.gravity);
+      b.max_strain = spring_body.maxStrain();
+      b.pinned_count = static_cast<std::uint32_t>(spring_body.pinnedCount());
+      b.solver_iterations = static_cast<std::uint32_t>(std::max(0, spring_body.lastSolve().iterations));
+      b.solver_residual = spring_body.lastSolve().relative_residual;
+      b.frozen = spring_body.frozen();
+      b.frozen_reason = spring_body.frozenReason();
+    }
+    status->bodies.push_back(std::move(b));
+  }
+  return status;
+}
+
+void SimNode::produceDiagnostics(diagnostic_updater::DiagnosticStatusWrapper& stat)
+{
+  using diagnostic_msgs::DiagnosticStatus;
+  const Window& w = diagnostics_window_;
+  const double wall = secondsSince(w.start);
+  const double rtf = wall > 0.0 ? (world_->simTime() - w.sim_time_at_start) / wall : 0.0;
+  const double step_us = w.steps ? 1e6 * w.step_seconds / static_cast<double>(w.steps) : 0.0;
+
+  // Over the spring bodies: the last implicit solves, strain and frozen bodies.
+  int iterations = 0, not_converged = 0;
+  double residual = 0.0, max_strain = 0.0;
+  std::string strained_body;
+  std::vector<std::string> frozen;
+  for (const auto& body : world_->bodies())
+  {
+    if (body->kind() != core::BodyKind::SpringNetwork) continue;
+    const auto& spring_body = static_cast<const core::SpringNetworkBody&>(*body);
+    if (spring_body.frozen())
+    {
+      frozen.push_back(body->name() + " (" + spring_body.frozenReason() + ")");
+      continue;
+    }
+    if (spring_body.integrator().type == core::IntegratorType::ImplicitEuler)
+    {
+      iterations = std::max(iterations, spring_body.lastSolve().iterations);
+      residual = std::max(residual, spring_body.lastSolve().relative_residual);
+      if (!spring_body.lastSolve().converged) ++not_converged;
+    }
+    const double strain = spring_body.maxStrain();
+    if (strain > max_strain)
+    {
+      max_strain = strain;
+      strained_body = body->name();
+    }
+  }
+
+  stat.summary(DiagnosticStatus::OK, w.paused || paused_ ? "paused" : "running");
+  char text[256];
+  // Thresholds: README "Diagnostics".
+  if (!frozen.empty())
+  {
+    std::string names;
+    for (const std::string& name : frozen) names += (names.empty() ? "" : ", ") + name;
+    stat.mergeSummary(DiagnosticStatus::ERROR, "frozen bodies: " + names);
+  }
+  if (!w.paused && !paused_ && settings_.real_time_factor > 0.0 &&
+      rtf < kRealTimeFactorWarnRatio * settings_.real_time_factor)
+  {
+    std::snprintf(text, sizeof(text), "real-time factor %.3g below %.0f %% of the target %.3g", rtf,
+                  100.0 * kRealTimeFactorWarnRatio, settings_.real_time_factor);
+    stat.mergeSummary(DiagnosticStatus::WARN, text);
+  }
+  if (not_converged > 0)
+    stat.mergeSummary(DiagnosticStatus::WARN,
+                      std::to_string(not_converged) + " implicit solves did not reach cg_tolerance in their last step");
+  if (max_strain > settings_.diagnostic_max_strain)
+  {
+    std::snprintf(text, sizeof(text), "max strain %.3g of '%s' above %.3g", max_strain, strained_body.c_str(),
+                  settings_.diagnostic_max_strain);
+    stat.mergeSummary(DiagnosticStatus::WARN, text);
+  }
+
+  stat.add("sim time [s]", world_->simTime());
+  stat.add("paused", paused_);
+  stat.add("real-time factor", rtf);
+  stat.add("target real-time factor", settings_.real_time_factor);
+  stat.add("step time [us]", step_us);
+  stat.add("steps per tick", substeps_);
+  stat.add("live particles", world_->particleCount());
+  stat.add("bodies", static_cast<int>(world_->bodies().size()));
+  stat.add("solver iterations (max, last step)", iterations);
+  stat.add("solver residual (max, last step)", residual);
+  stat.add("max strain", max_strain);
+  stat.add("frozen bodies", static_cast<int>(frozen.size()));
 }
 
 }  // namespace ros_interface

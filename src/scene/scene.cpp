@@ -47,6 +47,7 @@ void readIntegrator(MapReader& reader, core::IntegratorDef& integrator)
   reader.read("verlet_damping", integrator.verlet_damping);
   reader.read("cg_tolerance", integrator.cg_tolerance);
   reader.read("cg_max_iterations", integrator.cg_max_iterations);
+  reader.read("max_substeps", integrator.max_substeps);
 }
 
 void readWorld(const YAML::Node& node, const std::string& source, SceneDef& scene)
@@ -367,11 +368,14 @@ std::string resolvePath(const std::string& source, const std::string& path)
 BodyDef readCloth(MapReader& reader, SceneDef& scene, const std::string& source)
 {
   const core::WorldDef& world = scene.world;
-  std::string name, model = "springs";
+  std::string name, model_name = "springs";
   reader.require("name", name);
-  reader.read("model", model);
-  if (model != "springs")
-    reader.fail(reader.node()["model"], reader.field("model") + " = '" + model + "' is not a cloth model; allowed: springs");
+  reader.read("model", model_name);
+  core::ClothModel model = core::ClothModel::Springs;
+  if (!core::parseClothModel(model_name, model))
+    reader.fail(reader.node()["model"], reader.field("model") + " = '" + model_name +
+                                            "' is not a cloth model; allowed: springs, baraff_witkin");
+  const bool baraff_witkin = model == core::ClothModel::BaraffWitkin;
   const std::vector<FramePinEntry> frame_pins = readFramePinEntries(reader, source);
 
   // A triangle mesh (an OBJ file, or vertices and triangles inline) or a regular grid.
@@ -379,7 +383,14 @@ BodyDef readCloth(MapReader& reader, SceneDef& scene, const std::string& source)
   {
     core::MeshClothDef def;
     def.name = name;
+    def.model = model;
     def.integrator = world.integrator;
+    if (baraff_witkin)
+    {
+      def.stretch = core::kBaraffWitkinStretch;
+      def.shear = core::kBaraffWitkinShear;
+      def.bend = core::kBaraffWitkinBend;
+    }
     if (reader.has("mesh"))
     {
       std::string file;
@@ -394,6 +405,7 @@ BodyDef readCloth(MapReader& reader, SceneDef& scene, const std::string& source)
       check(reader, reader.field(""), core::checkFinite("origin", origin));
       for (const Eigen::Vector3d& v : mesh.vertices) def.vertices.push_back(origin + scale * v);
       def.triangles = mesh.triangles;
+      def.uvs = mesh.uvs;
     }
     else
     {
@@ -410,9 +422,21 @@ BodyDef readCloth(MapReader& reader, SceneDef& scene, const std::string& source)
           reader.fail(triangles[i], reader.field("triangles") + "[" + std::to_string(i) + "] must be [i, j, k]");
         def.triangles.emplace_back(triangles[i][0].as<int>(), triangles[i][1].as<int>(), triangles[i][2].as<int>());
       }
+      const YAML::Node uvs = reader.child("uvs");
+      for (std::size_t i = 0; uvs && uvs.IsSequence() && i < uvs.size(); ++i)
+      {
+        if (!uvs[i].IsSequence() || uvs[i].size() != 2)
+          reader.fail(uvs[i], reader.field("uvs") + "[" + std::to_string(i) + "] must be [u, v]");
+        def.uvs.emplace_back(uvs[i][0].as<double>(), uvs[i][1].as<double>());
+      }
     }
     reader.read("mass", def.mass);
-    readClothConstants(reader, def.stretch, nullptr, def.bend, source);
+    readClothConstants(reader, def.stretch, baraff_witkin ? &def.shear : nullptr, def.bend, source);
+    if (baraff_witkin)
+    {
+      reader.read("b_u", def.b_u);
+      reader.read("b_v", def.b_v);
+    }
     readPins(reader, def.pins, nullptr);
     readStrainLimit(reader, def.strain_limit);
     readIntegrator(reader, def.integrator);
@@ -425,7 +449,16 @@ BodyDef readCloth(MapReader& reader, SceneDef& scene, const std::string& source)
 
   core::ClothGridDef def;
   def.name = name;
+  def.model = model;
   def.integrator = world.integrator;
+  if (baraff_witkin)
+  {
+    def.stretch = core::kBaraffWitkinStretch;
+    def.shear = core::kBaraffWitkinShear;
+    def.bend = core::kBaraffWitkinBend;
+    reader.read("b_u", def.b_u);
+    reader.read("b_v", def.b_v);
+  }
   reader.read("origin", def.origin);
   reader.read("edge_u", def.edge_u);
   reader.read("edge_v", def.edge_v);
@@ -621,6 +654,7 @@ void integrator(YAML::Node node, const core::IntegratorDef& i)
   node["verlet_damping"] = i.verlet_damping;
   node["cg_tolerance"] = i.cg_tolerance;
   node["cg_max_iterations"] = i.cg_max_iterations;
+  node["max_substeps"] = i.max_substeps;
 }
 
 YAML::Node springConstants(double stiffness, double damping)
@@ -778,7 +812,12 @@ std::string toYaml(const SceneDef& scene)
       YAML::Node node;
       node["name"] = c->name;
       node["kind"] = "cloth";
-      node["model"] = "springs";
+      node["model"] = core::toString(c->model);
+      if (c->model == core::ClothModel::BaraffWitkin)
+      {
+        node["b_u"] = c->b_u;
+        node["b_v"] = c->b_v;
+      }
       node["origin"] = vector3(c->origin);
       node["edge_u"] = vector3(c->edge_u);
       node["edge_v"] = vector3(c->edge_v);
@@ -800,9 +839,23 @@ std::string toYaml(const SceneDef& scene)
       YAML::Node node;
       node["name"] = m->name;
       node["kind"] = "cloth";
-      node["model"] = "springs";
+      node["model"] = core::toString(m->model);
       for (const Eigen::Vector3d& v : m->vertices) node["vertices"].push_back(vector3(v));
       for (const Eigen::Vector3i& t : m->triangles) node["triangles"].push_back(indexList({t[0], t[1], t[2]}));
+      for (const Eigen::Vector2d& uv : m->uvs)
+      {
+        YAML::Node pair(YAML::NodeType::Sequence);
+        pair.SetStyle(YAML::EmitterStyle::Flow);
+        pair.push_back(uv.x());
+        pair.push_back(uv.y());
+        node["uvs"].push_back(pair);
+      }
+      if (m->model == core::ClothModel::BaraffWitkin)
+      {
+        node["shear"] = springConstants(m->shear.stiffness, m->shear.damping);
+        node["b_u"] = m->b_u;
+        node["b_v"] = m->b_v;
+      }
       node["mass"] = m->mass;
       node["stretch"] = springConstants(m->stretch.stiffness, m->stretch.damping);
       node["bend"] = springConstants(m->bend.stiffness, m->bend.damping);

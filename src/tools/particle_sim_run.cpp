@@ -21,7 +21,7 @@ constexpr const char* kUsage =
     "  SCENE.yaml       scene file (see README, 'Scene files')\n"
     "  --duration T     sim time to run [s], > 0\n"
     "  --dt DT          physics step [s], overrides the scene's world.dt, in (0, 0.1]\n"
-    "  --integrator NAME  integrator of every spring body: symplectic_euler, verlet, implicit_euler, rk4\n"
+    "  --integrator NAME  integrator of every spring body: symplectic_euler, verlet, implicit_euler, rk4, auto\n"
     "  --output FILE    write time,body,index,x,y,z,vx,vy,vz rows for every live particle\n"
     "  --every N        write every N-th step (default 1); the initial state is always written\n";
 
@@ -209,6 +209,17 @@ int main(int argc, char** argv)
   std::printf("steps %llu, sim time %.6g s, wall %.3f s, %.3f us/step, live particles %d\n",
               static_cast<unsigned long long>(steps), world->simTime(), wall,
               steps ? 1e6 * stepping_seconds / steps : 0.0, world->particleCount());
+  // What the stability guard did and what `auto` picked, per spring body.
+  for (const auto& body : world->bodies())
+  {
+    const auto* spring_body = dynamic_cast<const particle_sim::core::SpringNetworkBody*>(body.get());
+    if (!spring_body) continue;
+    if (!spring_body->autoChoice().empty())
+      std::printf("body '%s' auto: %s\n", body->name().c_str(), spring_body->autoChoice().c_str());
+    if (spring_body->stabilityEvents() > 0)
+      std::printf("body '%s': %lld stability events, last: %s\n", body->name().c_str(),
+                  spring_body->stabilityEvents(), spring_body->lastStabilityEvent().c_str());
+  }
   for (const SolverStats& stats : solver_stats)
   {
     std::printf("body '%s' implicit_euler: CG iterations mean %.1f, max %d; worst relative residual %.2e; %lld "

@@ -494,7 +494,10 @@ TEST(Integrator, ImplicitEulerStaysStableWhereSymplecticEulerBlowsUp)
   for (int i = 0; i < p.size(); ++i)
     EXPECT_LT((p.position.col(i) - implicit_def.start).norm(), 1.5 * rope_length) << "particle " << i;
 
-  SpringNetworkBody explicit_body(buildRope(stiffRope(IntegratorType::SymplecticEuler)));
+  // Symplectic Euler allowed no substeps (max_substeps = 1) blows up; it is frozen, not NaN.
+  RopeDef single_step_def = stiffRope(IntegratorType::SymplecticEuler);
+  single_step_def.integrator.max_substeps = 1;
+  SpringNetworkBody explicit_body(buildRope(single_step_def));
   for (int n = 0; n < 300; ++n) explicit_body.step(dt, env);
   EXPECT_TRUE(explicit_body.frozen());
   EXPECT_FALSE(explicit_body.frozenReason().empty());
@@ -503,4 +506,13 @@ TEST(Integrator, ImplicitEulerStaysStableWhereSymplecticEulerBlowsUp)
   const Eigen::Matrix3Xd frozen_at = explicit_body.particles().position;
   explicit_body.step(dt, env);
   EXPECT_EQ(explicit_body.particles().position, frozen_at);
+
+  // With its default cap it sees the instability coming, splits each step and stays finite.
+  SpringNetworkBody substepped(buildRope(stiffRope(IntegratorType::SymplecticEuler)));
+  for (int n = 0; n < 300; ++n) substepped.step(dt, env);
+  EXPECT_FALSE(substepped.frozen()) << substepped.frozenReason();
+  EXPECT_TRUE(allFinite(substepped));
+  EXPECT_GT(substepped.lastSubsteps(), 50);  // dt omega_max is about 105, the limit 2 (with 10 % margin)
+  EXPECT_GE(substepped.stabilityEvents(), 1);
+  EXPECT_NE(substepped.lastStabilityEvent().find("substeps"), std::string::npos) << substepped.lastStabilityEvent();
 }

@@ -153,8 +153,9 @@ TEST(SceneFiles, ToYamlRoundTripsEveryDefinition)
 
   // Every shipped scene: ropes, networks, cloth (grid and mesh, written back inline), jelly, frames.
   for (const auto& entry :
-       std::filesystem::directory_iterator(std::string(PARTICLE_SIM_SOURCE_DIR) + "/config/scenes"))
+       std::filesystem::recursive_directory_iterator(std::string(PARTICLE_SIM_SOURCE_DIR) + "/config/scenes"))
   {
+    if (entry.path().extension() != ".yaml") continue;
     ASSERT_TRUE(scene::loadSceneFile(entry.path().string(), original).ok) << entry.path();
     const core::Status status = scene::parseScene(scene::toYaml(original), "round-trip", again);
     ASSERT_TRUE(status.ok) << entry.path() << ": " << status.message;

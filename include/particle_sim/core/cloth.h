@@ -11,12 +11,21 @@ namespace particle_sim
 {
 namespace core
 {
-/// Spring constants of one class.
-struct SpringConstants
+/// How a cloth resists deformation.
+enum class ClothModel
 {
-  double stiffness = 0.0;  ///< [N/m] >= 0
-  double damping = 0.0;    ///< [N·s/m] >= 0
+  Springs,       ///< Provot's stretch, shear and bend springs
+  BaraffWitkin,  ///< Baraff & Witkin's stretch and shear per triangle, bend per interior edge
 };
+
+const char* toString(ClothModel model);
+/// Parses "springs" or "baraff_witkin"; false when unknown.
+bool parseClothModel(const std::string& text, ClothModel& model);
+
+/// Default constants of a Baraff–Witkin cloth: stretch and shear per unit area [N/m], bend [N·m].
+constexpr SpringConstants kBaraffWitkinStretch{1000.0, 1.0};
+constexpr SpringConstants kBaraffWitkinShear{100.0, 0.1};
+constexpr SpringConstants kBaraffWitkinBend{0.005, 5e-5};
 
 /// A regular grid cloth after Provot (1995): particle (a, b), a in [0, nu), b in [0, nv), sits at
 /// origin + a/(nu−1) edge_u + b/(nv−1) edge_v and has index b·nu + a. Stretch springs join grid
@@ -32,6 +41,7 @@ struct SpringConstants
 struct ClothGridDef
 {
   std::string name;
+  ClothModel model = ClothModel::Springs;  ///< springs, or Baraff–Witkin with (u, v) from the grid
   Eigen::Vector3d origin = Eigen::Vector3d(-0.5, 0.0, 2.0);  ///< [m] particle (0, 0)
   Eigen::Vector3d edge_u = Eigen::Vector3d(1.0, 0.0, 0.0);   ///< [m] from (0, 0) to (nu − 1, 0)
   Eigen::Vector3d edge_v = Eigen::Vector3d(0.0, 1.0, 0.0);   ///< [m] from (0, 0) to (0, nv − 1)
@@ -40,7 +50,8 @@ struct ClothGridDef
   double mass = 0.5;                                         ///< [kg] total, shared equally
   SpringConstants stretch{1000.0, 0.5};
   SpringConstants shear{200.0, 0.2};
-  SpringConstants bend{20.0, 0.05};   ///< stiffness 0 = no bend springs
+  SpringConstants bend{20.0, 0.05};   ///< stiffness 0 = no bend springs (Baraff–Witkin: see BaraffWitkinDef units)
+  double b_u = 1.0, b_v = 1.0;        ///< Baraff–Witkin rest stretch along u and v, > 0
   std::vector<int> pins;              ///< indices; negative counts from the end
   std::vector<std::string> named_pins;  ///< corner_00, corner_10, corner_01, corner_11, edge_u0, edge_u1, edge_v0, edge_v1
   StrainLimitDef strain_limit;
@@ -55,16 +66,22 @@ bool namedGridPins(const std::string& name, int nu, int nv, std::vector<int>& in
 /// "corner_00, corner_10, corner_01, corner_11, edge_u0, edge_u1, edge_v0, edge_v1"
 const char* namedGridPinNames();
 
-/// A cloth from a triangle mesh: every mesh edge is a stretch spring at its initial length, and
-/// across every interior edge the two opposite vertices are joined by a bend spring.
+/// A cloth from a triangle mesh. Springs: every mesh edge is a stretch spring at its initial
+/// length, and across every interior edge the two opposite vertices are joined by a bend spring.
+/// Baraff–Witkin: the rest (u, v) of each vertex comes from `uvs` (texture coordinates), scaled so
+/// that the (u, v) area equals the mesh's area.
 struct MeshClothDef
 {
   std::string name;
+  ClothModel model = ClothModel::Springs;
   std::vector<Eigen::Vector3d> vertices;   ///< [m]
   std::vector<Eigen::Vector3i> triangles;  ///< vertex indices
+  std::vector<Eigen::Vector2d> uvs;        ///< per vertex texture coordinates; needed by Baraff–Witkin
   double mass = 0.5;                       ///< [kg] total, shared equally by the vertices
   SpringConstants stretch{1000.0, 0.5};
+  SpringConstants shear{200.0, 0.2};       ///< Baraff–Witkin only
   SpringConstants bend{20.0, 0.05};        ///< stiffness 0 = no bend springs
+  double b_u = 1.0, b_v = 1.0;             ///< Baraff–Witkin rest stretch
   std::vector<int> pins;
   StrainLimitDef strain_limit;
   IntegratorDef integrator;
@@ -78,7 +95,8 @@ SpringNetworkDef buildMeshCloth(const MeshClothDef& def);
 void vertexNormals(const Eigen::Matrix3Xd& positions, int count, const std::vector<Eigen::Vector3i>& triangles,
                    std::vector<Eigen::Vector3d>& normals);
 
-/// Per particle, the largest strain (l − L) / L of the stretch and shear springs it belongs to.
+/// Per particle, the largest strain (l − L) / L of the stretch and shear springs it belongs to
+/// and, for Baraff–Witkin cloth, of its triangles (max(|w_u|/b_u, |w_v|/b_v) − 1).
 void vertexStrains(const SpringNetworkBody& body, std::vector<double>& strains);
 
 }  // namespace core

@@ -57,6 +57,7 @@ struct Environment
   GroundPlaneDef ground;
   std::vector<SphereColliderDef> spheres;
   AirDef air;
+  double damping = 0.0;  ///< [N·s/m per kg = 1/s] >= 0: global damping, f = −damping · m · v on spring-body particles
 };
 
 /// Moves every live, non-pinned particle of `pool` that ended a step inside a collider back out.
@@ -71,7 +72,12 @@ struct Environment
 ///             step), else 0,
 ///             |v_t| shrinks by at most mu (1 + e) |v_n| (Coulomb friction on the impulse).
 /// The result is always outside the collider that was handled.
-void resolveCollisions(const Environment& env, ParticlePool& pool, const Eigen::Matrix3Xd* start_velocity = nullptr);
+///
+/// `start_position`, when given, is each particle's position at the start of the step: a particle
+/// whose straight path crossed a sphere (fast particles that would tunnel through it) is put back
+/// on the sphere where the path first met it and bounces there.
+void resolveCollisions(const Environment& env, ParticlePool& pool, const Eigen::Matrix3Xd* start_velocity = nullptr,
+                       const Eigen::Matrix3Xd* start_position = nullptr);
 
 }  // namespace core
 }  // namespace particle_sim

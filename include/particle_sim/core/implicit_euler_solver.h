@@ -1,50 +1,70 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <utility>
 #include <vector>
 
 #include "particle_sim/core/integrator.h"
-#include "particle_sim/core/spring.h"
 
 namespace particle_sim
 {
 namespace core
 {
-/// One step of linearised backward Euler for a mass-spring system (Baraff & Witkin 1998):
+/// One step of linearised backward Euler (Baraff & Witkin 1998):
 ///
 ///   (M − h ∂f/∂v − h² ∂f/∂x) Δv = h (f0 + h ∂f/∂x v0),   v1 = v0 + Δv,   x1 = x0 + h v1,
 ///
 /// solved by their modified preconditioned conjugate gradient: pinned particles' Δv is held at 0
-/// by filtering every search direction and residual (no huge masses), with a 3x3 block-Jacobi
-/// preconditioner. The matrix is never assembled: each spring keeps its 3x3 block
-/// S = h ∂f_i/∂v_i + h² ∂f_i/∂x_i, which acts as +S on (i, j) and −S on (i, i) (and alike for j).
-/// The spring Jacobians use the definite form (see springJacobians), so the system is symmetric
-/// positive definite.
+/// by filtering every search direction and residual (no huge masses); 3x3 block-Jacobi
+/// preconditioner; warm start from the previous step's Δv.
 ///
-/// All memory is sized by resize(); step() allocates nothing.
+/// The matrix is block-sparse with 3x3 blocks. Its pattern (which particle pairs are coupled) is
+/// set once per body by setPattern(); each step the force elements add their Jacobian blocks with
+/// addBlock(), by the block index they looked up once with blockIndex(). Nothing allocates after
+/// setPattern().
+///
+/// Use per step: begin(), addBlock() for every element block, solve().
 class ImplicitEulerSolver
 {
 public:
-  void resize(int particles, int springs);
+  /// Sets the pattern: every particle's diagonal block, and both (i, j) and (j, i) for each pair.
+  void setPattern(int particles, const std::vector<std::pair<int, int>>& coupled_pairs);
+  /// The index of block (row i, column j); -1 when the pattern has no such block.
+  int blockIndex(int i, int j) const;
 
-  /// Advances x and v by h. `force` is f0 = f(x0, v0); `pinned[i]` marks kinematic particles,
-  /// whose velocity in v must already be the one that carries them to their target (it is kept).
-  SolverReport step(double h, const std::vector<Spring>& springs, const Eigen::VectorXd& mass,
-                    const std::vector<char>& pinned, const Eigen::Matrix3Xd& force, double tolerance,
-                    int max_iterations, Eigen::Matrix3Xd& x, Eigen::Matrix3Xd& v);
+  /// Starts a step: A = M, b = h f0; remembers h and v0 (null: no h² ∂f/∂x v0 term in b, as in
+  /// the Newton iterations, whose right-hand side is given whole in `force`).
+  void begin(double h, const Eigen::VectorXd& mass, const Eigen::Matrix3Xd& force, const Eigen::Matrix3Xd* v0);
+  /// Adds the block ∂f_i/∂x_j = dfdx, ∂f_i/∂v_j = dfdv at `block` (row i, column j):
+  /// A_ij −= h dfdv + h² dfdx and b_i += h² dfdx v0_j.
+  void addBlock(int block, const Eigen::Matrix3d& dfdx, const Eigen::Matrix3d& dfdv)
+  {
+    blocks_[block].noalias() -= h_ * dfdv + h_ * h_ * dfdx;
+    if (v0_) rhs_.col(block_row_[block]).noalias() += h_ * h_ * (dfdx * v0_->col(block_column_[block]));
+  }
+  /// Adds ∂f_i/∂x_i = dfdx, ∂f_i/∂v_i = dfdv to particle i's diagonal block.
+  void addToDiagonal(int i, const Eigen::Matrix3d& dfdx, const Eigen::Matrix3d& dfdv)
+  {
+    addBlock(diagonal_block_[i], dfdx, dfdv);
+  }
+  /// Solves for Δv with pinned rows filtered, then v += Δv, x += h v. Pinned particles keep the
+  /// velocity in v (the one that carries them to their target).
+  SolverReport solve(const std::vector<char>& pinned, double tolerance, int max_iterations, Eigen::Matrix3Xd& x,
+                     Eigen::Matrix3Xd& v);
+  /// Forgets the warm start (after a reset or a jump of the state).
+  void clearWarmStart() { delta_v_.setZero(); }
 
 private:
-  // out = A p, with A = M − Σ_springs (block pattern of S).
-  void multiply(const std::vector<Spring>& springs, const Eigen::VectorXd& mass, const Eigen::Matrix3Xd& p,
-                Eigen::Matrix3Xd& out) const;
-  // Zeroes the rows of pinned particles (the filter S of Baraff & Witkin).
+  void multiply(const Eigen::Matrix3Xd& p, Eigen::Matrix3Xd& out) const;
   static void filter(const std::vector<char>& pinned, Eigen::Matrix3Xd& p);
-  // out = P⁻¹ r with the block-Jacobi preconditioner.
   void precondition(const Eigen::Matrix3Xd& r, Eigen::Matrix3Xd& out) const;
 
-  std::vector<Eigen::Matrix3d> dfdx_;          // per spring, ∂f_i/∂x_i
-  std::vector<Eigen::Matrix3d> system_block_;  // per spring, S = h ∂f/∂v + h² ∂f/∂x
-  std::vector<Eigen::Matrix3d> inverse_diagonal_;  // per particle, (diagonal 3x3 block of A)⁻¹
+  // Block-sparse rows: row i has blocks row_start_[i] .. row_start_[i + 1] − 1.
+  std::vector<int> row_start_, block_row_, block_column_, diagonal_block_;
+  std::vector<Eigen::Matrix3d> blocks_;
+  std::vector<Eigen::Matrix3d> inverse_diagonal_;
+  double h_ = 0.0;
+  const Eigen::Matrix3Xd* v0_ = nullptr;
   Eigen::Matrix3Xd delta_v_, rhs_, residual_, direction_, product_, preconditioned_;
 };
 

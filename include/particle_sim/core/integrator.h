@@ -16,12 +16,13 @@ enum class IntegratorType
                     ///< for position-only forces; first order once forces depend on velocity)
   ImplicitEuler,    ///< linearised backward Euler solved by modified preconditioned CG (first order, stable)
   Rk4,              ///< classical Runge–Kutta, the accuracy reference (fourth order)
+  Auto,             ///< per body and step: Verlet where its stability bound holds with margin, else implicit Euler
 };
 
 const char* toString(IntegratorType type);
-/// Parses "symplectic_euler", "verlet", "implicit_euler" or "rk4"; false when unknown.
+/// Parses "symplectic_euler", "verlet", "implicit_euler", "rk4" or "auto"; false when unknown.
 bool parseIntegratorType(const std::string& text, IntegratorType& type);
-/// "symplectic_euler, verlet, implicit_euler, rk4", for error messages.
+/// "symplectic_euler, verlet, implicit_euler, rk4, auto", for error messages.
 const char* integratorTypeNames();
 
 /// An integrator and its settings, with defaults.
@@ -31,7 +32,12 @@ struct IntegratorDef
   double verlet_damping = 1.0;  ///< the lecture's Verlet k_d in [0, 1]: 1 = no damping, below 1 damps
   double cg_tolerance = 1e-8;   ///< implicit Euler: stop when |r| <= tolerance |b| (filtered residuals), > 0
   int cg_max_iterations = 500;  ///< implicit Euler: iteration cap, >= 1
+  int max_substeps = 64;        ///< explicit methods: most substeps a step may be split into to stay stable, >= 1
 };
+
+/// The stability limit h·ω of an explicit method on an undamped oscillator of frequency ω:
+/// 2 for symplectic Euler and Verlet, 2√2 for RK4, infinite for implicit Euler.
+double stabilityLimit(IntegratorType type);
 
 Status validate(const IntegratorDef& def);
 

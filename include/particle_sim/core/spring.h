@@ -19,6 +19,13 @@ const char* toString(SpringClass spring_class);
 /// Parses "stretch", "shear" or "bend"; false when unknown.
 bool parseSpringClass(const std::string& text, SpringClass& spring_class);
 
+/// Stiffness and damping of one class of springs (or of Baraff–Witkin conditions).
+struct SpringConstants
+{
+  double stiffness = 0.0;  ///< [N/m] >= 0
+  double damping = 0.0;    ///< [N·s/m] >= 0
+};
+
 /// One spring between particles i and j.
 struct Spring
 {

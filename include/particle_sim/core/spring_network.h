@@ -1,10 +1,12 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <array>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "particle_sim/core/baraff_witkin_model.h"
 #include "particle_sim/core/body.h"
 #include "particle_sim/core/implicit_euler_solver.h"
 #include "particle_sim/core/integrator.h"
@@ -48,6 +50,7 @@ struct SpringNetworkDef
   std::vector<Spring> springs;
   std::vector<int> pins;                    ///< indices pinned where they start
   std::vector<Eigen::Vector3i> triangles;   ///< surface triangles (cloth, jelly): drawn, published, feel the air
+  BaraffWitkinDef baraff_witkin;            ///< Baraff–Witkin energies (cloth model baraff_witkin); empty = none
   StrainLimitDef strain_limit;
   IntegratorDef integrator;
 };
@@ -63,9 +66,21 @@ Status validate(const SpringNetworkDef& def, int max_particles);
 /// to its pin target, and it ends the step exactly there. Targets can be moved between steps (a
 /// gripper carrying the rope end). Implicit Euler filters pinned degrees of freedom.
 ///
-/// A body whose state turns non-finite, or whose implicit solve breaks down, is restored to its last
-/// good state and frozen: it stops stepping and says why (frozenReason()). A solve that reaches its
-/// iteration cap is kept and reported (lastSolve().converged = false).
+/// Stability. Before each step an explicit method sees instability coming from the body's
+/// stability bound (Gershgorin: ω_max² ≤ max_i Σ_elements k |∂C/∂x_i| Σ_n |∂C/∂x_n| / m_i, and
+/// alike a damping rate c_max): when h (ω_max + c_max) exceeds the method's limit (2 for symplectic
+/// Euler and Verlet, 2√2 for RK4) with a 10 % margin, the step is split into enough substeps. After
+/// the step it checks for blow-up (non-finite state, or mechanical energy grown past 100 times its
+/// size plus the body's energy scale); then the step is rolled back and retried with twice the
+/// substeps, up to integrator.max_substeps. Each such event is counted and described
+/// (stabilityEvents(), lastStabilityEvent()). A body whose state still turns non-finite, or
+/// whose implicit solve breaks down, is restored to its last good state and frozen: it stops
+/// stepping and says why (frozenReason()). A solve that reaches its iteration cap is kept and
+/// reported (lastSolve().converged = false).
+///
+/// The `auto` integrator picks, per step, Verlet when h (ω_max + c_max) is at most half its limit
+/// (one substep, with margin), else implicit Euler; it re-decides when the spring constants or
+/// the step change and says what it picked and why (autoChoice()).
 class SpringNetworkBody : public Body
 {
 public:
@@ -92,17 +107,33 @@ public:
   /// Index of the particle nearest to `point`.
   int nearestParticle(const Eigen::Vector3d& point) const;
 
-  // Springs ------------------------------------------------------------------------------------
+  // Springs and Baraff–Witkin conditions ------------------------------------------------------
   const std::vector<Spring>& springs() const { return springs_; }
+  /// The Baraff–Witkin energies, or null for a spring-only body.
+  const BaraffWitkinModel* baraffWitkin() const { return baraff_witkin_ ? &*baraff_witkin_ : nullptr; }
   bool hasSpringClass(SpringClass spring_class) const;
   /// Sets stiffness [N/m] and damping [N·s/m] of every spring of `spring_class` (all springs when
-  /// empty). Takes effect at the next step; the implicit system is rebuilt every step.
+  /// empty), and of the Baraff–Witkin condition class of that name. Takes effect at the next step;
+  /// the implicit system is rebuilt every step.
   Status setSpringConstants(std::optional<SpringClass> spring_class, double stiffness, double damping);
 
   // Integrator ---------------------------------------------------------------------------------
   const IntegratorDef& integrator() const { return integrator_; }
   Status setIntegrator(const IntegratorDef& integrator);
   const SolverReport& lastSolve() const { return last_solve_; }
+  /// The method the last step used (auto resolved).
+  IntegratorType lastIntegrator() const { return last_integrator_; }
+  /// Substeps the last step was split into (1 = none).
+  int lastSubsteps() const { return last_substeps_; }
+  /// For `auto`: what it picked and why, e.g. "verlet: h (ω + c) = 0.31 <= 1 (ω_max = 41.2 1/s)".
+  const std::string& autoChoice() const { return auto_choice_; }
+  /// Upper bounds of the highest frequency ω_max [1/s] and damping rate c_max [1/s] of the body
+  /// (Gershgorin, at rest geometry; recomputed when spring constants change).
+  double frequencyBound() const { return omega_bound_; }
+  double dampingBound() const { return damping_bound_ + damping_; }
+  /// Stability events (substeps added, blow-ups rolled back) since build or reset.
+  long long stabilityEvents() const { return stability_events_; }
+  const std::string& lastStabilityEvent() const { return last_stability_event_; }
 
   // Measurements -------------------------------------------------------------------------------
   /// Largest (|x_j − x_i| − L) / L over the stretch and shear springs [-].
@@ -121,9 +152,20 @@ private:
   void stepSymplecticEuler(double h, const Eigen::Vector3d& gravity);
   void stepVerlet(double h, const Eigen::Vector3d& gravity);
   void stepImplicitEuler(double h, const Eigen::Vector3d& gravity);
+  // Adds every element's Jacobian blocks at positions x to the implicit solver.
+  void assembleImplicit(const Eigen::Matrix3Xd& x);
   void stepRk4(double h, const Eigen::Vector3d& gravity);
   // Provot's correction of over-stretched springs, then velocities by the correction over h.
   void limitStrain(double h);
+  // One (sub)step of length h with `type`: pins, integrator, pin targets, collisions, strain limit.
+  void substep(double h, IntegratorType type, const Environment& env);
+  // Recomputes omega_bound_ and damping_bound_ from the current constants.
+  void updateStabilityBound();
+  // Resolves `auto` for step dt (and records why).
+  IntegratorType chooseIntegrator(double dt);
+  // Kinetic plus potential energy of the current state [J].
+  double mechanicalEnergy(const Eigen::Vector3d& gravity) const { return kineticEnergy() + potentialEnergy(gravity); }
+  void recordEvent(std::string event);
   // a = f / m for free particles, 0 for pinned ones.
   void accelerations(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v, const Eigen::Vector3d& gravity,
                      Eigen::Matrix3Xd& a);
@@ -134,16 +176,30 @@ private:
   std::vector<Spring> springs_;
   IntegratorDef integrator_;
   AirDef air_;                      // the air of the current step
+  double damping_ = 0.0;            // [1/s] global damping of the current step (Environment::damping)
   Eigen::VectorXd mass_;            // [kg], kept for pinned particles too
   std::vector<char> pinned_;
   Eigen::Matrix3Xd pin_target_;
   bool verlet_started_ = false;     // Verlet needs its second-order start after build, reset or a switch
+  IntegratorType last_integrator_ = IntegratorType::ImplicitEuler;
+  int last_substeps_ = 1;
+  double omega_bound_ = 0.0;        // [1/s]
+  double damping_bound_ = 0.0;      // [1/s], springs and conditions (global damping added at use)
+  double energy_scale_ = 0.0;       // [J] total mass · (|g| + 1 m/s²) · size, for the blow-up check
+  std::string auto_choice_;
+  long long stability_events_ = 0;
+  std::string last_stability_event_;
   SolverReport last_solve_;
   std::string frozen_reason_;
 
   // Work arrays, sized once.
   ImplicitEulerSolver implicit_solver_;
+  std::vector<std::array<int, 4>> spring_blocks_;  // per spring: its blocks ii, ij, ji, jj
+  std::optional<BaraffWitkinModel> baraff_witkin_;
   Eigen::Matrix3Xd force_, saved_position_, saved_velocity_, unlimited_position_;
+  Eigen::Matrix3Xd step_target_;  // pin targets at the end of the whole step (substeps approach them)
+  Eigen::Matrix3Xd implicit_x0_, implicit_v0_;  // state at the start of an implicit (sub)step
+  static constexpr int kNewtonIterations = 8;
   Eigen::Matrix3Xd rk_x_, rk_v_, rk_kx_[4], rk_kv_[4];
 };
 

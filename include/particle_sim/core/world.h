@@ -60,6 +60,10 @@ public:
   Status setSphereCenter(const std::string& name, const Eigen::Vector3d& center);
   /// Sets the wind velocity [m/s] felt by cloth and jelly from the next step.
   Status setWind(const Eigen::Vector3d& wind);
+  /// Sets gravity [m/s^2] from the next step (finite).
+  Status setGravity(const Eigen::Vector3d& gravity);
+  /// Sets the global damping [1/s] (f = −damping · m · v on spring-body particles) from the next step (finite, >= 0).
+  Status setGlobalDamping(double damping);
 
   /// Sim time [s] = stepCount() * dt().
   double simTime() const { return static_cast<double>(step_count_) * def_.dt; }

@@ -11,6 +11,10 @@ namespace names
 constexpr const char* kMarkersTopic = "markers";  // ~markers, visualization_msgs/MarkerArray
 constexpr const char* kClockTopic = "/clock";     // rosgraph_msgs/Clock
 constexpr const char* kMeshesTopic = "meshes";    // ~meshes, particle_sim/ClothMesh
+constexpr const char* kStatusTopic = "status";    // ~status, particle_sim/SimStatus
+constexpr const char* kDiagnosticsTopic = "/diagnostics";  // diagnostic_msgs/DiagnosticArray (diagnostic_updater)
+// dynamic_reconfigure's own, under the node's private namespace: ~set_parameters (service),
+// ~parameter_descriptions and ~parameter_updates (latched topics).
 
 // Services
 constexpr const char* kSpawnEmitter = "spawn_emitter";
@@ -35,11 +39,17 @@ constexpr const char* kRealTimeFactorParam = "real_time_factor";
 constexpr const char* kPausedParam = "paused";
 constexpr const char* kFrameIdParam = "frame_id";
 constexpr const char* kParentFrameIdParam = "parent_frame_id";
+constexpr const char* kFrameOffsetParam = "frame_offset";
 constexpr const char* kPublishClockParam = "publish_clock";
 constexpr const char* kParticleSizeParam = "particle_size";
 constexpr const char* kMaxParticlesParam = "max_particles_per_body";
 constexpr const char* kStatusPeriodParam = "status_period";
 constexpr const char* kColorByStrainParam = "color_by_strain";
 constexpr const char* kStrainColorMaxParam = "strain_color_max";
+constexpr const char* kDiagnosticPeriodParam = "diagnostic_period";  // also read by diagnostic_updater
+constexpr const char* kDiagnosticMaxStrainParam = "diagnostic_max_strain";
+// Live (dynamic_reconfigure, config/Sim.cfg) and also read at start from the parameter server:
+// rate and real_time_factor above, and gravity_x/y/z, global_damping, wind_x/y/z, integrator,
+// body, spring_class, stiffness, damping, whose start values come from the scene.
 }  // namespace names
 }  // namespace particle_sim

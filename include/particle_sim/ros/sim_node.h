@@ -1,11 +1,16 @@
 #pragma once
 
+#include <boost/thread/recursive_mutex.hpp>
+#include <diagnostic_updater/diagnostic_updater.h>
+#include <dynamic_reconfigure/server.h>
+#include <ros/callback_queue.h>
 #include <ros/ros.h>
 #include <std_srvs/Trigger.h>
 #include <tf2_ros/buffer.h>
 #include <tf2_ros/transform_broadcaster.h>
 #include <tf2_ros/transform_listener.h>
 
+#include <atomic>
 #include <chrono>
 #include <memory>
 #include <set>
@@ -16,6 +21,8 @@
 #include "particle_sim/RemoveBody.h"
 #include "particle_sim/SetSpringConstants.h"
 #include "particle_sim/SetWind.h"
+#include "particle_sim/SimConfig.h"
+#include "particle_sim/SimStatus.h"
 #include "particle_sim/SpawnCloth.h"
 #include "particle_sim/SpawnEmitter.h"
 #include "particle_sim/SpawnJelly.h"
@@ -39,34 +46,52 @@ struct NodeSettings
   double real_time_factor = 1.0;   ///< ~real_time_factor [-]; 0 = as fast as possible
   bool paused = false;             ///< ~paused: start paused
   std::string frame_id = "world";  ///< ~frame_id: frame of every marker
-  std::string parent_frame_id = "map";  ///< ~parent_frame_id: tf parent of frame_id (identity)
+  std::string parent_frame_id = "map";  ///< ~parent_frame_id: tf parent of frame_id
+  std::vector<double> frame_offset = {0.0, 0.0, 0.0};  ///< ~frame_offset [m]: frame_id's origin in parent_frame_id
   bool publish_clock = true;       ///< ~publish_clock: publish /clock from sim time
   double particle_size = 0.05;     ///< ~particle_size [m]
   int max_particles_per_body = 0;  ///< ~max_particles_per_body; 0 = the scene's value
   double status_period = 1.0;      ///< ~status_period [s] of wall time between status lines; 0 = none
   bool color_by_strain = false;    ///< ~color_by_strain: colour cloth and jelly by strain
   double strain_color_max = 0.1;   ///< ~strain_color_max [-]: strain drawn fully red
+  double diagnostic_period = 1.0;  ///< ~diagnostic_period [s] of wall time between /diagnostics updates
+  double diagnostic_max_strain = 0.5;  ///< ~diagnostic_max_strain [-]: a larger max strain is a WARN
 };
 
-/// The simulator node: owns a core::World, steps it at a fixed rate on steady (wall) time, serves
-/// its services between steps and publishes markers, tf and /clock.
+/// Diagnostic thresholds (README "Diagnostics").
+constexpr double kRealTimeFactorWarnRatio = 0.9;  ///< WARN when the measured real-time factor is below 90 % of the target
+
+
+/// The simulator: owns a core::World, steps it at a fixed rate on steady (wall) time, serves its
+/// services, dynamic_reconfigure and diagnostics between steps and publishes markers, meshes,
+/// status, tf and /clock. Used by the node's main() and by the nodelet (SimNodelet), which runs
+/// run() in a thread of its own.
+///
+/// Every callback of the simulator (services, dynamic_reconfigure) goes to the simulator's own
+/// callback queue, served by run() between ticks: the world is only ever touched by one thread,
+/// whether it runs in a node or in a nodelet manager with many threads.
 class SimNode
 {
 public:
-  SimNode(ros::NodeHandle node, ros::NodeHandle private_node);
+  /// `node` for /clock, `private_node` for every other name; `name` is the node's (or nodelet's)
+  /// name, used as the diagnostics' hardware id and in their name.
+  SimNode(ros::NodeHandle node, ros::NodeHandle private_node, const std::string& name);
 
   /// Reads parameters and loads the scene; false (after logging why) when they are unusable.
   bool initialize();
 
-  /// Runs until ROS shuts down: spin callbacks, step, publish, sleep until the next tick.
+  /// Runs until ROS shuts down or stop() is called: serve callbacks, step, publish, sleep until the
+  /// next tick.
   void run();
+  /// Makes run() return after its current tick (thread-safe).
+  void stop() { stop_requested_ = true; }
 
 private:
   // One tick: `substeps_` physics steps unless paused, then publish.
   void tick();
   void stepPhysics(std::uint64_t steps);
   void publish();
-  void printStatus(double wall_elapsed);
+  void printStatus();
 
   // A particle pinned to a tf frame: its target is the frame's pose applied to `offset`, looked
   // up once per tick and approached linearly over the tick's substeps.
@@ -102,8 +127,46 @@ private:
   bool unpausePhysics(std_srvs::Trigger::Request& req, std_srvs::Trigger::Response& res);
   bool step(Step::Request& req, Step::Response& res);
 
+  // Spring constants, shared by ~set_spring_constants and dynamic_reconfigure.
+  core::Status applySpringConstants(const std::string& body, const std::string& spring_class, double stiffness,
+                                    double damping);
+  // The constants of the first spring of `spring_class` ("all": of any class) of `body`.
+  bool readSpringConstants(const std::string& body, const std::string& spring_class, double& stiffness,
+                           double& damping) const;
+
+  // dynamic_reconfigure: the current state as a config, and a change from rqt or dynparam.
+  SimConfig currentConfig() const;
+  void reconfigure(SimConfig& config, std::uint32_t level);
+  // The loop's timing after a change of ~rate or ~real_time_factor.
+  void updateSubsteps();
+
+  // ~status and /diagnostics.
+  SimStatus::Ptr buildStatus(const ros::Time& stamp) const;
+  void produceDiagnostics(diagnostic_updater::DiagnosticStatusWrapper& stat);
+
+  // Wall time and physics time over a window (status line, diagnostics).
+  struct Window
+  {
+    std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now();
+    double sim_time_at_start = 0.0;
+    std::uint64_t steps = 0;
+    double step_seconds = 0.0;
+    bool paused = false;  // paused or stepped by ~step at some time in the window
+    void restart(double sim_time, bool is_paused)
+    {
+      start = std::chrono::steady_clock::now();
+      sim_time_at_start = sim_time;
+      steps = 0;
+      step_seconds = 0.0;
+      paused = is_paused;
+    }
+  };
+
+  ros::CallbackQueue callback_queue_;  // before the node handles that use it
   ros::NodeHandle node_;
   ros::NodeHandle private_node_;
+  std::string name_;
+  std::atomic<bool> stop_requested_{false};
   NodeSettings settings_;
   MarkerStyle style_;
   scene::SceneDef scene_;  // as loaded: scripted frames and what follows frames
@@ -114,6 +177,13 @@ private:
   ros::Publisher markers_pub_;
   ros::Publisher meshes_pub_;
   ros::Publisher clock_pub_;
+  ros::Publisher status_pub_;
+  core::IntegratorDef default_integrator_;  // of bodies spawned by services (dynamic_reconfigure "integrator")
+
+  boost::recursive_mutex reconfigure_mutex_;
+  std::unique_ptr<dynamic_reconfigure::Server<SimConfig>> reconfigure_server_;
+  SimConfig config_;  // as last applied
+  std::unique_ptr<diagnostic_updater::Updater> diagnostics_;
   std::unique_ptr<tf2_ros::TransformBroadcaster> tf_broadcaster_;
   std::vector<ros::ServiceServer> services_;
 
@@ -129,10 +199,9 @@ private:
   double last_tf_time_ = -1.0;
   double last_clock_time_ = -1.0;
 
-  // Measurements for the status line.
-  std::uint64_t steps_since_status_ = 0;
-  double step_seconds_since_status_ = 0.0;
-  double sim_time_at_status_ = 0.0;
+  // Measurements for the status line and for diagnostics.
+  Window status_window_;
+  Window diagnostics_window_;
 };
 
 }  // namespace ros_interface

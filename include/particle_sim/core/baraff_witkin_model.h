@@ -1,0 +1,91 @@
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "particle_sim/core/baraff_witkin.h"
+#include "particle_sim/core/implicit_euler_solver.h"
+#include "particle_sim/core/spring.h"
+#include "particle_sim/core/status.h"
+
+namespace particle_sim
+{
+namespace core
+{
+/// A cloth's Baraff–Witkin energies: rest data per triangle and per interior edge, and the
+/// stiffness and damping of each condition class.
+///
+/// The scene's stiffness is per unit rest area, so a cloth behaves the same whatever its
+/// triangulation: a triangle of rest area a gets k = stiffness / a for stretch and shear, so its
+/// energy k/2 |C|² = stiffness · a · ε²/2 with ε the strain [stiffness in N/m]; a bend element gets
+/// k = stiffness · |e|² / (a₁ + a₂) (its rest edge length e and the areas of its two triangles),
+/// the discrete-shells scaling [stiffness in N·m]. Damping scales alike.
+struct BaraffWitkinDef
+{
+  std::vector<BwTriangle> triangles;
+  std::vector<BwBend> bends;
+  std::vector<double> bend_weights;  ///< per bend, |e|² / (a₁ + a₂) [-]
+  SpringConstants stretch{500.0, 0.5};  ///< [N/m], [N·s/m]
+  SpringConstants shear{50.0, 0.05};    ///< [N/m], [N·s/m]
+  SpringConstants bend{1e-3, 1e-5};     ///< [N·m], [N·m·s]
+  double b_u = 1.0;  ///< rest stretch along u (< 1 shrinks, > 1 grows the cloth)
+  double b_v = 1.0;  ///< rest stretch along v
+
+  bool empty() const { return triangles.empty(); }
+};
+
+/// Builds the Baraff–Witkin rest data of a triangle surface from per-vertex (u, v) coordinates
+/// [m] and the rest positions (for the rest dihedral angles); false (with `error`) when a
+/// triangle is degenerate in (u, v).
+bool buildBaraffWitkin(const std::vector<Eigen::Vector3d>& positions, const std::vector<Eigen::Vector2d>& uvs,
+                       const std::vector<Eigen::Vector3i>& triangles, BaraffWitkinDef& def, std::string& error);
+
+/// Evaluates a cloth's Baraff–Witkin forces, energy and Jacobians. The implicit solver's block
+/// indices of every element are looked up once, in setPattern().
+class BaraffWitkinModel
+{
+public:
+  explicit BaraffWitkinModel(const BaraffWitkinDef& def) : def_(def) {}
+
+  const BaraffWitkinDef& definition() const { return def_; }
+  /// Sets stiffness and damping of one class (stretch, shear or bend).
+  void setConstants(SpringClass spring_class, double stiffness, double damping);
+  const SpringConstants& constants(SpringClass spring_class) const;
+
+  /// The particle pairs each element couples (for the solver's pattern).
+  void coupledPairs(std::vector<std::pair<int, int>>& pairs) const;
+  /// Looks up every element's blocks in `solver` (after its pattern is set).
+  void setPattern(const ImplicitEulerSolver& solver);
+
+  /// force += −k ∂C C − k_d ∂C Ċ for every condition.
+  void addForces(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v, Eigen::Matrix3Xd& force) const;
+  /// Adds every element's blocks K_mn = −k (∂C_m ∂C_nᵀ + H_mn C) and D_mn = −k_d ∂C_m ∂C_nᵀ to the
+  /// solver, in the definite form: the H C term only for stretched stretch conditions (where it
+  /// is negative semi-definite), never for shear and bend (Gauss–Newton), so the system stays
+  /// positive definite.
+  void addJacobians(const Eigen::Matrix3Xd& x, ImplicitEulerSolver& solver) const;
+  /// Adds each element's Gershgorin row sums k |∂C/∂x_m| Σ_n |∂C/∂x_n| (and alike with damping) at
+  /// the rest positions `x`, for the body's stability bound.
+  void addStabilityRows(const std::vector<Eigen::Vector3d>& x, std::vector<double>& stiffness_rows,
+                        std::vector<double>& damping_rows) const;
+  /// Σ k/2 C² [J].
+  double energy(const Eigen::Matrix3Xd& x) const;
+  /// Per triangle, max(|w_u|/b_u, |w_v|/b_v) − 1; the largest over the cloth.
+  double maxStrain(const Eigen::Matrix3Xd& x) const;
+  /// Per vertex, the largest strain of its triangles (assigned into `strains`, sized by the caller).
+  void vertexStrains(const Eigen::Matrix3Xd& x, std::vector<double>& strains) const;
+
+private:
+  Eigen::Matrix3d corners(const Eigen::Matrix3Xd& x, const BwTriangle& t) const;
+  Eigen::Matrix<double, 3, 4> corners(const Eigen::Matrix3Xd& x, const BwBend& b) const;
+
+  BaraffWitkinDef def_;
+  std::vector<std::array<int, 9>> triangle_blocks_;  // block (m, n) at 3m + n
+  std::vector<std::array<int, 16>> bend_blocks_;     // block (m, n) at 4m + n
+};
+
+}  // namespace core
+}  // namespace particle_sim

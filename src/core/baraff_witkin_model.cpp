@@ -1,0 +1,290 @@
+#include "particle_sim/core/baraff_witkin_model.h"
+
+#include <map>
+#include <string>
+
+namespace particle_sim
+{
+namespace core
+{
+bool buildBaraffWitkin(const std::vector<Eigen::Vector3d>& positions, const std::vector<Eigen::Vector2d>& uvs,
+                       const std::vector<Eigen::Vector3i>& triangles, BaraffWitkinDef& def, std::string& error)
+{
+  def.triangles.clear();
+  def.bends.clear();
+  def.bend_weights.clear();
+
+  // Triangles: rest map from (u, v).
+  for (std::size_t k = 0; k < triangles.size(); ++k)
+  {
+    const Eigen::Vector3i& t = triangles[k];
+    BwTriangle rest;
+    if (!makeBwTriangle(t[0], t[1], t[2], uvs[t[0]], uvs[t[1]], uvs[t[2]], rest))
+    {
+      error = "triangles[" + std::to_string(k) + "] has no area in (u, v): its texture coordinates are degenerate";
+      return false;
+    }
+    def.triangles.push_back(rest);
+  }
+
+  // Interior edges: the directed edge a -> b of one triangle and its two opposite vertices.
+  struct Side
+  {
+    int triangle, a, b, opposite;
+  };
+  std::map<std::pair<int, int>, std::vector<Side>> edges;
+  for (std::size_t k = 0; k < triangles.size(); ++k)
+  {
+    const Eigen::Vector3i& t = triangles[k];
+    for (int c = 0; c < 3; ++c)
+    {
+      const int a = t[c], b = t[(c + 1) % 3], opposite = t[(c + 2) % 3];
+      edges[{std::min(a, b), std::max(a, b)}].push_back({static_cast<int>(k), a, b, opposite});
+    }
+  }
+  for (const auto& [edge, sides] : edges)
+  {
+    if (sides.size() != 2) continue;  // a border edge (or a non-manifold one) bends nothing
+    BwBend bend;
+    bend.v = {sides[0].opposite, sides[0].a, sides[0].b, sides[1].opposite};
+    Eigen::Matrix<double, 3, 4> x;
+    for (int m = 0; m < 4; ++m) x.col(m) = positions[bend.v[m]];
+    bend.rest_angle = dihedralAngle(x);
+    const double length2 = (uvs[sides[0].b] - uvs[sides[0].a]).squaredNorm();
+    def.bends.push_back(bend);
+    def.bend_weights.push_back(length2 /
+                               (def.triangles[sides[0].triangle].area + def.triangles[sides[1].triangle].area));
+  }
+  return true;
+}
+
+void BaraffWitkinModel::setConstants(SpringClass spring_class, double stiffness, double damping)
+{
+  SpringConstants& c = spring_class == SpringClass::Stretch ? def_.stretch
+                       : spring_class == SpringClass::Shear ? def_.shear
+                                                            : def_.bend;
+  c = {stiffness, damping};
+}
+
+const SpringConstants& BaraffWitkinModel::constants(SpringClass spring_class) const
+{
+  return spring_class == SpringClass::Stretch ? def_.stretch : spring_class == SpringClass::Shear ? def_.shear : def_.bend;
+}
+
+void BaraffWitkinModel::coupledPairs(std::vector<std::pair<int, int>>& pairs) const
+{
+  for (const BwTriangle& t : def_.triangles)
+    for (int m = 0; m < 3; ++m)
+      for (int n = m + 1; n < 3; ++n) pairs.emplace_back(t.v[m], t.v[n]);
+  for (const BwBend& b : def_.bends)
+    for (int m = 0; m < 4; ++m)
+      for (int n = m + 1; n < 4; ++n) pairs.emplace_back(b.v[m], b.v[n]);
+}
+
+void BaraffWitkinModel::setPattern(const ImplicitEulerSolver& solver)
+{
+  triangle_blocks_.clear();
+  bend_blocks_.clear();
+  for (const BwTriangle& t : def_.triangles)
+  {
+    std::array<int, 9> blocks;
+    for (int m = 0; m < 3; ++m)
+      for (int n = 0; n < 3; ++n) blocks[3 * m + n] = solver.blockIndex(t.v[m], t.v[n]);
+    triangle_blocks_.push_back(blocks);
+  }
+  for (const BwBend& b : def_.bends)
+  {
+    std::array<int, 16> blocks;
+    for (int m = 0; m < 4; ++m)
+      for (int n = 0; n < 4; ++n) blocks[4 * m + n] = solver.blockIndex(b.v[m], b.v[n]);
+    bend_blocks_.push_back(blocks);
+  }
+}
+
+Eigen::Matrix3d BaraffWitkinModel::corners(const Eigen::Matrix3Xd& x, const BwTriangle& t) const
+{
+  Eigen::Matrix3d c;
+  for (int m = 0; m < 3; ++m) c.col(m) = x.col(t.v[m]);
+  return c;
+}
+
+Eigen::Matrix<double, 3, 4> BaraffWitkinModel::corners(const Eigen::Matrix3Xd& x, const BwBend& b) const
+{
+  Eigen::Matrix<double, 3, 4> c;
+  for (int m = 0; m < 4; ++m) c.col(m) = x.col(b.v[m]);
+  return c;
+}
+
+void BaraffWitkinModel::addForces(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v, Eigen::Matrix3Xd& force) const
+{
+  // Each condition C with gradient g (over its corners) and corner velocities u pushes with
+  // f = −k g C − k_d g Ċ, Ċ = g·u.
+  for (const BwTriangle& t : def_.triangles)
+  {
+    const Eigen::Matrix3d xc = corners(x, t);
+    Gradient9 u;
+    for (int m = 0; m < 3; ++m) u.segment<3>(3 * m) = v.col(t.v[m]);
+    Eigen::Vector2d c;
+    std::array<Gradient9, 2> g;
+    stretchCondition(t, xc, def_.b_u, def_.b_v, c, g);
+    double shear;
+    Gradient9 gs;
+    shearCondition(t, xc, shear, gs);
+    Gradient9 f = Gradient9::Zero();
+    for (int d = 0; d < 2; ++d)
+      f -= (def_.stretch.stiffness * c[d] + def_.stretch.damping * g[d].dot(u)) / t.area * g[d];
+    f -= (def_.shear.stiffness * shear + def_.shear.damping * gs.dot(u)) / t.area * gs;
+    for (int m = 0; m < 3; ++m) force.col(t.v[m]) += f.segment<3>(3 * m);
+  }
+  for (std::size_t k = 0; k < def_.bends.size(); ++k)
+  {
+    const BwBend& b = def_.bends[k];
+    double c;
+    Gradient12 g;
+    bendCondition(b, corners(x, b), c, g);
+    Gradient12 u;
+    for (int m = 0; m < 4; ++m) u.segment<3>(3 * m) = v.col(b.v[m]);
+    const Gradient12 f = -def_.bend_weights[k] * (def_.bend.stiffness * c + def_.bend.damping * g.dot(u)) * g;
+    for (int m = 0; m < 4; ++m) force.col(b.v[m]) += f.segment<3>(3 * m);
+  }
+}
+
+void BaraffWitkinModel::addJacobians(const Eigen::Matrix3Xd& x, ImplicitEulerSolver& solver) const
+{
+  for (std::size_t k = 0; k < def_.triangles.size(); ++k)
+  {
+    const BwTriangle& t = def_.triangles[k];
+    const Eigen::Matrix3d xc = corners(x, t);
+    Eigen::Vector2d c;
+    std::array<Gradient9, 2> g;
+    std::array<Hessian9, 2> h;
+    stretchCondition(t, xc, def_.b_u, def_.b_v, c, g, &h);
+    double shear;
+    Gradient9 gs;
+    shearCondition(t, xc, shear, gs);
+
+    // K = −k (g gᵀ + H C) for stretch (H C only when stretched), −k g gᵀ for shear; D = −k_d g gᵀ.
+    const double ks = def_.stretch.stiffness / t.area, ds = def_.stretch.damping / t.area;
+    const double kh = def_.shear.stiffness / t.area, dh = def_.shear.damping / t.area;
+    Hessian9 dfdx = -kh * gs * gs.transpose();
+    Hessian9 dfdv = -dh * gs * gs.transpose();
+    for (int d = 0; d < 2; ++d)
+    {
+      const Hessian9 outer = g[d] * g[d].transpose();
+      dfdx -= ks * outer;
+      if (c[d] > 0.0) dfdx -= ks * c[d] * h[d];
+      dfdv -= ds * outer;
+    }
+    for (int m = 0; m < 3; ++m)
+      for (int n = 0; n < 3; ++n)
+        solver.addBlock(triangle_blocks_[k][3 * m + n], dfdx.block<3, 3>(3 * m, 3 * n), dfdv.block<3, 3>(3 * m, 3 * n));
+  }
+  for (std::size_t k = 0; k < def_.bends.size(); ++k)
+  {
+    const BwBend& b = def_.bends[k];
+    double c;
+    Gradient12 g;
+    bendCondition(b, corners(x, b), c, g);
+    const Hessian12 outer = g * g.transpose();
+    const double w = def_.bend_weights[k];
+    for (int m = 0; m < 4; ++m)
+      for (int n = 0; n < 4; ++n)
+        solver.addBlock(bend_blocks_[k][4 * m + n], -w * def_.bend.stiffness * outer.block<3, 3>(3 * m, 3 * n),
+                        -w * def_.bend.damping * outer.block<3, 3>(3 * m, 3 * n));
+  }
+}
+
+void BaraffWitkinModel::addStabilityRows(const std::vector<Eigen::Vector3d>& x, std::vector<double>& stiffness_rows,
+                                         std::vector<double>& damping_rows) const
+{
+  // Each condition with corner gradient norms |g_m| and stiffness k adds k |g_m| Σ_n |g_n| to row m.
+  auto add = [&](const auto& vertices, const auto& norms, double k, double d) {
+    double sum = 0.0;
+    for (double g : norms) sum += g;
+    for (std::size_t m = 0; m < norms.size(); ++m)
+    {
+      stiffness_rows[vertices[m]] += k * norms[m] * sum;
+      damping_rows[vertices[m]] += d * norms[m] * sum;
+    }
+  };
+  for (const BwTriangle& t : def_.triangles)
+  {
+    // At rest |ŵ| = 1 and |w_u| = |w_v| = 1: |∂C_u/∂x_m| = a |dwu_m|, |∂C_shear/∂x_m| <= a (|dwu_m| + |dwv_m|);
+    // with k = stiffness / a per condition.
+    std::array<double, 3> u, v, shear;
+    for (int m = 0; m < 3; ++m)
+    {
+      u[m] = t.area * std::abs(t.dwu[m]);
+      v[m] = t.area * std::abs(t.dwv[m]);
+      shear[m] = u[m] + v[m];
+    }
+    add(t.v, u, def_.stretch.stiffness / t.area, def_.stretch.damping / t.area);
+    add(t.v, v, def_.stretch.stiffness / t.area, def_.stretch.damping / t.area);
+    add(t.v, shear, def_.shear.stiffness / t.area, def_.shear.damping / t.area);
+  }
+  for (std::size_t k = 0; k < def_.bends.size(); ++k)
+  {
+    const BwBend& b = def_.bends[k];
+    Eigen::Matrix<double, 3, 4> corners_at_rest;
+    for (int m = 0; m < 4; ++m) corners_at_rest.col(m) = x[b.v[m]];
+    double c;
+    Gradient12 g;
+    bendCondition(b, corners_at_rest, c, g);
+    std::array<double, 4> norms;
+    for (int m = 0; m < 4; ++m) norms[m] = g.segment<3>(3 * m).norm();
+    add(b.v, norms, def_.bend_weights[k] * def_.bend.stiffness, def_.bend_weights[k] * def_.bend.damping);
+  }
+}
+
+double BaraffWitkinModel::energy(const Eigen::Matrix3Xd& x) const
+{
+  double energy = 0.0;
+  for (const BwTriangle& t : def_.triangles)
+  {
+    const Eigen::Matrix3d xc = corners(x, t);
+    Eigen::Vector2d c;
+    std::array<Gradient9, 2> g;
+    stretchCondition(t, xc, def_.b_u, def_.b_v, c, g);
+    double shear;
+    Gradient9 gs;
+    shearCondition(t, xc, shear, gs);
+    energy += 0.5 * (def_.stretch.stiffness * c.squaredNorm() + def_.shear.stiffness * shear * shear) / t.area;
+  }
+  for (std::size_t k = 0; k < def_.bends.size(); ++k)
+  {
+    double c;
+    Gradient12 g;
+    bendCondition(def_.bends[k], corners(x, def_.bends[k]), c, g);
+    energy += 0.5 * def_.bend_weights[k] * def_.bend.stiffness * c * c;
+  }
+  return energy;
+}
+
+namespace
+{
+double triangleStrain(const BwTriangle& t, const Eigen::Matrix3d& xc, double b_u, double b_v)
+{
+  const Eigen::Vector3d wu = t.dwu[0] * xc.col(0) + t.dwu[1] * xc.col(1) + t.dwu[2] * xc.col(2);
+  const Eigen::Vector3d wv = t.dwv[0] * xc.col(0) + t.dwv[1] * xc.col(1) + t.dwv[2] * xc.col(2);
+  return std::max(wu.norm() / b_u, wv.norm() / b_v) - 1.0;
+}
+}  // namespace
+
+double BaraffWitkinModel::maxStrain(const Eigen::Matrix3Xd& x) const
+{
+  double strain = 0.0;
+  for (const BwTriangle& t : def_.triangles) strain = std::max(strain, triangleStrain(t, corners(x, t), def_.b_u, def_.b_v));
+  return strain;
+}
+
+void BaraffWitkinModel::vertexStrains(const Eigen::Matrix3Xd& x, std::vector<double>& strains) const
+{
+  for (const BwTriangle& t : def_.triangles)
+  {
+    const double strain = triangleStrain(t, corners(x, t), def_.b_u, def_.b_v);
+    for (int m = 0; m < 3; ++m) strains[t.v[m]] = std::max(strains[t.v[m]], strain);
+  }
+}
+
+}  // namespace core
+}  // namespace particle_sim

@@ -1,0 +1,126 @@
+// rostest: the node's diagnostics (README "Diagnostics"): levels and values.
+
+#include <diagnostic_msgs/DiagnosticStatus.h>
+#include <gtest/gtest.h>
+#include <ros/ros.h>
+
+#include "node_listener.h"
+#include "sim_probe.h"
+
+#include "particle_sim/SetSpringConstants.h"
+#include "particle_sim/SpawnRope.h"
+
+using diagnostic_msgs::DiagnosticStatus;
+using particle_sim_test::call;
+using particle_sim_test::SimProbe;
+using particle_sim_test::waitForWall;
+
+namespace
+{
+std::string value(const DiagnosticStatus& status, const std::string& key)
+{
+  for (const auto& kv : status.values)
+    if (kv.key == key) return kv.value;
+  return "";
+}
+
+class DiagnosticsTest : public ::testing::Test
+{
+protected:
+  static void SetUpTestSuite()
+  {
+    for (const char* s : {"set_parameters", "set_spring_constants", "spawn_rope"})
+      ASSERT_TRUE(ros::service::waitForService(std::string("/particle_sim/") + s, ros::Duration(30.0))) << s;
+  }
+  // Waits for a diagnostic status, received after this call, that satisfies `predicate`; returns it
+  // (or the last one received if none did).
+  template <typename Predicate>
+  DiagnosticStatus waitForDiagnostic(Predicate predicate, double seconds = 30.0)
+  {
+    const std::size_t first = probe_.diagnostics().size();
+    DiagnosticStatus found;
+    found.level = 255;
+    waitForWall(
+        [&] {
+          const auto all = probe_.diagnostics();
+          for (std::size_t i = first; i < all.size(); ++i)
+          {
+            found = all[i];
+            if (predicate(all[i])) return true;
+          }
+          return false;
+        },
+        seconds);
+    return found;
+  }
+  ros::NodeHandle nh_;
+  SimProbe probe_{nh_};
+};
+}  // namespace
+
+TEST_F(DiagnosticsTest, OkWhenKeepingUpThenWarnUnderLoadThenErrorAfterAFrozenBody)
+{
+  // Keeping up with real time (allowing for a loaded machine: one OK update is enough).
+  DiagnosticStatus status = waitForDiagnostic([](const DiagnosticStatus& s) { return s.level == DiagnosticStatus::OK; });
+  ASSERT_EQ(status.level, DiagnosticStatus::OK) << status.message;
+  EXPECT_EQ(status.message, "running");
+  EXPECT_EQ(value(status, "live particles"), "64");  // the 8 x 8 cloth
+  EXPECT_EQ(value(status, "frozen bodies"), "0");
+  EXPECT_NE(value(status, "solver iterations (max, last step)"), "0");  // implicit Euler
+  EXPECT_NE(value(status, "step time [us]"), "");
+  EXPECT_NE(value(status, "max strain"), "");
+  EXPECT_NE(value(status, "solver residual (max, last step)"), "");
+
+  // Under load: 1000 times real time is out of reach for an implicit 8 x 8 cloth at dt = 2 ms
+  // (500 000 steps per second).
+  probe_.reconfigure({{"real_time_factor", 1000.0}});
+  status = waitForDiagnostic([](const DiagnosticStatus& s) { return s.level == DiagnosticStatus::WARN; });
+  ASSERT_EQ(status.level, DiagnosticStatus::WARN) << status.message;
+  EXPECT_NE(status.message.find("real-time factor"), std::string::npos) << status.message;
+  EXPECT_EQ(value(status, "target real-time factor"), "1000");
+
+  // Back to 1: OK again.
+  probe_.reconfigure({{"real_time_factor", 1.0}});
+  status = waitForDiagnostic([](const DiagnosticStatus& s) { return s.level == DiagnosticStatus::OK; });
+  ASSERT_EQ(status.level, DiagnosticStatus::OK) << status.message;
+
+  // A rope stepped by symplectic Euler far beyond its stability limit turns non-finite and freezes:
+  // ERROR, naming the body, for as long as it is frozen.
+  particle_sim::SpawnRope::Request rope;
+  rope.name = "doomed";
+  rope.particles = 6;
+  rope.start.z = 1.0;
+  rope.end.x = 1.0;
+  rope.end.z = 1.0;
+  rope.mass = 0.1;
+  rope.stretch_stiffness = 100.0;
+  rope.pins = {0};
+  rope.integrator = "symplectic_euler";
+  const auto spawned = call<particle_sim::SpawnRope>("spawn_rope", rope);
+  ASSERT_TRUE(spawned.success) << spawned.message;
+  particle_sim::SetSpringConstants::Request stiff;
+  stiff.body = "doomed";
+  stiff.spring_class = "all";
+  stiff.stiffness = 1e12;
+  const auto set = call<particle_sim::SetSpringConstants>("set_spring_constants", stiff);
+  ASSERT_TRUE(set.success) << set.message;
+
+  status = waitForDiagnostic([](const DiagnosticStatus& s) { return s.level == DiagnosticStatus::ERROR; });
+  ASSERT_EQ(status.level, DiagnosticStatus::ERROR) << status.message;
+  EXPECT_NE(status.message.find("frozen bodies: doomed"), std::string::npos) << status.message;
+  EXPECT_EQ(value(status, "frozen bodies"), "1");
+  EXPECT_TRUE(waitForWall([&] { return probe_.body("doomed").frozen; }));
+  EXPECT_FALSE(probe_.body("doomed").frozen_reason.empty());
+  EXPECT_FALSE(probe_.body("sheet").frozen);  // the rest of the world goes on
+  status = waitForDiagnostic([](const DiagnosticStatus&) { return true; });
+  EXPECT_EQ(status.level, DiagnosticStatus::ERROR) << "a frozen body stays an ERROR";
+}
+
+int main(int argc, char** argv)
+{
+  testing::InitGoogleTest(&argc, argv);
+  ros::init(argc, argv, "diagnostics_test");
+  ros::AsyncSpinner spinner(1);
+  spinner.start();
+  return RUN_ALL_TESTS();
+}
