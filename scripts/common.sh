@@ -12,7 +12,7 @@ PARTICLE_SIM_PACKAGES=(
   python3-roslaunch python3-rosservice python3-rostopic rosbash
   libdynamic-reconfigure-config-init-mutex-dev python3-dynamic-reconfigure libdiagnostic-updater-dev
   ros-diagnostic-msgs libnodelet-dev libnodeletlib-dev libnodeletlib-tools libbondcpp-dev pluginlib-dev
-  librosbag-dev python3-rosbag python3-rosnode python3-tf2-msgs
+  librosbag-dev python3-rosbag python3-rosnode python3-tf2-msgs rviz
 )
 
 # ROS tools are Python programs that need Debian's python3, not a pyenv one found first on PATH.

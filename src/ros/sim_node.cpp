@@ -254,13 +254,29 @@ void SimNode::stepPhysics(std::uint64_t steps)
     window->steps += steps;
   }
 
-  // A body that froze (non-finite state) is reported once; the rest of the world goes on.
+  // A body that froze is reported once; other stability events (substeps added, blow-ups rolled
+  // back, energy removed) and auto's choices as they happen, at most every 2 s each. The rest of
+  // the world goes on.
   for (const auto& body : world_->bodies())
   {
     if (body->kind() != core::BodyKind::SpringNetwork) continue;
     const auto& spring_body = static_cast<const core::SpringNetworkBody&>(*body);
     if (spring_body.frozen() && reported_frozen_.insert(body->name()).second)
       ROS_ERROR_NAMED("sim", "body '%s' is frozen: %s", body->name().c_str(), spring_body.frozenReason().c_str());
+    long long& seen = reported_events_[body->name()];
+    if (spring_body.stabilityEvents() > seen)
+    {
+      ROS_WARN_THROTTLE_NAMED(2.0, "stability", "body '%s': %lld stability events; last: %s", body->name().c_str(),
+                              spring_body.stabilityEvents(), spring_body.lastStabilityEvent().c_str());
+      events_since_diagnostics_ += spring_body.stabilityEvents() - seen;
+      seen = spring_body.stabilityEvents();
+    }
+    std::string& choice = reported_auto_[body->name()];
+    if (spring_body.autoChoice() != choice)
+    {
+      choice = spring_body.autoChoice();
+      if (!choice.empty()) ROS_INFO_NAMED("stability", "body '%s' auto: %s", body->name().c_str(), choice.c_str());
+    }
   }
 }
 
@@ -571,9 +587,27 @@ core::Status SimNode::applySpringConstants(const std::string& body_name, const s
   core::Status status = body->setSpringConstants(spring_class, stiffness, damping);
   if (status)
   {
+    // Say what the change means for stability: the new frequency bound and, for an explicit
+    // integrator, how many substeps a step of dt will take (auto re-decides at the next step).
     std::ostringstream message;
     message << "set " << class_name << " springs of '" << body_name << "' to " << stiffness << " N/m, " << damping
-            << " N·s/m";
+            << " N·s/m; omega_max <= " << body->frequencyBound() << " 1/s";
+    const core::IntegratorType type = body->integrator().type;
+    const double limit = core::stabilityLimit(type);
+    if (std::isfinite(limit) && type != core::IntegratorType::Auto)
+    {
+      const double product = world_->dt() * (body->frequencyBound() + body->dampingBound());
+      const int substeps = std::max(1, static_cast<int>(std::ceil(product / (0.9 * limit))));
+      message << ", so " << core::toString(type) << " takes " << std::min(substeps, body->integrator().max_substeps)
+              << " substep(s) per step of " << world_->dt() << " s";
+      if (substeps > body->integrator().max_substeps)
+        message << " (it would need " << substeps << ", above max_substeps: expect it to freeze)";
+    }
+    else if (type == core::IntegratorType::Auto)
+    {
+      const double product = world_->dt() * (body->frequencyBound() + body->dampingBound());
+      message << ", so auto will use " << (product <= 1.0 ? "verlet" : "implicit_euler");
+    }
     status.message = message.str();
   }
   return status;
@@ -728,6 +762,11 @@ bool SimNode::spawnCloth(SpawnCloth::Request& req, SpawnCloth::Response& res)
 {
   core::ClothGridDef def;
   def.name = req.name;
+  if (!req.model.empty() && !core::parseClothModel(req.model, def.model))
+    return answer(res, core::Status::failure("model = '" + req.model +
+                                             "' is not a cloth model; allowed: springs, baraff_witkin"));
+  if (req.b_u != 0.0) def.b_u = req.b_u;
+  if (req.b_v != 0.0) def.b_v = req.b_v;
   def.origin = {req.origin.x, req.origin.y, req.origin.z};
   def.edge_u = {req.edge_u.x, req.edge_u.y, req.edge_u.z};
   def.edge_v = {req.edge_v.x, req.edge_v.y, req.edge_v.z};
@@ -744,8 +783,8 @@ bool SimNode::spawnCloth(SpawnCloth::Request& req, SpawnCloth::Response& res)
   if (core::Status s = parseIntegratorField(req.integrator, def.integrator); !s) return answer(res, s);
   core::Status status = world_->addClothGrid(def);
   if (status)
-    status.message = "spawned cloth '" + def.name + "' of " + std::to_string(def.nu) + " x " + std::to_string(def.nv) +
-                     " particles";
+    status.message = "spawned " + std::string(core::toString(def.model)) + " cloth '" + def.name + "' of " +
+                     std::to_string(def.nu) + " x " + std::to_string(def.nv) + " particles";
   else
     ROS_WARN_NAMED("services", "spawn_cloth refused: %s", status.message.c_str());
   return answer(res, status);
@@ -836,9 +875,29 @@ bool SimNode::step(Step::Request& req, Step::Response& res)
                                       std::to_string(kMaxSteps) + "]"));
   else
   {
+    // Stability events during these steps are part of the answer.
+    long long events_before = 0;
+    for (const auto& body : world_->bodies())
+    {
+      if (const auto* spring_body = world_->findSpringBody(body->name()))
+        events_before += spring_body->stabilityEvents();
+    }
     stepPhysics(req.steps);
     publish();
-    answer(res, core::Status::success("advanced " + std::to_string(req.steps) + " steps"));
+    std::string message = "advanced " + std::to_string(req.steps) + " steps";
+    long long events_after = 0;
+    std::string last_event;
+    for (const auto& body : world_->bodies())
+    {
+      const auto* spring_body = world_->findSpringBody(body->name());
+      if (!spring_body) continue;
+      events_after += spring_body->stabilityEvents();
+      if (!spring_body->lastStabilityEvent().empty())
+        last_event = "'" + body->name() + "': " + spring_body->lastStabilityEvent();
+    }
+    if (events_after > events_before)
+      message += "; " + std::to_string(events_after - events_before) + " stability events, last " + last_event;
+    answer(res, core::Status::success(message));
   }
   res.sim_time = world_->simTime();
   return true;
@@ -884,6 +943,11 @@ SimStatus::Ptr SimNode::buildStatus(const ros::Time& stamp) const
       b.model = spring_body.definition().baraff_witkin.empty() ? core::toString(core::ClothModel::Springs)
                                                                 : core::toString(core::ClothModel::BaraffWitkin);
       b.integrator = core::toString(spring_body.integrator().type);
+      b.last_integrator = core::toString(spring_body.lastIntegrator());
+      b.auto_choice = spring_body.autoChoice();
+      b.substeps = static_cast<std::uint32_t>(spring_body.lastSubsteps());
+      b.stability_events = static_cast<std::uint64_t>(spring_body.stabilityEvents());
+      b.last_stability_event = spring_body.lastStabilityEvent();
       b.kinetic_energy = spring_body.kineticEnergy();
       b.potential_energy = spring_body.potentialEnergy(env.gravity);
       b.max_strain = spring_body.maxStrain();
@@ -920,7 +984,7 @@ void SimNode::produceDiagnostics(diagnostic_updater::DiagnosticStatusWrapper& st
       frozen.push_back(body->name() + " (" + spring_body.frozenReason() + ")");
       continue;
     }
-    if (spring_body.integrator().type == core::IntegratorType::ImplicitEuler)
+    if (spring_body.lastIntegrator() == core::IntegratorType::ImplicitEuler)
     {
       iterations = std::max(iterations, spring_body.lastSolve().iterations);
       residual = std::max(residual, spring_body.lastSolve().relative_residual);
@@ -953,6 +1017,9 @@ void SimNode::produceDiagnostics(diagnostic_updater::DiagnosticStatusWrapper& st
   if (not_converged > 0)
     stat.mergeSummary(DiagnosticStatus::WARN,
                       std::to_string(not_converged) + " implicit solves did not reach cg_tolerance in their last step");
+  if (events_since_diagnostics_ > 0)
+    stat.mergeSummary(DiagnosticStatus::WARN, std::to_string(events_since_diagnostics_) +
+                                                  " stability events since the last report (see ~status)");
   if (max_strain > settings_.diagnostic_max_strain)
   {
     std::snprintf(text, sizeof(text), "max strain %.3g of '%s' above %.3g", max_strain, strained_body.c_str(),
@@ -972,6 +1039,8 @@ void SimNode::produceDiagnostics(diagnostic_updater::DiagnosticStatusWrapper& st
   stat.add("solver residual (max, last step)", residual);
   stat.add("max strain", max_strain);
   stat.add("frozen bodies", static_cast<int>(frozen.size()));
+  stat.add("stability events since last report", events_since_diagnostics_);
+  events_since_diagnostics_ = 0;
 }
 
 }  // namespace ros_interface

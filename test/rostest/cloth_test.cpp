@@ -249,6 +249,39 @@ TEST_F(ClothTest, SphereFollowsItsTfFrame)
   })) << "the sphere marker is at " << listener_.latest("_colliders", 0).pose.position.x;
 }
 
+TEST_F(ClothTest, BaraffWitkinClothSpawnsPublishesAndTakesItsConstants)
+{
+  SpawnCloth::Request req = clothRequest("bw", -2.0);
+  req.model = "baraff_witkin";
+  req.stretch_stiffness = 2000.0;  // per unit area [N/m]
+  req.shear_stiffness = 100.0;
+  req.bend_stiffness = 0.005;      // [N·m]
+  req.bend_damping = 5e-5;
+  req.max_strain = 0.0;
+  const auto res = call<SpawnCloth>("spawn_cloth", req);
+  ASSERT_TRUE(res.success) << res.message;
+  EXPECT_NE(res.message.find("baraff_witkin"), std::string::npos) << res.message;
+  ASSERT_TRUE(listener_.waitFor([&] { return meshes_.has("bw"); }));
+  expectConsistent(meshes_.latest("bw"), 30u, 40u);
+  EXPECT_EQ(listener_.latest("bw", 1).type, Marker::TRIANGLE_LIST);
+
+  SetSpringConstants::Request k;
+  k.body = "bw";
+  k.spring_class = "shear";
+  k.stiffness = 50.0;
+  k.damping = 0.1;
+  const auto set = call<SetSpringConstants>("set_spring_constants", k);
+  EXPECT_TRUE(set.success) << set.message;
+  EXPECT_NE(set.message.find("omega_max"), std::string::npos) << set.message;
+
+  req.name = "bw_bad";
+  req.model = "finite_elements";
+  const auto refused = call<SpawnCloth>("spawn_cloth", req);
+  EXPECT_FALSE(refused.success);
+  EXPECT_NE(refused.message.find("model = 'finite_elements' is not a cloth model"), std::string::npos)
+      << refused.message;
+}
+
 TEST_F(ClothTest, BadClothAndJellyRequestsAreRefusedNamingTheField)
 {
   std::vector<std::pair<std::string, SpawnCloth::Request>> cloth(5, {"", clothRequest("bad", 3.0)});

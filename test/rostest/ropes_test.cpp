@@ -5,6 +5,7 @@
 #include <geometry_msgs/TransformStamped.h>
 #include <gtest/gtest.h>
 #include <ros/ros.h>
+#include <std_srvs/Trigger.h>
 #include <tf2_ros/transform_broadcaster.h>
 
 #include <atomic>
@@ -15,11 +16,13 @@
 #include "particle_sim/PinParticle.h"
 #include "particle_sim/SetSpringConstants.h"
 #include "particle_sim/SpawnRope.h"
+#include "particle_sim/Step.h"
 #include "particle_sim/UnpinParticle.h"
 
 using particle_sim::PinParticle;
 using particle_sim::SetSpringConstants;
 using particle_sim::SpawnRope;
+using particle_sim::Step;
 using particle_sim::UnpinParticle;
 using particle_sim_test::call;
 using particle_sim_test::Listener;
@@ -278,6 +281,40 @@ TEST_F(RopesTest, SetSpringConstantsChangesTheRopeAndRefusesBadValues)
     EXPECT_FALSE(refused.success) << expected;
     EXPECT_NE(refused.message.find(expected), std::string::npos) << "message: " << refused.message;
   }
+}
+
+TEST_F(RopesTest, StiffnessJumpOnAnExplicitRopeIsReportedByTheServices)
+{
+  // A symplectic Euler rope made 10^4 times stiffer: set_spring_constants says how many substeps
+  // it will now take, and ~step reports the stability event when it happens.
+  SpawnRope::Request req = ropeRequest("explicit", -3.0);
+  req.integrator = "symplectic_euler";
+  req.stretch_stiffness = 100.0;
+  spawn(req);
+  std_srvs::Trigger pause;
+  ASSERT_TRUE(ros::service::call("/particle_sim/pause_physics", pause));
+  SetSpringConstants::Request k;
+  k.body = "explicit";
+  k.spring_class = "stretch";
+  k.stiffness = 1e6;
+  k.damping = 0.0;
+  const auto set = call<SetSpringConstants>("set_spring_constants", k);
+  ASSERT_TRUE(set.success) << set.message;
+  EXPECT_NE(set.message.find("substep(s) per step"), std::string::npos) << set.message;
+
+  Step::Request steps;
+  steps.steps = 5;
+  const auto stepped = call<Step>("step", steps);
+  EXPECT_TRUE(stepped.success) << stepped.message;
+  EXPECT_NE(stepped.message.find("stability events"), std::string::npos) << stepped.message;
+  EXPECT_NE(stepped.message.find("'explicit'"), std::string::npos) << stepped.message;
+  std_srvs::Trigger unpause;
+  ASSERT_TRUE(ros::service::call("/particle_sim/unpause_physics", unpause));
+  // It stays finite: its markers keep coming with the rope near its pin.
+  ros::WallDuration(0.3).sleep();
+  const Marker line = listener_.latest("explicit", 1);
+  ASSERT_EQ(line.points.size(), 12u);
+  EXPECT_LT((pointOf(line, 11) - pointOf(line, 0)).norm(), 1.5);
 }
 
 int main(int argc, char** argv)

@@ -12,6 +12,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <map>
 #include <memory>
 #include <set>
 #include <string>
@@ -193,6 +194,9 @@ private:
   std::vector<Eigen::Vector3d> frame_pin_start_, frame_pin_goal_;  // per frame pin, this tick
 
   std::set<std::string> reported_frozen_;  // frozen bodies already logged
+  std::map<std::string, long long> reported_events_;  // per body, stability events already logged
+  std::map<std::string, std::string> reported_auto_;  // per body, auto's choice already logged
+  long long events_since_diagnostics_ = 0;
 
   bool delete_all_pending_ = true;
   std::vector<std::string> removed_bodies_;
