@@ -39,13 +39,15 @@ void stretchCondition(const BwTriangle& t, const Eigen::Matrix3d& x, double b_u,
     const double length = w.norm();
     const Eigen::Vector3d unit = length > 0.0 ? Eigen::Vector3d(w / length) : Eigen::Vector3d::Zero();
     c[d] = t.area * (length - rest[d]);
-    for (int m = 0; m < 3; ++m) gradients[d].segment<3>(3 * m) = t.area * dw[m] * unit;
+    for (int m = 0; m < 3; ++m)
+      gradients[d].segment<3>(3 * m) = t.area * dw[m] * unit;
     if (!hessians) continue;
     const Eigen::Matrix3d projector =
         length > 0.0 ? Eigen::Matrix3d((Eigen::Matrix3d::Identity() - unit * unit.transpose()) / length)
                      : Eigen::Matrix3d::Zero();
     for (int m = 0; m < 3; ++m)
-      for (int n = 0; n < 3; ++n) (*hessians)[d].block<3, 3>(3 * m, 3 * n) = t.area * dw[m] * dw[n] * projector;
+      for (int n = 0; n < 3; ++n)
+        (*hessians)[d].block<3, 3>(3 * m, 3 * n) = t.area * dw[m] * dw[n] * projector;
   }
 }
 
@@ -55,7 +57,8 @@ void shearCondition(const BwTriangle& t, const Eigen::Matrix3d& x, double& c, Gr
   const Eigen::Vector3d wu = t.dwu[0] * x.col(0) + t.dwu[1] * x.col(1) + t.dwu[2] * x.col(2);
   const Eigen::Vector3d wv = t.dwv[0] * x.col(0) + t.dwv[1] * x.col(1) + t.dwv[2] * x.col(2);
   c = t.area * wu.dot(wv);
-  for (int m = 0; m < 3; ++m) gradient.segment<3>(3 * m) = t.area * (t.dwu[m] * wv + t.dwv[m] * wu);
+  for (int m = 0; m < 3; ++m)
+    gradient.segment<3>(3 * m) = t.area * (t.dwu[m] * wv + t.dwv[m] * wu);
   if (!hessian) return;
   for (int m = 0; m < 3; ++m)
     for (int n = 0; n < 3; ++n)
@@ -111,9 +114,11 @@ void bendCondition(const BwBend& b, const Eigen::Matrix<double, 3, 4>& x, double
   using Dual = Eigen::AutoDiffScalar<Eigen::Matrix<double, 12, 1>>;
   Eigen::Matrix<Dual, 3, 4> xd;
   for (int m = 0; m < 4; ++m)
-    for (int a = 0; a < 3; ++a) xd(a, m) = Dual(x(a, m), 12, 3 * m + a);
+    for (int a = 0; a < 3; ++a)
+      xd(a, m) = Dual(x(a, m), 12, 3 * m + a);
   const Eigen::Matrix<Dual, 12, 1> g = dihedralGradient<Dual>(xd);
-  for (int r = 0; r < 12; ++r) hessian->row(r) = g[r].derivatives().transpose();
+  for (int r = 0; r < 12; ++r)
+    hessian->row(r) = g[r].derivatives().transpose();
 }
 
 }  // namespace core

@@ -48,7 +48,8 @@ bool buildBaraffWitkin(const std::vector<Eigen::Vector3d>& positions, const std:
     BwBend bend;
     bend.v = {sides[0].opposite, sides[0].a, sides[0].b, sides[1].opposite};
     Eigen::Matrix<double, 3, 4> x;
-    for (int m = 0; m < 4; ++m) x.col(m) = positions[bend.v[m]];
+    for (int m = 0; m < 4; ++m)
+      x.col(m) = positions[bend.v[m]];
     bend.rest_angle = dihedralAngle(x);
     const double length2 = (uvs[sides[0].b] - uvs[sides[0].a]).squaredNorm();
     def.bends.push_back(bend);
@@ -68,17 +69,21 @@ void BaraffWitkinModel::setConstants(SpringClass spring_class, double stiffness,
 
 const SpringConstants& BaraffWitkinModel::constants(SpringClass spring_class) const
 {
-  return spring_class == SpringClass::Stretch ? def_.stretch : spring_class == SpringClass::Shear ? def_.shear : def_.bend;
+  return spring_class == SpringClass::Stretch ? def_.stretch
+         : spring_class == SpringClass::Shear ? def_.shear
+                                              : def_.bend;
 }
 
 void BaraffWitkinModel::coupledPairs(std::vector<std::pair<int, int>>& pairs) const
 {
   for (const BwTriangle& t : def_.triangles)
     for (int m = 0; m < 3; ++m)
-      for (int n = m + 1; n < 3; ++n) pairs.emplace_back(t.v[m], t.v[n]);
+      for (int n = m + 1; n < 3; ++n)
+        pairs.emplace_back(t.v[m], t.v[n]);
   for (const BwBend& b : def_.bends)
     for (int m = 0; m < 4; ++m)
-      for (int n = m + 1; n < 4; ++n) pairs.emplace_back(b.v[m], b.v[n]);
+      for (int n = m + 1; n < 4; ++n)
+        pairs.emplace_back(b.v[m], b.v[n]);
 }
 
 void BaraffWitkinModel::setPattern(const ImplicitEulerSolver& solver)
@@ -89,14 +94,16 @@ void BaraffWitkinModel::setPattern(const ImplicitEulerSolver& solver)
   {
     std::array<int, 9> blocks;
     for (int m = 0; m < 3; ++m)
-      for (int n = 0; n < 3; ++n) blocks[3 * m + n] = solver.blockIndex(t.v[m], t.v[n]);
+      for (int n = 0; n < 3; ++n)
+        blocks[3 * m + n] = solver.blockIndex(t.v[m], t.v[n]);
     triangle_blocks_.push_back(blocks);
   }
   for (const BwBend& b : def_.bends)
   {
     std::array<int, 16> blocks;
     for (int m = 0; m < 4; ++m)
-      for (int n = 0; n < 4; ++n) blocks[4 * m + n] = solver.blockIndex(b.v[m], b.v[n]);
+      for (int n = 0; n < 4; ++n)
+        blocks[4 * m + n] = solver.blockIndex(b.v[m], b.v[n]);
     bend_blocks_.push_back(blocks);
   }
 }
@@ -104,14 +111,16 @@ void BaraffWitkinModel::setPattern(const ImplicitEulerSolver& solver)
 Eigen::Matrix3d BaraffWitkinModel::corners(const Eigen::Matrix3Xd& x, const BwTriangle& t) const
 {
   Eigen::Matrix3d c;
-  for (int m = 0; m < 3; ++m) c.col(m) = x.col(t.v[m]);
+  for (int m = 0; m < 3; ++m)
+    c.col(m) = x.col(t.v[m]);
   return c;
 }
 
 Eigen::Matrix<double, 3, 4> BaraffWitkinModel::corners(const Eigen::Matrix3Xd& x, const BwBend& b) const
 {
   Eigen::Matrix<double, 3, 4> c;
-  for (int m = 0; m < 4; ++m) c.col(m) = x.col(b.v[m]);
+  for (int m = 0; m < 4; ++m)
+    c.col(m) = x.col(b.v[m]);
   return c;
 }
 
@@ -123,7 +132,8 @@ void BaraffWitkinModel::addForces(const Eigen::Matrix3Xd& x, const Eigen::Matrix
   {
     const Eigen::Matrix3d xc = corners(x, t);
     Gradient9 u;
-    for (int m = 0; m < 3; ++m) u.segment<3>(3 * m) = v.col(t.v[m]);
+    for (int m = 0; m < 3; ++m)
+      u.segment<3>(3 * m) = v.col(t.v[m]);
     Eigen::Vector2d c;
     std::array<Gradient9, 2> g;
     stretchCondition(t, xc, def_.b_u, def_.b_v, c, g);
@@ -134,7 +144,8 @@ void BaraffWitkinModel::addForces(const Eigen::Matrix3Xd& x, const Eigen::Matrix
     for (int d = 0; d < 2; ++d)
       f -= (def_.stretch.stiffness * c[d] + def_.stretch.damping * g[d].dot(u)) / t.area * g[d];
     f -= (def_.shear.stiffness * shear + def_.shear.damping * gs.dot(u)) / t.area * gs;
-    for (int m = 0; m < 3; ++m) force.col(t.v[m]) += f.segment<3>(3 * m);
+    for (int m = 0; m < 3; ++m)
+      force.col(t.v[m]) += f.segment<3>(3 * m);
   }
   for (std::size_t k = 0; k < def_.bends.size(); ++k)
   {
@@ -143,9 +154,11 @@ void BaraffWitkinModel::addForces(const Eigen::Matrix3Xd& x, const Eigen::Matrix
     Gradient12 g;
     bendCondition(b, corners(x, b), c, g);
     Gradient12 u;
-    for (int m = 0; m < 4; ++m) u.segment<3>(3 * m) = v.col(b.v[m]);
+    for (int m = 0; m < 4; ++m)
+      u.segment<3>(3 * m) = v.col(b.v[m]);
     const Gradient12 f = -def_.bend_weights[k] * (def_.bend.stiffness * c + def_.bend.damping * g.dot(u)) * g;
-    for (int m = 0; m < 4; ++m) force.col(b.v[m]) += f.segment<3>(3 * m);
+    for (int m = 0; m < 4; ++m)
+      force.col(b.v[m]) += f.segment<3>(3 * m);
   }
 }
 
@@ -200,7 +213,8 @@ void BaraffWitkinModel::addStabilityRows(const std::vector<Eigen::Vector3d>& x, 
   // Each condition with corner gradient norms |g_m| and stiffness k adds k |g_m| Σ_n |g_n| to row m.
   auto add = [&](const auto& vertices, const auto& norms, double k, double d) {
     double sum = 0.0;
-    for (double g : norms) sum += g;
+    for (double g : norms)
+      sum += g;
     for (std::size_t m = 0; m < norms.size(); ++m)
     {
       stiffness_rows[vertices[m]] += k * norms[m] * sum;
@@ -226,12 +240,14 @@ void BaraffWitkinModel::addStabilityRows(const std::vector<Eigen::Vector3d>& x, 
   {
     const BwBend& b = def_.bends[k];
     Eigen::Matrix<double, 3, 4> corners_at_rest;
-    for (int m = 0; m < 4; ++m) corners_at_rest.col(m) = x[b.v[m]];
+    for (int m = 0; m < 4; ++m)
+      corners_at_rest.col(m) = x[b.v[m]];
     double c;
     Gradient12 g;
     bendCondition(b, corners_at_rest, c, g);
     std::array<double, 4> norms;
-    for (int m = 0; m < 4; ++m) norms[m] = g.segment<3>(3 * m).norm();
+    for (int m = 0; m < 4; ++m)
+      norms[m] = g.segment<3>(3 * m).norm();
     add(b.v, norms, def_.bend_weights[k] * def_.bend.stiffness, def_.bend_weights[k] * def_.bend.damping);
   }
 }
@@ -273,7 +289,8 @@ double triangleStrain(const BwTriangle& t, const Eigen::Matrix3d& xc, double b_u
 double BaraffWitkinModel::maxStrain(const Eigen::Matrix3Xd& x) const
 {
   double strain = 0.0;
-  for (const BwTriangle& t : def_.triangles) strain = std::max(strain, triangleStrain(t, corners(x, t), def_.b_u, def_.b_v));
+  for (const BwTriangle& t : def_.triangles)
+    strain = std::max(strain, triangleStrain(t, corners(x, t), def_.b_u, def_.b_v));
   return strain;
 }
 
@@ -282,7 +299,8 @@ void BaraffWitkinModel::vertexStrains(const Eigen::Matrix3Xd& x, std::vector<dou
   for (const BwTriangle& t : def_.triangles)
   {
     const double strain = triangleStrain(t, corners(x, t), def_.b_u, def_.b_v);
-    for (int m = 0; m < 3; ++m) strains[t.v[m]] = std::max(strains[t.v[m]], strain);
+    for (int m = 0; m < 3; ++m)
+      strains[t.v[m]] = std::max(strains[t.v[m]], strain);
   }
 }
 

@@ -34,11 +34,15 @@ Status checkCommon(const std::string& name, const SpringConstants& stretch, cons
 
 void addPins(const std::vector<int>& pins, int n, std::vector<int>& out)
 {
-  for (int pin : pins) out.push_back(pin < 0 ? n + pin : pin);
+  for (int pin : pins)
+    out.push_back(pin < 0 ? n + pin : pin);
 }
 }  // namespace
 
-const char* toString(ClothModel model) { return model == ClothModel::Springs ? "springs" : "baraff_witkin"; }
+const char* toString(ClothModel model)
+{
+  return model == ClothModel::Springs ? "springs" : "baraff_witkin";
+}
 
 bool parseClothModel(const std::string& text, ClothModel& model)
 {
@@ -75,7 +79,10 @@ Status checkBaraffWitkinRest(double b_u, double b_v)
 }
 }  // namespace
 
-const char* namedGridPinNames() { return "corner_00, corner_10, corner_01, corner_11, edge_u0, edge_u1, edge_v0, edge_v1"; }
+const char* namedGridPinNames()
+{
+  return "corner_00, corner_10, corner_01, corner_11, edge_u0, edge_u1, edge_v0, edge_v1";
+}
 
 bool namedGridPins(const std::string& name, int nu, int nv, std::vector<int>& indices)
 {
@@ -90,9 +97,11 @@ bool namedGridPins(const std::string& name, int nu, int nv, std::vector<int>& in
   else if (name == "corner_11")
     indices = {index(nu - 1, nv - 1)};
   else if (name == "edge_v0" || name == "edge_v1")  // the edges along u, at v = 0 or v = 1
-    for (int a = 0; a < nu; ++a) indices.push_back(index(a, name == "edge_v0" ? 0 : nv - 1));
+    for (int a = 0; a < nu; ++a)
+      indices.push_back(index(a, name == "edge_v0" ? 0 : nv - 1));
   else if (name == "edge_u0" || name == "edge_u1")  // the edges along v, at u = 0 or u = 1
-    for (int b = 0; b < nv; ++b) indices.push_back(index(name == "edge_u0" ? 0 : nu - 1, b));
+    for (int b = 0; b < nv; ++b)
+      indices.push_back(index(name == "edge_u0" ? 0 : nu - 1, b));
   else
     return false;
   return true;
@@ -105,16 +114,15 @@ Status validate(const ClothGridDef& def, int max_particles)
   if (Status s = checkFinite("origin", def.origin); !s) return s;
   if (Status s = checkFinite("edge_u", def.edge_u); !s) return s;
   if (Status s = checkFinite("edge_v", def.edge_v); !s) return s;
-  if (def.edge_u.cross(def.edge_v).norm() <= 1e-12 * def.edge_u.norm() * def.edge_v.norm() ||
-      def.edge_u.norm() == 0.0)
+  if (def.edge_u.cross(def.edge_v).norm() <= 1e-12 * def.edge_u.norm() * def.edge_v.norm() || def.edge_u.norm() == 0.0)
     return Status::failure("edge_u = " + formatValue(def.edge_u) + " and edge_v = " + formatValue(def.edge_v) +
                            " must be non-zero and not parallel");
   if (Status s = checkIntRange("resolution[0]", def.nu, 2, max_particles); !s) return s;
   if (Status s = checkIntRange("resolution[1]", def.nv, 2, max_particles); !s) return s;
   if (static_cast<long long>(def.nu) * def.nv > max_particles)
     return Status::failure("resolution = [" + std::to_string(def.nu) + ", " + std::to_string(def.nv) + "] makes " +
-                           std::to_string(static_cast<long long>(def.nu) * def.nv) +
-                           " particles, over the cap of " + std::to_string(max_particles));
+                           std::to_string(static_cast<long long>(def.nu) * def.nv) + " particles, over the cap of " +
+                           std::to_string(max_particles));
   if (Status s = checkPinIndices(def.pins, def.nu * def.nv); !s) return s;
   if (Status s = checkBaraffWitkinRest(def.b_u, def.b_v); !s) return s;
   std::vector<int> ignored;
@@ -159,8 +167,10 @@ SpringNetworkDef buildClothGrid(const ClothGridDef& def)
         net.triangles.emplace_back(index(a, b), index(a + 1, b + 1), index(a, b + 1));
       }
       if (!springs) continue;
-      if (a + 1 < nu) net.springs.push_back(makeSpring(x, index(a, b), index(a + 1, b), def.stretch, SpringClass::Stretch));
-      if (b + 1 < nv) net.springs.push_back(makeSpring(x, index(a, b), index(a, b + 1), def.stretch, SpringClass::Stretch));
+      if (a + 1 < nu)
+        net.springs.push_back(makeSpring(x, index(a, b), index(a + 1, b), def.stretch, SpringClass::Stretch));
+      if (b + 1 < nv)
+        net.springs.push_back(makeSpring(x, index(a, b), index(a, b + 1), def.stretch, SpringClass::Stretch));
       if (a + 1 < nu && b + 1 < nv)
       {
         net.springs.push_back(makeSpring(x, index(a, b), index(a + 1, b + 1), def.shear, SpringClass::Shear));
@@ -181,7 +191,8 @@ SpringNetworkDef buildClothGrid(const ClothGridDef& def)
     const Eigen::Vector3d e1 = def.edge_u.normalized();
     const Eigen::Vector3d e2 = (def.edge_v - def.edge_v.dot(e1) * e1).normalized();
     std::vector<Eigen::Vector2d> uvs;
-    for (const Eigen::Vector3d& p : net.positions) uvs.emplace_back((p - def.origin).dot(e1), (p - def.origin).dot(e2));
+    for (const Eigen::Vector3d& p : net.positions)
+      uvs.emplace_back((p - def.origin).dot(e1), (p - def.origin).dot(e2));
     addBaraffWitkin(uvs, def.stretch, def.shear, def.bend, def.b_u, def.b_v, net);
   }
 
@@ -263,13 +274,15 @@ SpringNetworkDef buildMeshCloth(const MeshClothDef& def)
     double mesh_area = 0.0, uv_area = 0.0;
     for (const Eigen::Vector3i& t : def.triangles)
     {
-      mesh_area += 0.5 * (def.vertices[t[1]] - def.vertices[t[0]]).cross(def.vertices[t[2]] - def.vertices[t[0]]).norm();
+      mesh_area +=
+          0.5 * (def.vertices[t[1]] - def.vertices[t[0]]).cross(def.vertices[t[2]] - def.vertices[t[0]]).norm();
       const Eigen::Vector2d a = def.uvs[t[1]] - def.uvs[t[0]], b = def.uvs[t[2]] - def.uvs[t[0]];
       uv_area += 0.5 * std::abs(a.x() * b.y() - a.y() * b.x());
     }
     const double scale = std::sqrt(mesh_area / uv_area);
     std::vector<Eigen::Vector2d> uvs;
-    for (const Eigen::Vector2d& uv : def.uvs) uvs.push_back(scale * uv);
+    for (const Eigen::Vector2d& uv : def.uvs)
+      uvs.push_back(scale * uv);
     addBaraffWitkin(uvs, def.stretch, def.shear, def.bend, def.b_u, def.b_v, net);
     addPins(def.pins, n, net.pins);
     return net;
@@ -295,7 +308,8 @@ void vertexNormals(const Eigen::Matrix3Xd& positions, int count, const std::vect
     const Eigen::Vector3d e1 = positions.col(t[1]) - positions.col(t[0]);
     const Eigen::Vector3d e2 = positions.col(t[2]) - positions.col(t[0]);
     const Eigen::Vector3d area_normal = e1.cross(e2);
-    for (int c = 0; c < 3; ++c) normals[t[c]] += area_normal;
+    for (int c = 0; c < 3; ++c)
+      normals[t[c]] += area_normal;
   }
   for (Eigen::Vector3d& normal : normals)
   {

@@ -37,7 +37,10 @@ const char* toString(EmitterType type)
   return "unknown";
 }
 
-const char* emitterTypeNames() { return "fountain, waterfall, semi_sphere, explosion"; }
+const char* emitterTypeNames()
+{
+  return "fountain, waterfall, semi_sphere, explosion";
+}
 
 bool parseEmitterType(const std::string& text, EmitterType& type)
 {
@@ -81,7 +84,10 @@ constexpr double kDegree = kPi / 180.0;
 // The lecture's rand01(), from a seeded 64-bit Mersenne twister: the top 53 bits as a double in
 // [0, 1). Written out (not std::uniform_real_distribution) so that it is the same on every
 // standard library.
-double rand01(std::mt19937_64& rng) { return static_cast<double>(rng() >> 11) * 0x1.0p-53; }
+double rand01(std::mt19937_64& rng)
+{
+  return static_cast<double>(rng() >> 11) * 0x1.0p-53;
+}
 
 // Unit direction at azimuth alpha and altitude beta, z up.
 Eigen::Vector3d direction(double alpha, double beta)
@@ -98,8 +104,7 @@ void EmitterBody::sample(const EmitterDef& def, std::mt19937_64& rng, Eigen::Vec
     // Fountain and waterfall: a random horizontal velocity in [-spread/2, spread/2)^2 and a fixed
     // vertical one (10 and 0 m/s in the lecture).
     case EmitterType::Fountain:
-    case EmitterType::Waterfall:
-    {
+    case EmitterType::Waterfall: {
       const double vx = def.spread * (rand01(rng) - 0.5);
       const double vy = def.spread * (rand01(rng) - 0.5);
       position = def.origin;
@@ -107,8 +112,7 @@ void EmitterBody::sample(const EmitterDef& def, std::mt19937_64& rng, Eigen::Vec
       return;
     }
     // Semi-sphere: azimuth in [-180, 180) degrees, altitude in [0, 90); start on the unit sphere.
-    case EmitterType::SemiSphere:
-    {
+    case EmitterType::SemiSphere: {
       const double alpha = 360.0 * (rand01(rng) - 0.5) * kDegree;
       const double beta = 90.0 * rand01(rng) * kDegree;
       const Eigen::Vector3d dir = direction(alpha, beta);
@@ -118,8 +122,7 @@ void EmitterBody::sample(const EmitterDef& def, std::mt19937_64& rng, Eigen::Vec
     }
     // Explosion: azimuth in [-180, 180), altitude in [-90, 90); start 0.01 m from the origin.
     // The lecture's speed * position would scale the speed by 0.01, so the unit direction is used.
-    case EmitterType::Explosion:
-    {
+    case EmitterType::Explosion: {
       const double alpha = 360.0 * (rand01(rng) - 0.5) * kDegree;
       const double beta = 180.0 * (rand01(rng) - 0.5) * kDegree;
       const Eigen::Vector3d dir = direction(alpha, beta);

@@ -86,9 +86,7 @@ void resolveCollisions(const Environment& env, ParticlePool& pool, const Eigen::
     auto x = pool.position.col(i);
     auto v = pool.velocity.col(i);
     // The approach speed along n at the start of the step (the current one when not given).
-    auto start_vn = [&](const Eigen::Vector3d& n) {
-      return start_velocity ? start_velocity->col(i).dot(n) : v.dot(n);
-    };
+    auto start_vn = [&](const Eigen::Vector3d& n) { return start_velocity ? start_velocity->col(i).dot(n) : v.dot(n); };
 
     // Ground plane z = height, normal +z.
     if (env.ground.enabled && x.z() < env.ground.height)

@@ -10,14 +10,18 @@ namespace core
 {
 namespace
 {
-double dot(const Eigen::Matrix3Xd& a, const Eigen::Matrix3Xd& b) { return a.cwiseProduct(b).sum(); }
+double dot(const Eigen::Matrix3Xd& a, const Eigen::Matrix3Xd& b)
+{
+  return a.cwiseProduct(b).sum();
+}
 }  // namespace
 
 void ImplicitEulerSolver::setPattern(int particles, const std::vector<std::pair<int, int>>& coupled_pairs)
 {
   // Columns of each row: the particle itself and every particle it is coupled with, sorted, once.
   std::vector<std::vector<int>> columns(particles);
-  for (int i = 0; i < particles; ++i) columns[i].push_back(i);
+  for (int i = 0; i < particles; ++i)
+    columns[i].push_back(i);
   for (const auto& [i, j] : coupled_pairs)
   {
     columns[i].push_back(j);
@@ -57,7 +61,8 @@ void ImplicitEulerSolver::begin(double h, const Eigen::VectorXd& mass, const Eig
 {
   h_ = h;
   v0_ = v0;
-  for (Eigen::Matrix3d& block : blocks_) block.setZero();
+  for (Eigen::Matrix3d& block : blocks_)
+    block.setZero();
   for (int i = 0; i < static_cast<int>(diagonal_block_.size()); ++i)
     blocks_[diagonal_block_[i]] = mass[i] * Eigen::Matrix3d::Identity();
   rhs_ = h * force;
@@ -68,7 +73,8 @@ void ImplicitEulerSolver::multiply(const Eigen::Matrix3Xd& p, Eigen::Matrix3Xd& 
   for (int i = 0; i < static_cast<int>(diagonal_block_.size()); ++i)
   {
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-    for (int k = row_start_[i]; k < row_start_[i + 1]; ++k) sum.noalias() += blocks_[k] * p.col(block_column_[k]);
+    for (int k = row_start_[i]; k < row_start_[i + 1]; ++k)
+      sum.noalias() += blocks_[k] * p.col(block_column_[k]);
     out.col(i) = sum;
   }
 }
@@ -83,14 +89,16 @@ void ImplicitEulerSolver::filter(const std::vector<char>& pinned, Eigen::Matrix3
 
 void ImplicitEulerSolver::precondition(const Eigen::Matrix3Xd& r, Eigen::Matrix3Xd& out) const
 {
-  for (int i = 0; i < r.cols(); ++i) out.col(i).noalias() = inverse_diagonal_[i] * r.col(i);
+  for (int i = 0; i < r.cols(); ++i)
+    out.col(i).noalias() = inverse_diagonal_[i] * r.col(i);
 }
 
 SolverReport ImplicitEulerSolver::solve(const std::vector<char>& pinned, double tolerance, int max_iterations,
                                         Eigen::Matrix3Xd& x, Eigen::Matrix3Xd& v)
 {
   const int n = static_cast<int>(x.cols());
-  for (int i = 0; i < n; ++i) inverse_diagonal_[i] = blocks_[diagonal_block_[i]].inverse();
+  for (int i = 0; i < n; ++i)
+    inverse_diagonal_[i] = blocks_[diagonal_block_[i]].inverse();
 
   // Modified preconditioned CG (Baraff & Witkin 1998, section 5.3), warm started from the last
   // step's Δv, with pinned rows filtered out of the start, every residual and every direction.

@@ -1,9 +1,9 @@
 #include "particle_sim/core/integrator.h"
 
-#include "particle_sim/core/validation.h"
-
 #include <cmath>
 #include <limits>
+
+#include "particle_sim/core/validation.h"
 
 namespace particle_sim
 {
@@ -43,7 +43,10 @@ double stabilityLimit(IntegratorType type)
   return std::numeric_limits<double>::infinity();
 }
 
-const char* integratorTypeNames() { return "symplectic_euler, verlet, implicit_euler, rk4, auto"; }
+const char* integratorTypeNames()
+{
+  return "symplectic_euler, verlet, implicit_euler, rk4, auto";
+}
 
 bool parseIntegratorType(const std::string& text, IntegratorType& type)
 {

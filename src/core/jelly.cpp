@@ -52,7 +52,8 @@ SpringNetworkDef buildJelly(const JellyDef& def)
   const Eigen::Vector3d spacing(def.size.x() / (nx - 1), def.size.y() / (ny - 1), def.size.z() / (nz - 1));
   for (int c = 0; c < nz; ++c)
     for (int b = 0; b < ny; ++b)
-      for (int a = 0; a < nx; ++a) net.positions.push_back(def.origin + spacing.cwiseProduct(Eigen::Vector3d(a, b, c)));
+      for (int a = 0; a < nx; ++a)
+        net.positions.push_back(def.origin + spacing.cwiseProduct(Eigen::Vector3d(a, b, c)));
   net.masses.assign(n, def.mass / n);
   net.velocities.assign(n, def.velocity);
 
@@ -64,11 +65,11 @@ SpringNetworkDef buildJelly(const JellyDef& def)
     SpringClass cls;
   };
   static const Offset kOffsets[] = {
-      {1, 0, 0, SpringClass::Stretch},  {0, 1, 0, SpringClass::Stretch},  {0, 0, 1, SpringClass::Stretch},
-      {1, 1, 0, SpringClass::Shear},    {1, -1, 0, SpringClass::Shear},   {1, 0, 1, SpringClass::Shear},
-      {1, 0, -1, SpringClass::Shear},   {0, 1, 1, SpringClass::Shear},    {0, 1, -1, SpringClass::Shear},
-      {1, 1, 1, SpringClass::Shear},    {1, 1, -1, SpringClass::Shear},   {1, -1, 1, SpringClass::Shear},
-      {1, -1, -1, SpringClass::Shear},  {2, 0, 0, SpringClass::Bend},     {0, 2, 0, SpringClass::Bend},
+      {1, 0, 0, SpringClass::Stretch}, {0, 1, 0, SpringClass::Stretch}, {0, 0, 1, SpringClass::Stretch},
+      {1, 1, 0, SpringClass::Shear},   {1, -1, 0, SpringClass::Shear},  {1, 0, 1, SpringClass::Shear},
+      {1, 0, -1, SpringClass::Shear},  {0, 1, 1, SpringClass::Shear},   {0, 1, -1, SpringClass::Shear},
+      {1, 1, 1, SpringClass::Shear},   {1, 1, -1, SpringClass::Shear},  {1, -1, 1, SpringClass::Shear},
+      {1, -1, -1, SpringClass::Shear}, {2, 0, 0, SpringClass::Bend},    {0, 2, 0, SpringClass::Bend},
       {0, 0, 2, SpringClass::Bend},
   };
   for (int c = 0; c < nz; ++c)
@@ -77,8 +78,9 @@ SpringNetworkDef buildJelly(const JellyDef& def)
         for (const Offset& o : kOffsets)
         {
           if (!inside(a + o.da, b + o.db, c + o.dc)) continue;
-          const SpringConstants& k =
-              o.cls == SpringClass::Stretch ? def.stretch : o.cls == SpringClass::Shear ? def.shear : def.bend;
+          const SpringConstants& k = o.cls == SpringClass::Stretch ? def.stretch
+                                     : o.cls == SpringClass::Shear ? def.shear
+                                                                   : def.bend;
           if (o.cls == SpringClass::Bend && k.stiffness == 0.0) continue;
           const int i = index(a, b, c), j = index(a + o.da, b + o.db, c + o.dc);
           net.springs.push_back({i, j, (net.positions[j] - net.positions[i]).norm(), k.stiffness, k.damping, o.cls});
@@ -110,7 +112,8 @@ SpringNetworkDef buildJelly(const JellyDef& def)
     addFace(axis, true);
   }
 
-  for (int pin : def.pins) net.pins.push_back(pin < 0 ? n + pin : pin);
+  for (int pin : def.pins)
+    net.pins.push_back(pin < 0 ? n + pin : pin);
   return net;
 }
 

@@ -1,7 +1,6 @@
 #include "particle_sim/core/spring_network.h"
 
 #include <Eigen/Geometry>
-
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -18,7 +17,10 @@ namespace
 // Relative slack allowed above the strain limit, for rounding.
 constexpr double kStrainTolerance = 1e-9;
 
-std::string indexed(const char* field, std::size_t i) { return std::string(field) + "[" + std::to_string(i) + "]"; }
+std::string indexed(const char* field, std::size_t i)
+{
+  return std::string(field) + "[" + std::to_string(i) + "]";
+}
 
 Status checkIndex(const std::string& field, long long index, int count)
 {
@@ -138,7 +140,8 @@ SpringNetworkBody::SpringNetworkBody(const SpringNetworkDef& def) : Body(def.nam
   // its four blocks (ii, ij, ji, jj).
   // Baraff–Witkin elements couple the corners of each triangle and of each bend pair.
   std::vector<std::pair<int, int>> pairs;
-  for (const Spring& spring : def_.springs) pairs.emplace_back(spring.i, spring.j);
+  for (const Spring& spring : def_.springs)
+    pairs.emplace_back(spring.i, spring.j);
   if (!def_.baraff_witkin.empty())
   {
     baraff_witkin_.emplace(def_.baraff_witkin);
@@ -160,8 +163,9 @@ SpringNetworkBody::SpringNetworkBody(const SpringNetworkDef& def) : Body(def.nam
   energy_scale_ = total_mass * std::max((high - low).norm(), 1e-3);
   for (const Spring& spring : def_.springs)
   {
-    spring_blocks_.push_back({implicit_solver_.blockIndex(spring.i, spring.i), implicit_solver_.blockIndex(spring.i, spring.j),
-                              implicit_solver_.blockIndex(spring.j, spring.i), implicit_solver_.blockIndex(spring.j, spring.j)});
+    spring_blocks_.push_back(
+        {implicit_solver_.blockIndex(spring.i, spring.i), implicit_solver_.blockIndex(spring.i, spring.j),
+         implicit_solver_.blockIndex(spring.j, spring.i), implicit_solver_.blockIndex(spring.j, spring.j)});
   }
   reset();
 }
@@ -243,7 +247,8 @@ Status SpringNetworkBody::unpin(int index)
 int SpringNetworkBody::pinnedCount() const
 {
   int count = 0;
-  for (char p : pinned_) count += p;
+  for (char p : pinned_)
+    count += p;
   return count;
 }
 
@@ -265,8 +270,7 @@ int SpringNetworkBody::nearestParticle(const Eigen::Vector3d& point) const
 
 bool SpringNetworkBody::hasSpringClass(SpringClass spring_class) const
 {
-  if (baraff_witkin_ && (spring_class != SpringClass::Bend || !baraff_witkin_->definition().bends.empty()))
-    return true;
+  if (baraff_witkin_ && (spring_class != SpringClass::Bend || !baraff_witkin_->definition().bends.empty())) return true;
   for (const Spring& spring : springs_)
   {
     if (spring.spring_class == spring_class) return true;
@@ -315,11 +319,12 @@ Status SpringNetworkBody::setIntegrator(const IntegratorDef& integrator)
 void SpringNetworkBody::computeForces(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v,
                                       const Eigen::Vector3d& gravity, Eigen::Matrix3Xd& force) const
 {
-  for (int i = 0; i < x.cols(); ++i) force.col(i) = mass_[i] * gravity;
+  for (int i = 0; i < x.cols(); ++i)
+    force.col(i) = mass_[i] * gravity;
   for (const Spring& s : springs_)
   {
-    const Eigen::Vector3d f = springForce(x.col(s.i), x.col(s.j), v.col(s.i), v.col(s.j), s.rest_length, s.stiffness,
-                                          s.damping);
+    const Eigen::Vector3d f =
+        springForce(x.col(s.i), x.col(s.j), v.col(s.i), v.col(s.j), s.rest_length, s.stiffness, s.damping);
     force.col(s.i) += f;
     force.col(s.j) -= f;
   }
@@ -328,7 +333,8 @@ void SpringNetworkBody::computeForces(const Eigen::Matrix3Xd& x, const Eigen::Ma
   // Global damping (Environment::damping): f −= damping · m · v (explicit, also in implicit steps).
   if (damping_ != 0.0)
   {
-    for (int i = 0; i < x.cols(); ++i) force.col(i) -= damping_ * mass_[i] * v.col(i);
+    for (int i = 0; i < x.cols(); ++i)
+      force.col(i) -= damping_ * mass_[i] * v.col(i);
   }
 }
 
@@ -345,7 +351,8 @@ void SpringNetworkBody::addAirForces(const Eigen::Matrix3Xd& x, const Eigen::Mat
     const Eigen::Vector3d relative = air_.wind - (v.col(t[0]) + v.col(t[1]) + v.col(t[2])) / 3.0;
     // A ((u·n) n) = (u·(A n)) (A n) / A
     const Eigen::Vector3d f = air_.drag * relative.dot(area_normal) / area * area_normal;
-    for (int c = 0; c < 3; ++c) force.col(t[c]) += f / 3.0;
+    for (int c = 0; c < 3; ++c)
+      force.col(t[c]) += f / 3.0;
   }
 }
 
@@ -398,7 +405,8 @@ void SpringNetworkBody::accelerations(const Eigen::Matrix3Xd& x, const Eigen::Ma
                                       const Eigen::Vector3d& gravity, Eigen::Matrix3Xd& a)
 {
   computeForces(x, v, gravity, a);
-  for (int i = 0; i < a.cols(); ++i) a.col(i) *= particles_.inverse_mass[i];  // 0 for pinned
+  for (int i = 0; i < a.cols(); ++i)
+    a.col(i) *= particles_.inverse_mass[i];  // 0 for pinned
 }
 
 double SpringNetworkBody::kineticEnergy() const
@@ -476,10 +484,10 @@ void SpringNetworkBody::step(double dt, const Environment& env)
       for (int i = 0; i < n; ++i)
       {
         if (!pinned_[i]) continue;
-        pin_target_.col(i) = k + 1 == substeps
-                                 ? Eigen::Vector3d(step_target_.col(i))  // exactly on target at the end
-                                 : Eigen::Vector3d(saved_position_.col(i) +
-                                                   s * (step_target_.col(i) - saved_position_.col(i)));
+        pin_target_.col(i) =
+            k + 1 == substeps
+                ? Eigen::Vector3d(step_target_.col(i))  // exactly on target at the end
+                : Eigen::Vector3d(saved_position_.col(i) + s * (step_target_.col(i) - saved_position_.col(i)));
       }
       substep(dt / substeps, type, env);
     }
@@ -507,7 +515,8 @@ void SpringNetworkBody::step(double dt, const Environment& env)
   }
   last_substeps_ = substeps;
   last_integrator_ = type;
-  for (int i = 0; i < n; ++i) p.age[i] += dt;
+  for (int i = 0; i < n; ++i)
+    p.age[i] += dt;
   p.previous_position = saved_position_;
 
   // A non-finite state or a failed solve is never kept: go back to the last good state and stop
@@ -516,10 +525,9 @@ void SpringNetworkBody::step(double dt, const Environment& env)
   {
     p.position = saved_position_;
     p.velocity = saved_velocity_;
-    frozen_reason_ = std::string(last_solve_.breakdown ? "the implicit solve failed (CG breakdown)"
-                                                       : "state became non-finite") +
-                     " under " + toString(type) + " at dt = " + formatValue(dt) +
-                     " s; the body is frozen at its last good state";
+    frozen_reason_ =
+        std::string(last_solve_.breakdown ? "the implicit solve failed (CG breakdown)" : "state became non-finite") +
+        " under " + toString(type) + " at dt = " + formatValue(dt) + " s; the body is frozen at its last good state";
     recordEvent(frozen_reason_);
   }
 }
@@ -615,8 +623,8 @@ IntegratorType SpringNetworkBody::chooseIntegrator(double dt)
     }
     auto_choice_ = std::string(toString(choice)) + ": h (omega_max + c_max) = " + formatValue(product) +
                    (choice == IntegratorType::Verlet ? " <= " : " > ") + formatValue(limit) +
-                   " (half of Verlet's limit 2; omega_max = " + formatValue(omega_bound_) + " 1/s, c_max = " +
-                   formatValue(dampingBound()) + " 1/s, dt = " + formatValue(dt) + " s)";
+                   " (half of Verlet's limit 2; omega_max = " + formatValue(omega_bound_) +
+                   " 1/s, c_max = " + formatValue(dampingBound()) + " 1/s, dt = " + formatValue(dt) + " s)";
   }
   return choice;
 }
@@ -682,7 +690,8 @@ void SpringNetworkBody::stepImplicitEuler(double h, const Eigen::Vector3d& gravi
 
   // Without moving pins or wind nothing does work on the body, so its energy must not grow.
   bool conservative = air_.drag == 0.0 || air_.wind.isZero();
-  for (int i = 0; i < n && conservative; ++i) conservative = !pinned_[i] || p.velocity.col(i).isZero();
+  for (int i = 0; i < n && conservative; ++i)
+    conservative = !pinned_[i] || p.velocity.col(i).isZero();
   const double energy_before = conservative ? mechanicalEnergy(gravity) : 0.0;
   implicit_x0_ = p.position;
   implicit_v0_ = p.velocity;
@@ -691,8 +700,8 @@ void SpringNetworkBody::stepImplicitEuler(double h, const Eigen::Vector3d& gravi
   computeForces(p.position, p.velocity, gravity, force_);
   implicit_solver_.begin(h, mass_, force_, &implicit_v0_);
   assembleImplicit(p.position);
-  last_solve_ = implicit_solver_.solve(pinned_, integrator_.cg_tolerance, integrator_.cg_max_iterations, p.position,
-                                       p.velocity);
+  last_solve_ =
+      implicit_solver_.solve(pinned_, integrator_.cg_tolerance, integrator_.cg_max_iterations, p.position, p.velocity);
   if (!conservative || last_solve_.breakdown) return;
 
   // 2. If that one linearisation gained energy (large rotations or stretches in one step), Newton
@@ -703,12 +712,13 @@ void SpringNetworkBody::stepImplicitEuler(double h, const Eigen::Vector3d& gravi
   for (; newton < kNewtonIterations && mechanicalEnergy(gravity) > energy_before + tolerance; ++newton)
   {
     computeForces(p.position, p.velocity, gravity, force_);
-    for (int i = 0; i < n; ++i) force_.col(i) -= mass_[i] * (p.velocity.col(i) - implicit_v0_.col(i)) / h;
+    for (int i = 0; i < n; ++i)
+      force_.col(i) -= mass_[i] * (p.velocity.col(i) - implicit_v0_.col(i)) / h;
     implicit_solver_.begin(h, mass_, force_, nullptr);
     assembleImplicit(p.position);
     p.position = implicit_x0_;  // the solve sets x = x0 + h v_{k+1}
-    last_solve_ = implicit_solver_.solve(pinned_, integrator_.cg_tolerance, integrator_.cg_max_iterations,
-                                         p.position, p.velocity);
+    last_solve_ = implicit_solver_.solve(pinned_, integrator_.cg_tolerance, integrator_.cg_max_iterations, p.position,
+                                         p.velocity);
     if (last_solve_.breakdown) return;
   }
 
@@ -789,7 +799,8 @@ SpringNetworkDef buildRope(const RopeDef& def)
     for (int i = 0; i + 2 < n; ++i)
       net.springs.push_back({i, i + 2, 2.0 * segment, def.bend_stiffness, def.bend_damping, SpringClass::Bend});
   }
-  for (int pin : def.pins) net.pins.push_back(pin < 0 ? n + pin : pin);
+  for (int pin : def.pins)
+    net.pins.push_back(pin < 0 ? n + pin : pin);
   return net;
 }
 

@@ -81,13 +81,15 @@ Status World::setGlobalDamping(double damping)
 
 void World::step()
 {
-  for (const std::unique_ptr<Body>& body : bodies_) body->step(def_.dt, env_);
+  for (const std::unique_ptr<Body>& body : bodies_)
+    body->step(def_.dt, env_);
   ++step_count_;
 }
 
 void World::reset()
 {
-  for (const std::unique_ptr<Body>& body : bodies_) body->reset();
+  for (const std::unique_ptr<Body>& body : bodies_)
+    body->reset();
 }
 
 Status World::addEmitter(const EmitterDef& def)
@@ -171,7 +173,8 @@ const SpringNetworkBody* World::findSpringBody(const std::string& name) const
 int World::particleCount() const
 {
   int count = 0;
-  for (const std::unique_ptr<Body>& body : bodies_) count += body->particles().size();
+  for (const std::unique_ptr<Body>& body : bodies_)
+    count += body->particles().size();
   return count;
 }
 

@@ -89,7 +89,7 @@ visualization_msgs::Marker surfaceMarker(const core::SpringNetworkBody& body, co
   const auto& triangles = body.definition().triangles;
   visualization_msgs::Marker surface = makeMarker(body.name(), kLinesMarkerId, stamp, style);
   surface.type = visualization_msgs::Marker::TRIANGLE_LIST;
-  surface.color = body.frozen() ? rgba(0.5f, 0.5f, 0.5f)
+  surface.color = body.frozen()                               ? rgba(0.5f, 0.5f, 0.5f)
                   : body.shape() == core::NetworkShape::Jelly ? rgba(0.95f, 0.35f, 0.55f)
                                                               : rgba(0.35f, 0.6f, 0.95f);
   std::vector<double> strains;
@@ -165,7 +165,8 @@ void addSpringBody(const core::SpringNetworkBody& body, const ros::Time& stamp, 
   {
     lines.type = visualization_msgs::Marker::LINE_STRIP;
     lines.points.reserve(n);
-    for (int i = 0; i < n; ++i) lines.points.push_back(toPoint(p.position.col(i)));
+    for (int i = 0; i < n; ++i)
+      lines.points.push_back(toPoint(p.position.col(i)));
   }
   else
   {
@@ -214,9 +215,8 @@ void addEmitter(const core::EmitterBody& emitter, const ros::Time& stamp, const 
 }
 }  // namespace
 
-visualization_msgs::MarkerArray buildMarkers(const core::World& world, const ros::Time& stamp,
-                                              const MarkerStyle& style, bool delete_all,
-                                              const std::vector<std::string>& removed)
+visualization_msgs::MarkerArray buildMarkers(const core::World& world, const ros::Time& stamp, const MarkerStyle& style,
+                                             bool delete_all, const std::vector<std::string>& removed)
 {
   visualization_msgs::MarkerArray out;
   if (delete_all)

@@ -22,7 +22,8 @@ ClothMesh buildClothMesh(const core::SpringNetworkBody& body, const ros::Time& s
   // particles are left out); `vertex_of` maps a particle to its vertex.
   std::vector<int> vertex_of(n, -1);
   for (const Eigen::Vector3i& t : triangles)
-    for (int c = 0; c < 3; ++c) vertex_of[t[c]] = 0;
+    for (int c = 0; c < 3; ++c)
+      vertex_of[t[c]] = 0;
 
   ClothMesh msg;
   msg.header.stamp = stamp;

@@ -41,8 +41,8 @@ bool answer(Response& res, const core::Status& status)
 core::Status parseIntegratorField(const std::string& name, core::IntegratorDef& integrator)
 {
   if (name.empty() || core::parseIntegratorType(name, integrator.type)) return core::Status::success();
-  return core::Status::failure("integrator = '" + name + "' is not an integrator; allowed: " +
-                               core::integratorTypeNames());
+  return core::Status::failure("integrator = '" + name +
+                               "' is not an integrator; allowed: " + core::integratorTypeNames());
 }
 
 geometry_msgs::Vector3 toVector3(const Eigen::Vector3d& v)
@@ -54,11 +54,14 @@ geometry_msgs::Vector3 toVector3(const Eigen::Vector3d& v)
   return out;
 }
 
-int clampCount(std::uint32_t value) { return static_cast<int>(std::min<std::uint32_t>(value, 2000000000u)); }
+int clampCount(std::uint32_t value)
+{
+  return static_cast<int>(std::min<std::uint32_t>(value, 2000000000u));
+}
 }  // namespace
 
 SimNode::SimNode(ros::NodeHandle node, ros::NodeHandle private_node, const std::string& name)
-  : node_(std::move(node)), private_node_(std::move(private_node)), name_(name)
+    : node_(std::move(node)), private_node_(std::move(private_node)), name_(name)
 {
   // Every callback of ours (services, dynamic_reconfigure) waits in our own queue until run()
   // serves it between two ticks, whichever thread runs us.
@@ -94,14 +97,15 @@ bool SimNode::initialize()
   if (!(s.rate > 0.0 && s.rate <= 1000.0))
     return refuse("~rate = " + std::to_string(s.rate) + " is out of range: must be in (0, 1000] Hz");
   if (!(s.real_time_factor >= 0.0 && std::isfinite(s.real_time_factor)))
-    return refuse("~real_time_factor = " + std::to_string(s.real_time_factor) + " must be >= 0 (0 = as fast as possible)");
+    return refuse("~real_time_factor = " + std::to_string(s.real_time_factor) +
+                  " must be >= 0 (0 = as fast as possible)");
   if (!(s.particle_size > 0.0 && std::isfinite(s.particle_size)))
     return refuse("~particle_size = " + std::to_string(s.particle_size) + " must be > 0 m");
   if (s.frame_id.empty()) return refuse("~frame_id is empty");
   if (s.parent_frame_id.empty() || s.parent_frame_id == s.frame_id)
     return refuse("~parent_frame_id = '" + s.parent_frame_id + "' must be set and differ from ~frame_id");
-  if (s.frame_offset.size() != 3 || !std::all_of(s.frame_offset.begin(), s.frame_offset.end(),
-                                                 [](double v) { return std::isfinite(v); }))
+  if (s.frame_offset.size() != 3 ||
+      !std::all_of(s.frame_offset.begin(), s.frame_offset.end(), [](double v) { return std::isfinite(v); }))
     return refuse("~frame_offset must be a list of 3 finite numbers [x, y, z] in m");
 
   if (!(s.strain_color_max > 0.0 && std::isfinite(s.strain_color_max)))
@@ -150,8 +154,7 @@ bool SimNode::initialize()
   services_.push_back(private_node_.advertiseService(names::kSpawnRope, &SimNode::spawnRope, this));
   services_.push_back(private_node_.advertiseService(names::kPinParticle, &SimNode::pinParticle, this));
   services_.push_back(private_node_.advertiseService(names::kUnpinParticle, &SimNode::unpinParticle, this));
-  services_.push_back(
-      private_node_.advertiseService(names::kSetSpringConstants, &SimNode::setSpringConstants, this));
+  services_.push_back(private_node_.advertiseService(names::kSetSpringConstants, &SimNode::setSpringConstants, this));
   services_.push_back(private_node_.advertiseService(names::kSpawnCloth, &SimNode::spawnCloth, this));
   services_.push_back(private_node_.advertiseService(names::kSpawnJelly, &SimNode::spawnJelly, this));
   services_.push_back(private_node_.advertiseService(names::kSetWind, &SimNode::setWind, this));
@@ -162,8 +165,7 @@ bool SimNode::initialize()
   reconfigure_server_ = std::make_unique<dynamic_reconfigure::Server<SimConfig>>(reconfigure_mutex_, private_node_);
   config_ = currentConfig();
   reconfigure_server_->updateConfig(config_);
-  reconfigure_server_->setCallback(
-      [this](SimConfig& config, std::uint32_t level) { reconfigure(config, level); });
+  reconfigure_server_->setCallback([this](SimConfig& config, std::uint32_t level) { reconfigure(config, level); });
 
   // Diagnostics, updated on wall time by run() (diagnostic_updater's own update() runs on ROS time,
   // which stands still while paused).
@@ -173,11 +175,12 @@ bool SimNode::initialize()
   status_window_.restart(world_->simTime(), paused_);
   diagnostics_window_.restart(world_->simTime(), paused_);
 
-  ROS_INFO_NAMED("sim",
-                 "particle_sim: scene '%s', %zu bodies, dt = %g s, %d substeps per tick at %g Hz, real-time factor %g%s, "
-                 "frame '%s'",
-                 s.scene_path.c_str(), world_->bodies().size(), world_->dt(), substeps_, s.rate, s.real_time_factor,
-                 paused_ ? ", paused" : "", s.frame_id.c_str());
+  ROS_INFO_NAMED(
+      "sim",
+      "particle_sim: scene '%s', %zu bodies, dt = %g s, %d substeps per tick at %g Hz, real-time factor %g%s, "
+      "frame '%s'",
+      s.scene_path.c_str(), world_->bodies().size(), world_->dt(), substeps_, s.rate, s.real_time_factor,
+      paused_ ? ", paused" : "", s.frame_id.c_str());
   return true;
 }
 
@@ -217,8 +220,7 @@ void SimNode::run()
     // Sleep until the next tick; if we fell more than a tick behind, do not try to catch up.
     next_tick += std::chrono::duration_cast<SteadyClock::duration>(paused_ ? paused_period : wall_period);
     const auto now = SteadyClock::now();
-    if (next_tick < now - std::chrono::duration_cast<SteadyClock::duration>(paused_period))
-      next_tick = now;
+    if (next_tick < now - std::chrono::duration_cast<SteadyClock::duration>(paused_period)) next_tick = now;
     if (next_tick > now) std::this_thread::sleep_until(next_tick);
   }
 }
@@ -289,8 +291,8 @@ bool SimNode::lookupFrame(const std::string& frame, const Eigen::Vector3d& offse
     tf_listener_ = std::make_unique<tf2_ros::TransformListener>(*tf_buffer_);  // listens on its own thread
   }
   // Poll on wall time: waiting on ROS time could wait on our own /clock.
-  const auto deadline = SteadyClock::now() + std::chrono::duration_cast<SteadyClock::duration>(
-                                                 std::chrono::duration<double>(wait));
+  const auto deadline =
+      SteadyClock::now() + std::chrono::duration_cast<SteadyClock::duration>(std::chrono::duration<double>(wait));
   while (!tf_buffer_->canTransform(settings_.frame_id, frame, ros::Time(0), &error) && SteadyClock::now() < deadline)
     std::this_thread::sleep_for(std::chrono::milliseconds(10));
   try
@@ -441,7 +443,8 @@ void SimNode::printStatus()
     cg_residual = std::max(cg_residual, spring_body.lastSolve().relative_residual);
   }
   char solver[96] = "";
-  if (any_implicit) std::snprintf(solver, sizeof(solver), " | CG %d iterations, residual %.1e", cg_iterations, cg_residual);
+  if (any_implicit)
+    std::snprintf(solver, sizeof(solver), " | CG %d iterations, residual %.1e", cg_iterations, cg_residual);
   ROS_INFO_NAMED("status", "sim time %.3f s | real-time factor %.2f | live particles %d | step %.1f us%s%s", sim_time,
                  rtf, world_->particleCount(), step_us, solver, paused_ ? " | paused" : "");
   status_window_.restart(sim_time, paused_);
@@ -462,7 +465,8 @@ bool SimNode::spawnEmitter(SpawnEmitter::Request& req, SpawnEmitter::Response& r
   def.spread = req.spread;
   if (req.lifetime != 0.0) def.lifetime = req.lifetime;
   if (req.mass != 0.0) def.particle_mass = req.mass;
-  if (req.max_particles != 0) def.max_particles = static_cast<int>(std::min<std::uint32_t>(req.max_particles, 2000000000u));
+  if (req.max_particles != 0)
+    def.max_particles = static_cast<int>(std::min<std::uint32_t>(req.max_particles, 2000000000u));
   def.seed = req.seed != 0 ? req.seed : core::deriveSeed(world_->definition().seed, def.name);
 
   core::Status status = world_->addEmitter(def);
@@ -531,8 +535,7 @@ bool SimNode::pinParticle(PinParticle::Request& req, PinParticle::Response& res)
       target = point;
       what = "at the given point";
       break;
-    case PinParticle::Request::TARGET_FRAME:
-    {
+    case PinParticle::Request::TARGET_FRAME: {
       const Eigen::Vector3d offset(req.offset.x, req.offset.y, req.offset.z);
       if (req.frame.empty()) return answer(res, core::Status::failure("frame is empty: name the tf frame to follow"));
       if (!offset.allFinite()) return answer(res, core::Status::failure("offset is not finite"));
@@ -557,7 +560,8 @@ bool SimNode::pinParticle(PinParticle::Request& req, PinParticle::Response& res)
   if (req.target == PinParticle::Request::TARGET_FRAME)
     frame_pins_.push_back({req.body, index, req.frame, Eigen::Vector3d(req.offset.x, req.offset.y, req.offset.z)});
   res.index = index;
-  return answer(res, core::Status::success("pinned particle " + std::to_string(index) + " of '" + req.body + "' " + what));
+  return answer(res,
+                core::Status::success("pinned particle " + std::to_string(index) + " of '" + req.body + "' " + what));
 }
 
 bool SimNode::unpinParticle(UnpinParticle::Request& req, UnpinParticle::Response& res)
@@ -722,8 +726,8 @@ void SimNode::reconfigure(SimConfig& config, std::uint32_t level)
       default_integrator_.type = type;
     else
     {
-      refuse("integrator", core::Status::failure("integrator = '" + config.integrator + "' is not an integrator; allowed: " +
-                                                 core::integratorTypeNames()));
+      refuse("integrator", core::Status::failure("integrator = '" + config.integrator +
+                                                 "' is not an integrator; allowed: " + core::integratorTypeNames()));
       config.integrator = config_.integrator;
     }
   }
@@ -941,7 +945,7 @@ SimStatus::Ptr SimNode::buildStatus(const ros::Time& stamp) const
       const auto& spring_body = static_cast<const core::SpringNetworkBody&>(*body);
       b.type = core::toString(spring_body.shape());
       b.model = spring_body.definition().baraff_witkin.empty() ? core::toString(core::ClothModel::Springs)
-                                                                : core::toString(core::ClothModel::BaraffWitkin);
+                                                               : core::toString(core::ClothModel::BaraffWitkin);
       b.integrator = core::toString(spring_body.integrator().type);
       b.last_integrator = core::toString(spring_body.lastIntegrator());
       b.auto_choice = spring_body.autoChoice();
@@ -1004,7 +1008,8 @@ void SimNode::produceDiagnostics(diagnostic_updater::DiagnosticStatusWrapper& st
   if (!frozen.empty())
   {
     std::string names;
-    for (const std::string& name : frozen) names += (names.empty() ? "" : ", ") + name;
+    for (const std::string& name : frozen)
+      names += (names.empty() ? "" : ", ") + name;
     stat.mergeSummary(DiagnosticStatus::ERROR, "frozen bodies: " + names);
   }
   if (!w.paused && !paused_ && settings_.real_time_factor > 0.0 &&

@@ -3,9 +3,9 @@
 // manager get markers, meshes and status without a copy.
 
 #include <nodelet/nodelet.h>
-#include <pluginlib/class_list_macros.hpp>
 
 #include <memory>
+#include <pluginlib/class_list_macros.hpp>
 #include <thread>
 
 #include "particle_sim/ros/sim_node.h"

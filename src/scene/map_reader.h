@@ -16,7 +16,6 @@ namespace scene
 {
 using core::Status;
 
-
 // A scene error carries its own message; thrown only inside the scene layer and turned into a Status
 // by parseScene(), so it never crosses the layer.
 struct SceneError
@@ -36,7 +35,7 @@ class MapReader
 {
 public:
   MapReader(const YAML::Node& node, std::string path, const std::string& source)
-    : node_(node), path_(std::move(path)), source_(source)
+      : node_(node), path_(std::move(path)), source_(source)
   {
     if (!node_.IsMap()) fail(node_, path_ + " must be a mapping of key: value");
   }
@@ -59,7 +58,8 @@ public:
     if (!child) return;
     if (!child.IsSequence() || child.size() != 3)
       fail(child, field(key) + " = " + text(child) + " must be a list of 3 numbers [x, y, z]");
-    for (int i = 0; i < 3; ++i) value[i] = convert<double>(child[i], field(key) + "[" + std::to_string(i) + "]");
+    for (int i = 0; i < 3; ++i)
+      value[i] = convert<double>(child[i], field(key) + "[" + std::to_string(i) + "]");
   }
 
   template <typename T>
@@ -83,7 +83,8 @@ public:
       const std::string key = entry.first.as<std::string>();
       if (known_.count(key)) continue;
       std::string allowed;
-      for (const std::string& k : known_) allowed += (allowed.empty() ? "" : ", ") + k;
+      for (const std::string& k : known_)
+        allowed += (allowed.empty() ? "" : ", ") + k;
       fail(entry.first, field(key) + " is not a known key; allowed keys: " + allowed);
     }
   }

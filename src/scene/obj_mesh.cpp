@@ -84,7 +84,8 @@ core::Status parseObj(const std::string& text, const std::string& source, ObjMes
   // Texture coordinates per vertex, when every vertex used by a face has one.
   bool all_uv = !texture_coordinates.empty();
   for (const Eigen::Vector3i& t : mesh.triangles)
-    for (int c = 0; c < 3; ++c) all_uv = all_uv && uv_of_vertex[t[c]] >= 0;
+    for (int c = 0; c < 3; ++c)
+      all_uv = all_uv && uv_of_vertex[t[c]] >= 0;
   if (all_uv)
   {
     mesh.uvs.assign(mesh.vertices.size(), Eigen::Vector2d::Zero());

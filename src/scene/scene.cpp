@@ -1,9 +1,5 @@
 #include "particle_sim/scene/scene.h"
 
-#include "map_reader.h"
-#include "particle_sim/core/validation.h"
-#include "particle_sim/scene/obj_mesh.h"
-
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
@@ -13,6 +9,10 @@
 #include <iomanip>
 #include <set>
 #include <sstream>
+
+#include "map_reader.h"
+#include "particle_sim/core/validation.h"
+#include "particle_sim/scene/obj_mesh.h"
 
 namespace particle_sim
 {
@@ -212,8 +212,8 @@ core::SpringNetworkDef readSpringNetwork(MapReader& reader, const core::WorldDef
 
   const YAML::Node particles = reader.child("particles");
   if (!particles || !particles.IsSequence() || particles.size() == 0)
-    reader.fail(particles ? particles : reader.node(), reader.field("particles") +
-                                                           " must be a non-empty list of {position, mass, velocity}");
+    reader.fail(particles ? particles : reader.node(),
+                reader.field("particles") + " must be a non-empty list of {position, mass, velocity}");
   bool any_velocity = false;
   std::vector<Eigen::Vector3d> velocities;
   for (std::size_t i = 0; i < particles.size(); ++i)
@@ -254,7 +254,8 @@ core::SpringNetworkDef readSpringNetwork(MapReader& reader, const core::WorldDef
         std::string name;
         s.read("class", name);
         if (!core::parseSpringClass(name, spring.spring_class))
-          s.fail(springs[k]["class"], s.field("class") + " = '" + name + "' is not a spring class; allowed: stretch, shear, bend");
+          s.fail(springs[k]["class"],
+                 s.field("class") + " = '" + name + "' is not a spring class; allowed: stretch, shear, bend");
       }
       s.finish();
       const int n = static_cast<int>(def.positions.size());
@@ -338,7 +339,8 @@ void addFramePins(MapReader& reader, const std::vector<FramePinEntry>& entries, 
     if (YAML::convert<int>::decode(e.node["pin"], index))
       indices.push_back(index < 0 ? count + index : index);
     else if (!resolve_name(e.pin, indices))
-      reader.fail(e.node["pin"], reader.field("frame_pins") + ": pin = '" + e.pin + "' is neither an index nor a pin name");
+      reader.fail(e.node["pin"],
+                  reader.field("frame_pins") + ": pin = '" + e.pin + "' is neither an index nor a pin name");
     for (int i : indices)
     {
       if (i < 0 || i >= count)
@@ -403,7 +405,8 @@ BodyDef readCloth(MapReader& reader, SceneDef& scene, const std::string& source)
       reader.read("origin", origin);
       check(reader, reader.field(""), core::checkPositive("scale", scale));
       check(reader, reader.field(""), core::checkFinite("origin", origin));
-      for (const Eigen::Vector3d& v : mesh.vertices) def.vertices.push_back(origin + scale * v);
+      for (const Eigen::Vector3d& v : mesh.vertices)
+        def.vertices.push_back(origin + scale * v);
       def.triangles = mesh.triangles;
       def.uvs = mesh.uvs;
     }
@@ -414,7 +417,8 @@ BodyDef readCloth(MapReader& reader, SceneDef& scene, const std::string& source)
       {
         if (!vertices[i].IsSequence() || vertices[i].size() != 3)
           reader.fail(vertices[i], reader.field("vertices") + "[" + std::to_string(i) + "] must be [x, y, z]");
-        def.vertices.emplace_back(vertices[i][0].as<double>(), vertices[i][1].as<double>(), vertices[i][2].as<double>());
+        def.vertices.emplace_back(vertices[i][0].as<double>(), vertices[i][1].as<double>(),
+                                  vertices[i][2].as<double>());
       }
       for (std::size_t i = 0; triangles && triangles.IsSequence() && i < triangles.size(); ++i)
       {
@@ -442,8 +446,9 @@ BodyDef readCloth(MapReader& reader, SceneDef& scene, const std::string& source)
     readIntegrator(reader, def.integrator);
     reader.finish();
     check(reader, reader.field(""), core::validate(def, world.max_particles_per_body));
-    addFramePins(reader, frame_pins, name, static_cast<int>(def.vertices.size()),
-                 [](const std::string&, std::vector<int>&) { return false; }, def.pins, scene);
+    addFramePins(
+        reader, frame_pins, name, static_cast<int>(def.vertices.size()),
+        [](const std::string&, std::vector<int>&) { return false; }, def.pins, scene);
     return def;
   }
 
@@ -476,11 +481,12 @@ BodyDef readCloth(MapReader& reader, SceneDef& scene, const std::string& source)
   readIntegrator(reader, def.integrator);
   reader.finish();
   check(reader, reader.field(""), core::validate(def, world.max_particles_per_body));
-  addFramePins(reader, frame_pins, name, def.nu * def.nv,
-               [&](const std::string& pin, std::vector<int>& indices) {
-                 return core::namedGridPins(pin, def.nu, def.nv, indices);
-               },
-               def.pins, scene);
+  addFramePins(
+      reader, frame_pins, name, def.nu * def.nv,
+      [&](const std::string& pin, std::vector<int>& indices) {
+        return core::namedGridPins(pin, def.nu, def.nv, indices);
+      },
+      def.pins, scene);
   return def;
 }
 
@@ -597,7 +603,8 @@ Status buildWorld(const SceneDef& scene, std::unique_ptr<core::World>& world)
   {
     const auto& spheres = scene.world.spheres;
     if (std::none_of(spheres.begin(), spheres.end(), [&](const auto& s) { return s.name == follower.sphere; }))
-      return Status::failure("sphere '" + follower.sphere + "' follows frame '" + follower.frame + "' but does not exist");
+      return Status::failure("sphere '" + follower.sphere + "' follows frame '" + follower.frame +
+                             "' but does not exist");
   }
   if (Status s = applyScriptedFrames(scene, 0.0, *built); !s) return s;
   world = std::move(built);
@@ -644,7 +651,8 @@ YAML::Node vector3(const Eigen::Vector3d& v)
 {
   YAML::Node node;
   node.SetStyle(YAML::EmitterStyle::Flow);
-  for (int i = 0; i < 3; ++i) node.push_back(v[i]);
+  for (int i = 0; i < 3; ++i)
+    node.push_back(v[i]);
   return node;
 }
 
@@ -670,7 +678,8 @@ YAML::Node indexList(const std::vector<int>& values)
 {
   YAML::Node node(YAML::NodeType::Sequence);
   node.SetStyle(YAML::EmitterStyle::Flow);
-  for (int v : values) node.push_back(v);
+  for (int v : values)
+    node.push_back(v);
   return node;
 }
 
@@ -827,7 +836,8 @@ std::string toYaml(const SceneDef& scene)
       node["shear"] = springConstants(c->shear.stiffness, c->shear.damping);
       node["bend"] = springConstants(c->bend.stiffness, c->bend.damping);
       YAML::Node pins = indexList(c->pins);
-      for (const std::string& name : c->named_pins) pins.push_back(name);
+      for (const std::string& name : c->named_pins)
+        pins.push_back(name);
       node["pins"] = pins;
       node["frame_pins"] = framePins(scene, c->name);
       strainLimit(node, c->strain_limit);
@@ -840,8 +850,10 @@ std::string toYaml(const SceneDef& scene)
       node["name"] = m->name;
       node["kind"] = "cloth";
       node["model"] = core::toString(m->model);
-      for (const Eigen::Vector3d& v : m->vertices) node["vertices"].push_back(vector3(v));
-      for (const Eigen::Vector3i& t : m->triangles) node["triangles"].push_back(indexList({t[0], t[1], t[2]}));
+      for (const Eigen::Vector3d& v : m->vertices)
+        node["vertices"].push_back(vector3(v));
+      for (const Eigen::Vector3i& t : m->triangles)
+        node["triangles"].push_back(indexList({t[0], t[1], t[2]}));
       for (const Eigen::Vector2d& uv : m->uvs)
       {
         YAML::Node pair(YAML::NodeType::Sequence);

@@ -13,8 +13,9 @@
 // at half that step. Work: wall time of the stepping loop (std::chrono::steady_clock) per
 // simulated second, the median of repeated runs when one run is short.
 
-#include <Eigen/Geometry>
+#include <unistd.h>
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -33,8 +34,6 @@
 #include <utility>
 #include <variant>
 #include <vector>
-
-#include <unistd.h>
 
 #include "particle_sim/scene/scene.h"
 
@@ -83,19 +82,20 @@ const char* describe(ReferenceKind kind)
 
 struct Case
 {
-  std::string name;       // scene file stem; the key in every CSV
-  std::string title;      // for tables and plots
+  std::string name;   // scene file stem; the key in every CSV
+  std::string title;  // for tables and plots
   ReferenceKind reference;
-  double duration;        // [s] simulated; error measured at this time
+  double duration;          // [s] simulated; error measured at this time
   std::vector<double> dts;  // [s] swept steps, each dividing `duration`
-  double dt_ref = 0.0;    // [s] FineRk4: the checked reference step (the reference runs at half of it)
+  double dt_ref = 0.0;      // [s] FineRk4: the checked reference step (the reference runs at half of it)
 };
 
 // Steps dt0, dt0/2, ... (count of them).
 std::vector<double> halvings(double dt0, int count)
 {
   std::vector<double> dts;
-  for (int i = 0; i < count; ++i) dts.push_back(dt0 / std::pow(2.0, i));
+  for (int i = 0; i < count; ++i)
+    dts.push_back(dt0 / std::pow(2.0, i));
   return dts;
 }
 
@@ -114,7 +114,10 @@ std::vector<Case> benchCases(bool quick)
        sweep(0.3 / 16, 10), 2e-5},
       {"cloth_on_sphere", "cloth falling onto a sphere", ReferenceKind::FineRk4, 0.4, sweep(0.4 / 32, 9), 5e-6},
       {"jelly_drop", "jelly drop", ReferenceKind::FineRk4, 0.4, sweep(0.4 / 32, 9), 5e-6},
-      {"emitters", "emitters (analytic ballistic paths)", ReferenceKind::Ballistic, 1.0,
+      {"emitters",
+       "emitters (analytic ballistic paths)",
+       ReferenceKind::Ballistic,
+       1.0,
        {1e-2, 5e-3, 2e-3, 1e-3, 5e-4, 2e-4, 1e-4}},
   };
   if (quick)
@@ -150,8 +153,7 @@ auto oneSubstep(D& def, int) -> decltype(def.max_substeps = 1, void())
 }
 template <class D>
 void oneSubstep(D&, long)
-{
-}
+{}
 
 // The integrators to compare: the four methods, and `auto` once the core knows it.
 std::vector<std::string> integratorNames()
@@ -216,7 +218,7 @@ struct Run
   std::string why;
   double wall_per_sim = 0.0;  // [s per simulated s], median over repeats
   int repeats = 0;
-  double cg_per_step = 0.0;   // mean CG iterations per step over the implicit bodies
+  double cg_per_step = 0.0;  // mean CG iterations per step over the implicit bodies
 };
 
 bool anyFrozen(const core::World& world, std::string& why)
@@ -239,7 +241,8 @@ double largestCoordinate(const core::World& world)
   for (const auto& body : world.bodies())
   {
     const auto& p = body->particles();
-    for (int i = 0; i < p.size(); ++i) largest = std::max(largest, p.position.col(i).cwiseAbs().maxCoeff());
+    for (int i = 0; i < p.size(); ++i)
+      largest = std::max(largest, p.position.col(i).cwiseAbs().maxCoeff());
   }
   return largest;
 }
@@ -332,7 +335,8 @@ double rmsDistance(const std::vector<Eigen::Vector3d>& a, const std::vector<Eige
 {
   if (a.size() != b.size() || a.empty()) return std::numeric_limits<double>::quiet_NaN();
   double sum = 0.0;
-  for (std::size_t i = 0; i < a.size(); ++i) sum += (a[i] - b[i]).squaredNorm();
+  for (std::size_t i = 0; i < a.size(); ++i)
+    sum += (a[i] - b[i]).squaredNorm();
   return std::sqrt(sum / static_cast<double>(a.size()));
 }
 
@@ -441,7 +445,7 @@ struct Point
   RunStatus status = RunStatus::Stable;
   std::string why;
   double error = std::numeric_limits<double>::quiet_NaN();  // [m]
-  double wall_per_sim = 0.0;                                 // [s/s]
+  double wall_per_sim = 0.0;                                // [s/s]
   int repeats = 0;
   double cg_per_step = 0.0;
 };
@@ -450,9 +454,9 @@ struct ReferenceInfo
 {
   std::string scene, title, kind;
   double duration = 0.0;
-  double dt_ref = 0.0;           // [s] the reference's step (FineRk4)
-  double check = 0.0;            // [m] RMS difference of the references at dt_ref and dt_ref/2
-  double reference_wall = 0.0;   // [s] spent on the references
+  double dt_ref = 0.0;          // [s] the reference's step (FineRk4)
+  double check = 0.0;           // [m] RMS difference of the references at dt_ref and dt_ref/2
+  double reference_wall = 0.0;  // [s] spent on the references
   int free_particles = 0;
 };
 
@@ -460,9 +464,9 @@ struct StabilityPoint
 {
   double k_over_m = 0.0;  // [1/s²]
   std::string integrator;
-  double dt_max = 0.0;    // [s]
-  std::string bound;      // measured | top_of_range | below_range
-  double theory = 0.0;    // [s] 0 = none (implicit)
+  double dt_max = 0.0;  // [s]
+  std::string bound;    // measured | top_of_range | below_range
+  double theory = 0.0;  // [s] 0 = none (implicit)
 };
 
 std::string fmt(const char* format, double value)
@@ -473,14 +477,18 @@ std::string fmt(const char* format, double value)
 }
 
 // Where the plotted error stops meaning anything: round-off, or the reference's own uncertainty.
-double errorFloor(const ReferenceInfo& ref) { return std::max(1e-12, 10.0 * ref.check); }
+double errorFloor(const ReferenceInfo& ref)
+{
+  return std::max(1e-12, 10.0 * ref.check);
+}
 
 // Slope of log(error) against log(dt) over the finest (up to 4) stable points above the floor.
 double observedOrder(const std::vector<Point>& points, double floor)
 {
   std::vector<std::pair<double, double>> xy;  // (log dt, log error), finest first
   std::vector<const Point*> sorted;
-  for (const Point& p : points) sorted.push_back(&p);
+  for (const Point& p : points)
+    sorted.push_back(&p);
   std::sort(sorted.begin(), sorted.end(), [](const Point* a, const Point* b) { return a->dt < b->dt; });
   for (const Point* p : sorted)
   {
@@ -489,11 +497,13 @@ double observedOrder(const std::vector<Point>& points, double floor)
   }
   if (xy.size() < 2) return std::numeric_limits<double>::quiet_NaN();
   double mx = 0, my = 0;
-  for (auto& [x, y] : xy) mx += x, my += y;
+  for (auto& [x, y] : xy)
+    mx += x, my += y;
   mx /= xy.size();
   my /= xy.size();
   double sxy = 0, sxx = 0;
-  for (auto& [x, y] : xy) sxy += (x - mx) * (y - my), sxx += (x - mx) * (x - mx);
+  for (auto& [x, y] : xy)
+    sxy += (x - mx) * (y - my), sxx += (x - mx) * (x - mx);
   return sxy / sxx;
 }
 
@@ -518,7 +528,8 @@ double costAtError(const std::vector<Point>& points, double target)
       if ((a.error - target) * (b.error - target) < 0.0 && a.error > 0.0 && b.error > 0.0)
       {
         const double s = (std::log(target) - std::log(a.error)) / (std::log(b.error) - std::log(a.error));
-        best = std::min(best, std::exp(std::log(a.wall_per_sim) + s * (std::log(b.wall_per_sim) - std::log(a.wall_per_sim))));
+        best = std::min(best,
+                        std::exp(std::log(a.wall_per_sim) + s * (std::log(b.wall_per_sim) - std::log(a.wall_per_sim))));
       }
     }
   }
@@ -646,7 +657,6 @@ std::string machineLine()
   return out.str();
 }
 
-
 bool writeCsvs(const std::string& dir, const std::vector<Point>& points, const std::vector<ReferenceInfo>& refs,
                const std::vector<StabilityPoint>& stability, bool with_stability)
 {
@@ -751,9 +761,11 @@ std::string markdownTables(const std::vector<Case>& cases, const std::vector<std
     else
       md << ref->kind << ".\n\n";
     md << "| dt [s] |";
-    for (const std::string& name : names) md << " " << name << " |";
+    for (const std::string& name : names)
+      md << " " << name << " |";
     md << "\n|---|";
-    for (std::size_t i = 0; i < names.size(); ++i) md << "---|";
+    for (std::size_t i = 0; i < names.size(); ++i)
+      md << "---|";
     md << "\n";
     for (double dt : c.dts)
     {
@@ -785,9 +797,11 @@ std::string markdownTables(const std::vector<Case>& cases, const std::vector<std
         "floor (10 times the reference check, and 1e-12 m). Expected: symplectic Euler 1, Verlet 2 (1 with "
         "damped springs), implicit Euler 1, RK4 4; contacts make every method first order at best. `auto` "
         "switches method with the step, so it has no single order.\n\n| scene |";
-  for (const std::string& name : integrators) md << " " << name << " |";
+  for (const std::string& name : integrators)
+    md << " " << name << " |";
   md << "\n|---|";
-  for (std::size_t i = 0; i < integrators.size(); ++i) md << "---|";
+  for (std::size_t i = 0; i < integrators.size(); ++i)
+    md << "---|";
   md << "\n";
   for (const Case& c : cases)
   {
@@ -821,10 +835,12 @@ std::string markdownTables(const std::vector<Case>& cases, const std::vector<std
         "sweep. Bold: the cheapest.";
   if (has_auto) md << " Last column: auto's cost over implicit Euler's (below 1: auto is cheaper).";
   md << "\n\n| scene | error ≤ [m] |";
-  for (const std::string& name : integrators) md << " " << name << " |";
+  for (const std::string& name : integrators)
+    md << " " << name << " |";
   if (has_auto) md << " auto / implicit_euler |";
   md << "\n|---|---|";
-  for (std::size_t i = 0; i < integrators.size() + (has_auto ? 1 : 0); ++i) md << "---|";
+  for (std::size_t i = 0; i < integrators.size() + (has_auto ? 1 : 0); ++i)
+    md << "---|";
   md << "\n";
   for (const Case& c : cases)
   {
@@ -832,7 +848,8 @@ std::string markdownTables(const std::vector<Case>& cases, const std::vector<std
     for (double target : {1e-3, 1e-5})
     {
       std::vector<double> costs;
-      for (const std::string& name : integrators) costs.push_back(costAtError(pointsOf(points, c.name, name), target));
+      for (const std::string& name : integrators)
+        costs.push_back(costAtError(pointsOf(points, c.name, name), target));
       const double best = *std::min_element(costs.begin(), costs.end());
       md << "| " << c.name << " | " << fmt("%.0e", target) << " |";
       for (double cost : costs)
@@ -881,9 +898,11 @@ std::string markdownTables(const std::vector<Case>& cases, const std::vector<std
           "bisection in log(dt) over [1e-7, 1] s; in brackets, measured over theory (2/ω for symplectic Euler and "
           "Verlet, 2√2/ω for RK4). `≥ 1`: stable at the top of the range.\n\n| k/m [1/s²] | ω [rad/s] | 2/ω [s] | "
           "2√2/ω [s] |";
-    for (const std::string& name : integrators) md << " " << name << " |";
+    for (const std::string& name : integrators)
+      md << " " << name << " |";
     md << "\n|---|---|---|---|";
-    for (std::size_t i = 0; i < integrators.size(); ++i) md << "---|";
+    for (std::size_t i = 0; i < integrators.size(); ++i)
+      md << "---|";
     md << "\n";
     for (std::size_t i = 0; i < stability.size(); i += integrators.size())
     {
@@ -974,13 +993,15 @@ int main(int argc, char** argv)
         return 2;
       }
     }
-    cases.erase(std::remove_if(cases.begin(), cases.end(),
-                               [&](const Case& c) { return std::find(only.begin(), only.end(), c.name) == only.end(); }),
-                cases.end());
+    cases.erase(
+        std::remove_if(cases.begin(), cases.end(),
+                       [&](const Case& c) { return std::find(only.begin(), only.end(), c.name) == only.end(); }),
+        cases.end());
   }
   const int max_repeats = quick ? 1 : 9;
   std::fprintf(stderr, "[bench] integrators:");
-  for (const std::string& name : integrators) std::fprintf(stderr, " %s", name.c_str());
+  for (const std::string& name : integrators)
+    std::fprintf(stderr, " %s", name.c_str());
   std::fprintf(stderr, "\n");
 
   std::vector<Point> points;
@@ -1069,8 +1090,8 @@ int main(int argc, char** argv)
           }
         }
         if (point.status == RunStatus::Stable)
-          std::fprintf(stderr, "[bench] %s %-16s dt %-9.4g s: error %.2e m, %.2e s per sim s (%d runs)\n", c.name.c_str(),
-                       name.c_str(), dt, point.error, point.wall_per_sim, point.repeats);
+          std::fprintf(stderr, "[bench] %s %-16s dt %-9.4g s: error %.2e m, %.2e s per sim s (%d runs)\n",
+                       c.name.c_str(), name.c_str(), dt, point.error, point.wall_per_sim, point.repeats);
         else
           std::fprintf(stderr, "[bench] %s %-16s dt %-9.4g s: %s (%s)\n", c.name.c_str(), name.c_str(), dt,
                        toString(point.status), point.why.c_str());

@@ -2,6 +2,7 @@
 //
 //   particle_sim_run SCENE.yaml --duration T [--dt DT] [--integrator NAME] [--output states.csv] [--every N]
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -10,7 +11,6 @@
 #include <iostream>
 #include <string>
 #include <vector>
-#include <algorithm>
 
 #include "particle_sim/scene/scene.h"
 
@@ -83,7 +83,8 @@ int main(int argc, char** argv)
     }
     else if (arg == "--every")
     {
-      if (!value(every) || every < 1.0 || every != std::floor(every)) return usageError("--every needs an integer >= 1");
+      if (!value(every) || every < 1.0 || every != std::floor(every))
+        return usageError("--every needs an integer >= 1");
     }
     else if (arg == "--integrator")
     {
@@ -217,15 +218,16 @@ int main(int argc, char** argv)
     if (!spring_body->autoChoice().empty())
       std::printf("body '%s' auto: %s\n", body->name().c_str(), spring_body->autoChoice().c_str());
     if (spring_body->stabilityEvents() > 0)
-      std::printf("body '%s': %lld stability events, last: %s\n", body->name().c_str(),
-                  spring_body->stabilityEvents(), spring_body->lastStabilityEvent().c_str());
+      std::printf("body '%s': %lld stability events, last: %s\n", body->name().c_str(), spring_body->stabilityEvents(),
+                  spring_body->lastStabilityEvent().c_str());
   }
   for (const SolverStats& stats : solver_stats)
   {
-    std::printf("body '%s' implicit_euler: CG iterations mean %.1f, max %d; worst relative residual %.2e; %lld "
-                "steps not converged\n",
-                stats.body->name().c_str(), steps ? static_cast<double>(stats.iterations) / steps : 0.0,
-                stats.max_iterations, stats.worst_residual, stats.unconverged);
+    std::printf(
+        "body '%s' implicit_euler: CG iterations mean %.1f, max %d; worst relative residual %.2e; %lld "
+        "steps not converged\n",
+        stats.body->name().c_str(), steps ? static_cast<double>(stats.iterations) / steps : 0.0, stats.max_iterations,
+        stats.worst_residual, stats.unconverged);
   }
   return exit_code;
 }

@@ -51,7 +51,8 @@ Graph graph()
   collect(payload[2], g.services);
   ros::master::V_TopicInfo topics;
   EXPECT_TRUE(ros::master::getTopics(topics));
-  for (const auto& t : topics) g.types[t.name] = t.datatype;
+  for (const auto& t : topics)
+    g.types[t.name] = t.datatype;
   return g;
 }
 }  // namespace
@@ -102,8 +103,8 @@ TEST(ApiContract, TopicsServicesAndParametersUnderTheNamespace)
   for (const auto& [topic, nodes] : g.publishers)
   {
     if (node != ns || !nodes.count(node)) continue;
-    const bool ours = topic.rfind(ns + "/", 0) == 0 || topic == "/clock" || topic == "/diagnostics" ||
-                      topic == "/tf" || topic == "/rosout";
+    const bool ours = topic.rfind(ns + "/", 0) == 0 || topic == "/clock" || topic == "/diagnostics" || topic == "/tf" ||
+                      topic == "/rosout";
     EXPECT_TRUE(ours) << node << " publishes " << topic << " outside " << ns;
   }
 
@@ -131,7 +132,8 @@ TEST(ApiContract, TopicsServicesAndParametersUnderTheNamespace)
   auto markers = ros::topic::waitForMessage<visualization_msgs::MarkerArray>(ns + "/markers", ros::Duration(30.0));
   ASSERT_TRUE(markers);
   ASSERT_FALSE(markers->markers.empty());
-  for (const auto& m : markers->markers) EXPECT_EQ(m.header.frame_id, frame_id) << m.ns;
+  for (const auto& m : markers->markers)
+    EXPECT_EQ(m.header.frame_id, frame_id) << m.ns;
   auto status = ros::topic::waitForMessage<particle_sim::SimStatus>(ns + "/status", ros::Duration(30.0));
   ASSERT_TRUE(status);
   EXPECT_EQ(status->header.frame_id, frame_id);

@@ -1,11 +1,11 @@
 // rostest: cloth and jelly through the node's services, checked in ~markers and ~meshes.
 
-#include <Eigen/Geometry>
 #include <geometry_msgs/TransformStamped.h>
 #include <gtest/gtest.h>
 #include <ros/ros.h>
 #include <tf2_ros/transform_broadcaster.h>
 
+#include <Eigen/Geometry>
 #include <cmath>
 #include <map>
 #include <mutex>
@@ -36,7 +36,10 @@ namespace
 class MeshListener
 {
 public:
-  explicit MeshListener(ros::NodeHandle& nh) { sub_ = nh.subscribe("/particle_sim/meshes", 20, &MeshListener::onMesh, this); }
+  explicit MeshListener(ros::NodeHandle& nh)
+  {
+    sub_ = nh.subscribe("/particle_sim/meshes", 20, &MeshListener::onMesh, this);
+  }
   bool has(const std::string& body) const
   {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -110,9 +113,12 @@ void expectConsistent(const ClothMesh& mesh, std::size_t vertices, std::size_t t
   ASSERT_EQ(mesh.strain.size(), vertices);
   ASSERT_EQ(mesh.particles.size(), vertices);
   for (const auto& t : mesh.mesh.triangles)
-    for (std::uint32_t v : t.vertex_indices) EXPECT_LT(v, vertices);
-  for (const auto& n : mesh.normals) EXPECT_NEAR(std::sqrt(n.x * n.x + n.y * n.y + n.z * n.z), 1.0, 1e-9);
-  for (double s : mesh.strain) EXPECT_TRUE(std::isfinite(s));
+    for (std::uint32_t v : t.vertex_indices)
+      EXPECT_LT(v, vertices);
+  for (const auto& n : mesh.normals)
+    EXPECT_NEAR(std::sqrt(n.x * n.x + n.y * n.y + n.z * n.z), 1.0, 1e-9);
+  for (double s : mesh.strain)
+    EXPECT_TRUE(std::isfinite(s));
 }
 
 class ClothTest : public ::testing::Test
@@ -120,7 +126,8 @@ class ClothTest : public ::testing::Test
 protected:
   static void SetUpTestSuite()
   {
-    for (const char* s : {"spawn_cloth", "spawn_jelly", "set_wind", "set_spring_constants", "pin_particle", "remove_body"})
+    for (const char* s :
+         {"spawn_cloth", "spawn_jelly", "set_wind", "set_spring_constants", "pin_particle", "remove_body"})
       ASSERT_TRUE(ros::service::waitForService(std::string("/particle_sim/") + s, ros::Duration(30.0))) << s;
   }
   ros::NodeHandle nh_;
@@ -166,7 +173,8 @@ TEST_F(ClothTest, SpawnedJellyIsAClosedSurfaceInMarkersAndMeshes)
       [&] {
         const ClothMesh mesh = meshes_.latest("cube");
         double lowest = 1e9;
-        for (const auto& v : mesh.mesh.vertices) lowest = std::min(lowest, v.z);
+        for (const auto& v : mesh.mesh.vertices)
+          lowest = std::min(lowest, v.z);
         return lowest < 0.01;
       },
       10.0));
@@ -212,7 +220,8 @@ TEST_F(ClothTest, WindPushesTheHangingSheetAlongItsNormal)
   auto meanY = [&] {
     const ClothMesh mesh = meshes_.latest("sheet");
     double y = 0.0;
-    for (const auto& v : mesh.mesh.vertices) y += v.y / mesh.mesh.vertices.size();
+    for (const auto& v : mesh.mesh.vertices)
+      y += v.y / mesh.mesh.vertices.size();
     return y;
   };
   const double before = meanY();
@@ -246,7 +255,8 @@ TEST_F(ClothTest, SphereFollowsItsTfFrame)
     const Marker ball = listener_.latest("_colliders", 0);
     return ball.action == Marker::ADD && std::abs(ball.pose.position.x + 2.0) < 1e-9 &&
            std::abs(ball.pose.position.y - 1.5) < 1e-9 && std::abs(ball.pose.position.z - 0.75) < 1e-9;
-  })) << "the sphere marker is at " << listener_.latest("_colliders", 0).pose.position.x;
+  })) << "the sphere marker is at "
+      << listener_.latest("_colliders", 0).pose.position.x;
 }
 
 TEST_F(ClothTest, BaraffWitkinClothSpawnsPublishesAndTakesItsConstants)
@@ -255,7 +265,7 @@ TEST_F(ClothTest, BaraffWitkinClothSpawnsPublishesAndTakesItsConstants)
   req.model = "baraff_witkin";
   req.stretch_stiffness = 2000.0;  // per unit area [N/m]
   req.shear_stiffness = 100.0;
-  req.bend_stiffness = 0.005;      // [N·m]
+  req.bend_stiffness = 0.005;  // [N·m]
   req.bend_damping = 5e-5;
   req.max_strain = 0.0;
   const auto res = call<SpawnCloth>("spawn_cloth", req);

@@ -5,10 +5,9 @@
 #include <ros/ros.h>
 
 #include "node_listener.h"
-#include "sim_probe.h"
-
 #include "particle_sim/SetSpringConstants.h"
 #include "particle_sim/SpawnRope.h"
+#include "sim_probe.h"
 
 using diagnostic_msgs::DiagnosticStatus;
 using particle_sim_test::call;
@@ -61,7 +60,8 @@ protected:
 TEST_F(DiagnosticsTest, OkWhenKeepingUpThenWarnUnderLoadThenErrorAfterAFrozenBody)
 {
   // Keeping up with real time (allowing for a loaded machine: one OK update is enough).
-  DiagnosticStatus status = waitForDiagnostic([](const DiagnosticStatus& s) { return s.level == DiagnosticStatus::OK; });
+  DiagnosticStatus status =
+      waitForDiagnostic([](const DiagnosticStatus& s) { return s.level == DiagnosticStatus::OK; });
   ASSERT_EQ(status.level, DiagnosticStatus::OK) << status.message;
   EXPECT_EQ(status.message, "running");
   EXPECT_EQ(value(status, "live particles"), "64");  // the 8 x 8 cloth

@@ -70,7 +70,8 @@ private:
   {
     std::lock_guard<std::mutex> lock(mutex_);
     ++arrays_;
-    for (const Marker& m : msg->markers) latest_[{m.ns, m.id}] = m;
+    for (const Marker& m : msg->markers)
+      latest_[{m.ns, m.id}] = m;
   }
   void onClock(const rosgraph_msgs::Clock::ConstPtr& msg)
   {

@@ -7,10 +7,9 @@
 #include <algorithm>
 
 #include "node_listener.h"
-#include "sim_probe.h"
-
 #include "particle_sim/SetSpringConstants.h"
 #include "particle_sim/SpawnRope.h"
+#include "sim_probe.h"
 
 using particle_sim_test::call;
 using particle_sim_test::Listener;
@@ -88,7 +87,8 @@ TEST_F(ReconfigureTest, StartsFromTheSceneAndSpringConstantsChangeTheRope)
   EXPECT_TRUE(waitForWall([&] {
     const auto c = probe_.config();
     return c.doubles.at("stiffness") == 1234.0 && c.doubles.at("damping") == 0.4;
-  })) << "~parameter_updates shows stiffness " << probe_.config().doubles.at("stiffness");
+  })) << "~parameter_updates shows stiffness "
+      << probe_.config().doubles.at("stiffness");
   EXPECT_TRUE(waitForWall([&] { return probe_.body("rope").max_strain < 0.2; }));
 }
 

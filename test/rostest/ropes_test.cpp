@@ -1,13 +1,13 @@
 // rostest: ropes through the node's services: spawn_rope, pin_particle with each target kind
 // (current, point, tf frame), unpin_particle and set_spring_constants, good and bad input.
 
-#include <Eigen/Core>
 #include <geometry_msgs/TransformStamped.h>
 #include <gtest/gtest.h>
 #include <ros/ros.h>
 #include <std_srvs/Trigger.h>
 #include <tf2_ros/transform_broadcaster.h>
 
+#include <Eigen/Core>
 #include <atomic>
 #include <cmath>
 #include <thread>
@@ -55,7 +55,8 @@ Eigen::Vector3d pointOf(const Marker& m, int index)
 double stripLength(const Marker& m)
 {
   double length = 0.0;
-  for (std::size_t i = 1; i < m.points.size(); ++i) length += (pointOf(m, i) - pointOf(m, i - 1)).norm();
+  for (std::size_t i = 1; i < m.points.size(); ++i)
+    length += (pointOf(m, i) - pointOf(m, i - 1)).norm();
   return length;
 }
 
@@ -95,7 +96,8 @@ TEST_F(RopesTest, SpawnedRopeIsALineStripWithItsPinnedParticlesDrawnApart)
   SpawnRope::Request req = ropeRequest("drawn", 0.5);
   req.pins = {0, -1};
   spawn(req);
-  const Marker line = listener_.latest("drawn", 1), free = listener_.latest("drawn", 0), pins = listener_.latest("drawn", 2);
+  const Marker line = listener_.latest("drawn", 1), free = listener_.latest("drawn", 0),
+               pins = listener_.latest("drawn", 2);
   EXPECT_EQ(line.type, Marker::LINE_STRIP);
   EXPECT_GT(line.scale.x, 0.0);
   EXPECT_EQ(free.type, Marker::SPHERE_LIST);

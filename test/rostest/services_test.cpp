@@ -9,7 +9,6 @@
 #include <cmath>
 
 #include "node_listener.h"
-
 #include "particle_sim/RemoveBody.h"
 #include "particle_sim/SpawnEmitter.h"
 #include "particle_sim/Step.h"
@@ -37,7 +36,10 @@ SpawnEmitter::Request emitterRequest(const std::string& name, const std::string&
   return req;
 }
 
-std_srvs::Trigger::Response trigger(const std::string& name) { return call<std_srvs::Trigger>(name, {}); }
+std_srvs::Trigger::Response trigger(const std::string& name)
+{
+  return call<std_srvs::Trigger>(name, {});
+}
 
 class ServicesTest : public ::testing::Test
 {

@@ -36,8 +36,10 @@ struct ConfigValues
   std::map<std::string, std::string> strs;
   explicit ConfigValues(const dynamic_reconfigure::Config& config = {})
   {
-    for (const auto& p : config.doubles) doubles[p.name] = p.value;
-    for (const auto& p : config.strs) strs[p.name] = p.value;
+    for (const auto& p : config.doubles)
+      doubles[p.name] = p.value;
+    for (const auto& p : config.strs)
+      strs[p.name] = p.value;
   }
 };
 

@@ -45,7 +45,8 @@ double sheetArea(const ParticlePool& p, const std::vector<Eigen::Vector3i>& tria
 {
   double area = 0.0;
   for (const auto& t : triangles)
-    area += 0.5 * (p.position.col(t[1]) - p.position.col(t[0])).cross(p.position.col(t[2]) - p.position.col(t[0])).norm();
+    area +=
+        0.5 * (p.position.col(t[1]) - p.position.col(t[0])).cross(p.position.col(t[2]) - p.position.col(t[0])).norm();
   return area;
 }
 }  // namespace
@@ -59,9 +60,11 @@ TEST(BaraffWitkinCloth, GridCarriesTrianglesAndBendsButNoSprings)
   // Interior edges of a 4 x 4 cell grid split into triangles: the 16 diagonals, and the 3 inner
   // rows and 3 inner columns of 4 edges each.
   EXPECT_EQ(net.baraff_witkin.bends.size(), 16u + 3u * 4u + 3u * 4u);
-  for (const BwBend& b : net.baraff_witkin.bends) EXPECT_NEAR(b.rest_angle, 0.0, 1e-12);
+  for (const BwBend& b : net.baraff_witkin.bends)
+    EXPECT_NEAR(b.rest_angle, 0.0, 1e-12);
   double area = 0.0;
-  for (const BwTriangle& t : net.baraff_witkin.triangles) area += t.area;
+  for (const BwTriangle& t : net.baraff_witkin.triangles)
+    area += t.area;
   EXPECT_NEAR(area, 0.8, 1e-12);  // the rest (u, v) sheet is the 1 m x 0.8 m start
 }
 
@@ -77,7 +80,8 @@ TEST(BaraffWitkinCloth, ForcesAreTheNegativeEnergyGradientAndVanishAtRest)
   std::mt19937_64 rng(5);
   std::normal_distribution<double> normal(0.0, 0.05);
   Eigen::Matrix3Xd x = body.particles().position;
-  for (int i = 0; i < x.cols(); ++i) x.col(i) += Eigen::Vector3d(normal(rng), normal(rng), normal(rng));
+  for (int i = 0; i < x.cols(); ++i)
+    x.col(i) += Eigen::Vector3d(normal(rng), normal(rng), normal(rng));
   const BaraffWitkinModel& model = *body.baraffWitkin();
   model.addForces(x, zero, force.setZero());
   const double h = 1e-6;
@@ -101,7 +105,8 @@ TEST(BaraffWitkinCloth, RigidMotionChangesNoEnergyAndRotatesTheForces)
   std::mt19937_64 rng(6);
   std::normal_distribution<double> normal(0.0, 0.05);
   Eigen::Matrix3Xd x = body.particles().position;
-  for (int i = 0; i < x.cols(); ++i) x.col(i) += Eigen::Vector3d(normal(rng), normal(rng), normal(rng));
+  for (int i = 0; i < x.cols(); ++i)
+    x.col(i) += Eigen::Vector3d(normal(rng), normal(rng), normal(rng));
   const Eigen::Matrix3d rotation = Eigen::AngleAxisd(1.1, Eigen::Vector3d(-1, 2, 0.5).normalized()).toRotationMatrix();
   const Eigen::Matrix3Xd moved = (rotation * x).colwise() + Eigen::Vector3d(3, -1, 2);
   EXPECT_NEAR(model.energy(moved), model.energy(x), 1e-12 * (1.0 + model.energy(x)));
@@ -120,11 +125,13 @@ TEST(BaraffWitkinCloth, StretchedSheetRelaxesToItsRestSize)
   def.integrator.type = IntegratorType::ImplicitEuler;
   SpringNetworkDef net = buildClothGrid(def);
   const double rest_area = sheetArea(SpringNetworkBody(net).particles(), net.triangles);
-  for (Eigen::Vector3d& x : net.positions) x = Eigen::Vector3d(1.3 * x.x(), 1.2 * x.y(), x.z());  // stretched start
+  for (Eigen::Vector3d& x : net.positions)
+    x = Eigen::Vector3d(1.3 * x.x(), 1.2 * x.y(), x.z());  // stretched start
   SpringNetworkBody body(net);
   ASSERT_GT(sheetArea(body.particles(), net.triangles), 1.5 * rest_area);
   const Environment env = noGravity();
-  for (int k = 0; k < 600; ++k) body.step(1.0 / 100.0, env);
+  for (int k = 0; k < 600; ++k)
+    body.step(1.0 / 100.0, env);
   ASSERT_FALSE(body.frozen()) << body.frozenReason();
   EXPECT_NEAR(sheetArea(body.particles(), net.triangles), rest_area, 1e-3 * rest_area);
   EXPECT_LT(body.maxStrain(), 1e-3);
@@ -152,14 +159,16 @@ TEST(BaraffWitkinCloth, FoldedSheetRelaxesToItsRestAngle)
     for (const BwBend& b : model.definition().bends)
     {
       Eigen::Matrix<double, 3, 4> x;
-      for (int m = 0; m < 4; ++m) x.col(m) = body.particles().position.col(b.v[m]);
+      for (int m = 0; m < 4; ++m)
+        x.col(m) = body.particles().position.col(b.v[m]);
       angle = std::max(angle, std::abs(dihedralAngle(x)));
     }
     return angle;
   };
   ASSERT_GT(largestAngle(), 1.0);
   const Environment env = noGravity();
-  for (int k = 0; k < 2000; ++k) body.step(1.0 / 200.0, env);
+  for (int k = 0; k < 2000; ++k)
+    body.step(1.0 / 200.0, env);
   ASSERT_FALSE(body.frozen()) << body.frozenReason();
   EXPECT_LT(largestAngle(), 0.01);
 }
@@ -177,7 +186,8 @@ TEST(BaraffWitkinCloth, StiffHangingClothIsStableAtOneSixtiethAndConvergesAsDtSh
     Environment env;
     env.ground.enabled = false;
     const int steps = static_cast<int>(std::lround(0.5 / dt));
-    for (int k = 0; k < steps; ++k) body.step(dt, env);
+    for (int k = 0; k < steps; ++k)
+      body.step(dt, env);
     EXPECT_FALSE(body.frozen()) << body.frozenReason();
     EXPECT_LT(body.maxStrain(), 0.05) << "dt " << dt;  // stiff: it hangs without stretching much
     return Eigen::Vector3d(body.particles().position.col(35));
@@ -205,7 +215,8 @@ TEST(BaraffWitkinCloth, SameSceneRunsWithBothClothModels)
     ASSERT_TRUE(parsed.ok) << parsed.message;
     std::unique_ptr<World> world;
     ASSERT_TRUE(particle_sim::scene::buildWorld(def, world).ok);
-    for (int k = 0; k < 100; ++k) world->step();
+    for (int k = 0; k < 100; ++k)
+      world->step();
     const SpringNetworkBody& body = *world->findSpringBody("c");
     EXPECT_FALSE(body.frozen()) << model;
     EXPECT_LT(body.particles().position(2, 63), 1.9) << model << ": the free corner fell";

@@ -2,14 +2,14 @@
 // random deformed triangles and triangle pairs (near-degenerate ones included); zero force at
 // rest; no force and no energy change under rigid motion.
 
+#include "particle_sim/core/baraff_witkin.h"
+
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
 #include <cmath>
 #include <functional>
 #include <random>
-
-#include "particle_sim/core/baraff_witkin.h"
 
 using namespace particle_sim::core;
 
@@ -216,8 +216,7 @@ TEST(BaraffWitkin, RestStateHasZeroConditionsAndRigidMotionChangesNothing)
   EXPECT_NEAR(shear, 0.0, 1e-14);
 
   // A rigid motion (rotation + translation) of any deformed state leaves every condition as it is.
-  const Eigen::Matrix3d rotation =
-      Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+  const Eigen::Matrix3d rotation = Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
   const Eigen::Vector3d shift(0.3, -2.0, 5.0);
   const Eigen::Matrix3d moved = (rotation * t.x).colwise() + shift;
   Eigen::Vector2d c1, c2;

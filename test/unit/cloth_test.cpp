@@ -7,6 +7,8 @@
 // hanging cloth settles to a dt-independent equilibrium that implicit Euler approaches at first
 // order.
 
+#include "particle_sim/core/cloth.h"
+
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
@@ -18,7 +20,6 @@
 #include <utility>
 #include <vector>
 
-#include "particle_sim/core/cloth.h"
 #include "particle_sim/core/world.h"
 
 using namespace particle_sim::core;
@@ -27,15 +28,21 @@ namespace
 {
 const double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-bool mentions(const Status& status, const std::string& field) { return status.message.find(field) != std::string::npos; }
+bool mentions(const Status& status, const std::string& field)
+{
+  return status.message.find(field) != std::string::npos;
+}
 
 int countClass(const std::vector<Spring>& springs, SpringClass spring_class)
 {
-  return static_cast<int>(std::count_if(springs.begin(), springs.end(),
-                                        [&](const Spring& s) { return s.spring_class == spring_class; }));
+  return static_cast<int>(
+      std::count_if(springs.begin(), springs.end(), [&](const Spring& s) { return s.spring_class == spring_class; }));
 }
 
-std::pair<int, int> sortedPair(int i, int j) { return {std::min(i, j), std::max(i, j)}; }
+std::pair<int, int> sortedPair(int i, int j)
+{
+  return {std::min(i, j), std::max(i, j)};
+}
 
 double maxSpeed(const SpringNetworkBody& body)
 {
@@ -79,7 +86,8 @@ MeshClothDef meshGrid(int n)
   MeshClothDef def;
   def.name = "mesh";
   for (int b = 0; b < n; ++b)
-    for (int a = 0; a < n; ++a) def.vertices.emplace_back(a, b, 1.0);
+    for (int a = 0; a < n; ++a)
+      def.vertices.emplace_back(a, b, 1.0);
   for (int b = 0; b + 1 < n; ++b)
     for (int a = 0; a + 1 < n; ++a)
     {
@@ -124,7 +132,8 @@ std::set<std::pair<int, int>> meshEdges(const std::vector<Eigen::Vector3i>& tria
 {
   std::set<std::pair<int, int>> out;
   for (const Eigen::Vector3i& t : triangles)
-    for (int c = 0; c < 3; ++c) out.insert(sortedPair(t[c], t[(c + 1) % 3]));
+    for (int c = 0; c < 3; ++c)
+      out.insert(sortedPair(t[c], t[(c + 1) % 3]));
   return out;
 }
 }  // namespace
@@ -147,7 +156,8 @@ TEST(ClothGrid, BuildPlacesParticlesOnTheGridWithEqualMasses)
   EXPECT_EQ(net.strain_limit.iterations, 33);
   ASSERT_EQ(net.positions.size(), 20u);
   ASSERT_EQ(net.masses.size(), 20u);
-  for (const Eigen::Vector3d& v : net.velocities) EXPECT_EQ(v.norm(), 0.0);
+  for (const Eigen::Vector3d& v : net.velocities)
+    EXPECT_EQ(v.norm(), 0.0);
   double total = 0.0;
   for (int b = 0; b < 4; ++b)
     for (int a = 0; a < 5; ++a)
@@ -178,7 +188,8 @@ TEST(ClothGrid, SpringCountsPerClassFollowProvotsLayout)
       def.bend.stiffness = bend_stiffness;
       ASSERT_TRUE(validate(def, 1000).ok) << validate(def, 1000).message;
       const SpringNetworkDef net = buildClothGrid(def);
-      const std::string where = std::to_string(nu) + "x" + std::to_string(nv) + " bend " + std::to_string(bend_stiffness);
+      const std::string where =
+          std::to_string(nu) + "x" + std::to_string(nv) + " bend " + std::to_string(bend_stiffness);
 
       const int stretch = (nu - 1) * nv + nu * (nv - 1);
       const int shear = 2 * (nu - 1) * (nv - 1);
@@ -251,9 +262,9 @@ TEST(ClothGrid, NamedPinsCoverTheDocumentedCornersAndEdges)
 {
   const int nu = 4, nv = 3;  // index = b * 4 + a
   const std::vector<std::pair<std::string, std::vector<int>>> expected = {
-      {"corner_00", {0}},         {"corner_10", {3}},      {"corner_01", {8}},       {"corner_11", {11}},
-      {"edge_u0", {0, 4, 8}},     {"edge_u1", {3, 7, 11}},  // the sides at u = 0 and u = 1
-      {"edge_v0", {0, 1, 2, 3}},  {"edge_v1", {8, 9, 10, 11}},  // the sides at v = 0 and v = 1
+      {"corner_00", {0}},        {"corner_10", {3}},          {"corner_01", {8}},
+      {"corner_11", {11}},       {"edge_u0", {0, 4, 8}},      {"edge_u1", {3, 7, 11}},  // the sides at u = 0 and u = 1
+      {"edge_v0", {0, 1, 2, 3}}, {"edge_v1", {8, 9, 10, 11}},                           // the sides at v = 0 and v = 1
   };
   for (const auto& [name, indices] : expected)
   {
@@ -279,7 +290,8 @@ TEST(ClothGrid, NamedPinsCoverTheDocumentedCornersAndEdges)
   // A built body holds exactly those particles.
   SpringNetworkBody body(buildClothGrid(def));
   EXPECT_EQ(body.pinnedCount(), 6);
-  for (int i : {0, 5, 8, 9, 10, 11}) EXPECT_TRUE(body.isPinned(i)) << i;
+  for (int i : {0, 5, 8, 9, 10, 11})
+    EXPECT_TRUE(body.isPinned(i)) << i;
 }
 
 TEST(ClothGrid, ValidateRefusesBadFieldsNamingThem)
@@ -304,7 +316,11 @@ TEST(ClothGrid, ValidateRefusesBadFieldsNamingThem)
       {"negative shear stiffness", [](ClothGridDef& d) { d.shear.stiffness = -2.0; }, {"shear.stiffness", "-2"}},
       {"negative bend stiffness", [](ClothGridDef& d) { d.bend.stiffness = -3.0; }, {"bend.stiffness", "-3"}},
       {"negative shear damping", [](ClothGridDef& d) { d.shear.damping = -0.5; }, {"shear.damping"}},
-      {"unknown pin name", [](ClothGridDef& d) { d.named_pins = {"corner_00", "top_left"}; }, {"top_left"}},
+      {"unknown pin name",
+       [](ClothGridDef& d) {
+         d.named_pins = {"corner_00", "top_left"};
+       },
+       {"top_left"}},
       {"pin index out of range", [](ClothGridDef& d) { d.pins = {20}; }, {"pins[0]", "20"}},
       {"too many particles", [](ClothGridDef& d) { d.nu = 7; }, {"resolution", "28", "20"}},
       {"zero mass", [](ClothGridDef& d) { d.mass = 0.0; }, {"mass"}},
@@ -317,7 +333,8 @@ TEST(ClothGrid, ValidateRefusesBadFieldsNamingThem)
     c.edit(def);
     const Status status = validate(def, 20);
     EXPECT_FALSE(status.ok) << c.what;
-    for (const std::string& word : c.words) EXPECT_TRUE(mentions(status, word)) << c.what << ": " << status.message;
+    for (const std::string& word : c.words)
+      EXPECT_TRUE(mentions(status, word)) << c.what << ": " << status.message;
   }
 
   // The world refuses the same definitions and adds nothing.
@@ -351,7 +368,8 @@ TEST(ClothMesh, TwoTrianglesMakeFiveStretchSpringsAndOneBendAcrossTheDiagonal)
   EXPECT_EQ(net.shape, NetworkShape::Cloth);
   EXPECT_EQ(net.positions, def.vertices);
   EXPECT_EQ(net.triangles, def.triangles);
-  for (double m : net.masses) EXPECT_NEAR(m, 0.2, 1e-15);
+  for (double m : net.masses)
+    EXPECT_NEAR(m, 0.2, 1e-15);
   EXPECT_EQ(net.pins, std::vector<int>{3});
 
   EXPECT_EQ(pairsOfClass(net.springs, SpringClass::Stretch),
@@ -386,7 +404,8 @@ TEST(ClothMesh, GridMeshHasOneStretchPerEdgeAndOneBendPerInteriorEdge)
   {
     MeshClothDef def = meshGrid(n);
     // Move the vertices off the plane so that rest lengths differ from spring to spring.
-    for (std::size_t k = 0; k < def.vertices.size(); ++k) def.vertices[k].z() += 0.1 * std::sin(1.7 * k);
+    for (std::size_t k = 0; k < def.vertices.size(); ++k)
+      def.vertices[k].z() += 0.1 * std::sin(1.7 * k);
     ASSERT_TRUE(validate(def, 100).ok) << validate(def, 100).message;
     const SpringNetworkDef net = buildMeshCloth(def);
 
@@ -423,17 +442,40 @@ TEST(ClothMesh, ValidateRefusesBadTrianglesAndFields)
     std::vector<std::string> words;
   };
   const Case cases[] = {
-      {"index past the end", [](MeshClothDef& d) { d.triangles[1] = {0, 2, 4}; }, {"triangles[1]", "4"}},
-      {"negative index", [](MeshClothDef& d) { d.triangles[1] = {-1, 2, 3}; }, {"triangles[1]", "-1"}},
-      {"repeated vertex", [](MeshClothDef& d) { d.triangles[0] = {0, 1, 0}; }, {"triangles[0]"}},
-      {"all one vertex", [](MeshClothDef& d) { d.triangles[1] = {2, 2, 2}; }, {"triangles[1]"}},
+      {"index past the end",
+       [](MeshClothDef& d) {
+         d.triangles[1] = {0, 2, 4};
+       },
+       {"triangles[1]", "4"}},
+      {"negative index",
+       [](MeshClothDef& d) {
+         d.triangles[1] = {-1, 2, 3};
+       },
+       {"triangles[1]", "-1"}},
+      {"repeated vertex",
+       [](MeshClothDef& d) {
+         d.triangles[0] = {0, 1, 0};
+       },
+       {"triangles[0]"}},
+      {"all one vertex",
+       [](MeshClothDef& d) {
+         d.triangles[1] = {2, 2, 2};
+       },
+       {"triangles[1]"}},
       {"no triangles", [](MeshClothDef& d) { d.triangles.clear(); }, {"triangles"}},
-      {"two vertices", [](MeshClothDef& d) { d.vertices.resize(2); d.triangles.clear(); }, {"vertices"}},
+      {"two vertices",
+       [](MeshClothDef& d) {
+         d.vertices.resize(2);
+         d.triangles.clear();
+       },
+       {"vertices"}},
       {"NaN vertex", [](MeshClothDef& d) { d.vertices[2].y() = kNaN; }, {"vertices[2]"}},
       {"pin out of range", [](MeshClothDef& d) { d.pins = {4}; }, {"pins[0]"}},
       {"negative stretch stiffness", [](MeshClothDef& d) { d.stretch.stiffness = -5.0; }, {"stretch.stiffness"}},
       {"negative bend damping", [](MeshClothDef& d) { d.bend.damping = -1.0; }, {"bend.damping"}},
-      {"too many vertices", [](MeshClothDef& d) { d.vertices.resize(11, Eigen::Vector3d(3, 3, 3)); }, {"vertices", "11"}},
+      {"too many vertices",
+       [](MeshClothDef& d) { d.vertices.resize(11, Eigen::Vector3d(3, 3, 3)); },
+       {"vertices", "11"}},
   };
   for (const Case& c : cases)
   {
@@ -441,7 +483,8 @@ TEST(ClothMesh, ValidateRefusesBadTrianglesAndFields)
     c.edit(def);
     const Status status = validate(def, 10);
     EXPECT_FALSE(status.ok) << c.what;
-    for (const std::string& word : c.words) EXPECT_TRUE(mentions(status, word)) << c.what << ": " << status.message;
+    for (const std::string& word : c.words)
+      EXPECT_TRUE(mentions(status, word)) << c.what << ": " << status.message;
   }
   World world(WorldDef{});
   MeshClothDef bad = good;
@@ -510,16 +553,19 @@ TEST(ClothStrain, VertexStrainsAreZeroAtRestAndMatchAUniformStretch)
     std::vector<double> strains;
     vertexStrains(body, strains);
     ASSERT_EQ(strains.size(), 20u);
-    for (double s : strains) EXPECT_NEAR(s, 0.0, 1e-12);
+    for (double s : strains)
+      EXPECT_NEAR(s, 0.0, 1e-12);
     EXPECT_NEAR(body.maxStrain(), 0.0, 1e-12);
   }
   // Rest lengths shortened by 1/1.1: every stretch and shear spring is 10 % long.
-  for (Spring& s : net.springs) s.rest_length /= 1.1;
+  for (Spring& s : net.springs)
+    s.rest_length /= 1.1;
   SpringNetworkBody body(net);
   std::vector<double> strains;
   vertexStrains(body, strains);
   ASSERT_EQ(strains.size(), 20u);
-  for (double s : strains) EXPECT_NEAR(s, 0.1, 1e-12);
+  for (double s : strains)
+    EXPECT_NEAR(s, 0.1, 1e-12);
   EXPECT_NEAR(body.maxStrain(), 0.1, 1e-12);
 
   // Only the bend springs shortened: no strain is reported (bend springs are not measured).
@@ -528,7 +574,8 @@ TEST(ClothStrain, VertexStrainsAreZeroAtRestAndMatchAUniformStretch)
     if (s.spring_class == SpringClass::Bend) s.rest_length /= 1.5;
   SpringNetworkBody bent(bend_only);
   vertexStrains(bent, strains);
-  for (double s : strains) EXPECT_NEAR(s, 0.0, 1e-12);
+  for (double s : strains)
+    EXPECT_NEAR(s, 0.0, 1e-12);
   EXPECT_NEAR(bent.maxStrain(), 0.0, 1e-12);
 }
 
@@ -712,7 +759,8 @@ TEST(ClothCollision, ClothDroppedOnASphereDrapesWithoutEverEnteringItOrTheGround
   EXPECT_NEAR(p.position(2, Drape::kCentre), Drape::kTop, 0.01);
   EXPECT_LE(p.position.col(Drape::kCentre).head<2>().norm(), 1e-6) << "the centre stays above the sphere's top";
   // The corners hang well below it.
-  for (int c : corners) EXPECT_LT(p.position(2, c), p.position(2, Drape::kCentre) - 0.5) << "corner " << c;
+  for (int c : corners)
+    EXPECT_LT(p.position(2, c), p.position(2, Drape::kCentre) - 0.5) << "corner " << c;
 }
 
 // Once the sheet lies still on the sphere, the particle on top does not move; the velocity it
@@ -726,7 +774,8 @@ TEST(ClothCollision, ParticleLyingStillOnTheSphereReportsNoSpeed)
     ContactDef contact;
     contact.restitution = restitution;
     Drape drape(contact);
-    for (int k = 0; k < 500; ++k) drape.world.step();
+    for (int k = 0; k < 500; ++k)
+      drape.world.step();
     const Eigen::Vector3d before = drape.body->particles().position.col(Drape::kCentre);
     double speed = 0.0;
     for (int k = 0; k < 100; ++k)
@@ -777,7 +826,8 @@ TEST(ClothCollision, MovingTheSpherePushesTheClothOutOfIt)
   ASSERT_TRUE(world.setSphereCenter("tool", moved).ok);
   EXPECT_EQ(world.environment().spheres[0].center, moved);
   int inside_before = 0;
-  for (int i = 0; i < body.particles().size(); ++i) inside_before += (start.col(i) - moved).norm() < sphere.radius;
+  for (int i = 0; i < body.particles().size(); ++i)
+    inside_before += (start.col(i) - moved).norm() < sphere.radius;
   ASSERT_GT(inside_before, 5) << "the moved sphere must overlap the sheet for the test to mean anything";
 
   for (int k = 0; k < 20; ++k)
@@ -795,7 +845,8 @@ TEST(ClothCollision, MovingTheSpherePushesTheClothOutOfIt)
   const ParticlePool& p = body.particles();
   const int middle = 5 * 11 + 5;
   EXPECT_GT(p.position(1, middle) - start(1, middle), 0.1);
-  for (int pin : body.definition().pins) EXPECT_EQ(p.position.col(pin), start.col(pin));
+  for (int pin : body.definition().pins)
+    EXPECT_EQ(p.position.col(pin), start.col(pin));
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -835,7 +886,8 @@ struct AirWorld
   void run(double duration)
   {
     const int steps = static_cast<int>(std::lround(duration / world.dt()));
-    for (int k = 0; k < steps; ++k) world.step();
+    for (int k = 0; k < steps; ++k)
+      world.step();
   }
 
   World world;
@@ -950,7 +1002,8 @@ Eigen::Matrix3Xd hang(IntegratorType type, double dt, double duration, double* f
   Environment env;
   env.ground.enabled = false;
   const int steps = static_cast<int>(std::lround(duration / dt));
-  for (int k = 0; k < steps; ++k) body.step(dt, env);
+  for (int k = 0; k < steps; ++k)
+    body.step(dt, env);
   EXPECT_FALSE(body.frozen()) << body.frozenReason();
   if (final_speed) *final_speed = maxSpeed(body);
   if (residual)

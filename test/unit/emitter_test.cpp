@@ -1,11 +1,11 @@
 // The lecture's four emitters: their initial positions and velocities obey the formulas, mapped
 // to z up; particles are recycled at their lifetime; the pool never grows; seeds reproduce.
 
+#include "particle_sim/core/emitter.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
-
-#include "particle_sim/core/emitter.h"
 
 using particle_sim::core::EmitterBody;
 using particle_sim::core::EmitterDef;
@@ -136,8 +136,8 @@ TEST(EmitterBody, SameSeedGivesIdenticalParticlesAndAnotherSeedDoesNot)
 TEST(EmitterBody, RateEmitsTheExpectedCountAndParticlesAreRecycledAtTheirLifetime)
 {
   EmitterDef def = makeDef(EmitterType::Fountain);
-  def.rate = 200.0;      // particles/s
-  def.lifetime = 0.5;    // s
+  def.rate = 200.0;    // particles/s
+  def.lifetime = 0.5;  // s
   def.max_particles = 1000;
   Environment env;
   env.ground.enabled = false;
@@ -146,7 +146,8 @@ TEST(EmitterBody, RateEmitsTheExpectedCountAndParticlesAreRecycledAtTheirLifetim
   for (int k = 0; k < 2000; ++k)
   {
     emitter.step(dt, env);
-    for (int i = 0; i < emitter.particles().size(); ++i) ASSERT_LT(emitter.particles().age[i], def.lifetime);
+    for (int i = 0; i < emitter.particles().size(); ++i)
+      ASSERT_LT(emitter.particles().age[i], def.lifetime);
   }
   // After 2 s: 400 emitted, and the live ones are those of the last 0.5 s.
   EXPECT_NEAR(static_cast<double>(emitter.emittedCount()), 400.0, 1.0);
@@ -162,7 +163,8 @@ TEST(EmitterBody, FullPoolDropsEmissionsAndNeverGrows)
   def.max_particles = 50;
   EmitterBody emitter(def);
   const Environment env;
-  for (int k = 0; k < 200; ++k) emitter.step(0.001, env);
+  for (int k = 0; k < 200; ++k)
+    emitter.step(0.001, env);
   EXPECT_EQ(emitter.particles().size(), 50);
   EXPECT_EQ(emitter.particles().capacity(), 50);
   EXPECT_EQ(emitter.emittedCount() + emitter.droppedCount(), 200);
@@ -178,7 +180,8 @@ TEST(EmitterBody, BurstEmitsOnceAndResetRepeatsItExactly)
   EXPECT_EQ(emitter.particles().size(), 300);
   const Eigen::Matrix3Xd first = emitter.particles().position.leftCols(300);
   const Environment env;
-  for (int k = 0; k < 100; ++k) emitter.step(0.001, env);
+  for (int k = 0; k < 100; ++k)
+    emitter.step(0.001, env);
   EXPECT_EQ(emitter.emittedCount(), 300);
   emitter.reset();
   EXPECT_TRUE(emitter.particles().position.leftCols(300) == first);

@@ -80,7 +80,8 @@ TEST(HardCases, VeryStiffSpringsUnderImplicitEulerStayFiniteLoseEnergyAndConverg
   auto freeEnd = [&](double dt) {
     auto w = build(def, IntegratorType::ImplicitEuler, dt);
     const int steps = static_cast<int>(std::lround(0.5 / dt));
-    for (int k = 0; k < steps; ++k) w->step();
+    for (int k = 0; k < steps; ++k)
+      w->step();
     return Eigen::Vector3d(w->findSpringBody("rope")->particles().position.col(9));
   };
   const Eigen::Vector3d reference = freeEnd(1.0 / 7680.0);
@@ -118,7 +119,8 @@ TEST(HardCases, VeryStiffSpringsUnderExplicitMethodsAreSubsteppedOrFrozenButNeve
   capped.bodies.push_back(other);
   auto world = build(capped, IntegratorType::SymplecticEuler);
   ASSERT_TRUE(world->findSpringBody("other")->setIntegrator(other.integrator).ok);
-  for (int k = 0; k < 60; ++k) world->step();
+  for (int k = 0; k < 60; ++k)
+    world->step();
   const SpringNetworkBody& frozen = *world->findSpringBody("rope");
   EXPECT_TRUE(frozen.frozen());
   EXPECT_NE(frozen.frozenReason().find("even with 4 substeps"), std::string::npos) << frozen.frozenReason();

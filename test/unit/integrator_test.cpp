@@ -177,9 +177,8 @@ TEST(Integrator, ConvergenceOrdersOnTheHarmonicOscillator)
       // Errors stay well above round-off, so the ratio measures truncation.
       EXPECT_GT(errors[level + 1], 1e-11) << toString(c.type);
       const double order = std::log2(errors[level] / errors[level + 1]);
-      EXPECT_NEAR(order, c.expected_order, 0.25)
-          << toString(c.type) << " dt = " << c.first_dt / std::pow(2.0, level) << " errors " << errors[level]
-          << " -> " << errors[level + 1];
+      EXPECT_NEAR(order, c.expected_order, 0.25) << toString(c.type) << " dt = " << c.first_dt / std::pow(2.0, level)
+                                                 << " errors " << errors[level] << " -> " << errors[level + 1];
     }
   }
 }
@@ -251,8 +250,8 @@ TEST(Integrator, ImplicitEulerNeverGainsEnergy)
       body.step(1.0 / 60.0, env);
       const double after = totalEnergy(body, env);
       ASSERT_LE(after, before + 1e-9 * std::max(std::abs(before), scale))
-          << "k = " << stiffness << " rest_length " << c.rest_length << " step " << n << " gained "
-          << after - before << " J";
+          << "k = " << stiffness << " rest_length " << c.rest_length << " step " << n << " gained " << after - before
+          << " J";
       before = after;
     }
     ASSERT_FALSE(body.frozen()) << body.frozenReason();
@@ -282,7 +281,8 @@ TEST(Integrator, InternalForcesConserveMomentum)
 
     // The initial momentum is that of the given velocities.
     Eigen::Vector3d expected = Eigen::Vector3d::Zero();
-    for (std::size_t i = 0; i < network.velocities.size(); ++i) expected += network.masses[i] * network.velocities[i];
+    for (std::size_t i = 0; i < network.velocities.size(); ++i)
+      expected += network.masses[i] * network.velocities[i];
     const Eigen::Vector3d p0 = body.momentum();
     ASSERT_LE((p0 - expected).norm(), 1e-12 * expected.norm()) << toString(type);
     for (int n = 0; n < 300; ++n)
@@ -344,8 +344,8 @@ TEST(Integrator, MovingPinTargetIsReachedExactlyEveryStep)
       ASSERT_TRUE(body.setPinTarget(0, target).ok);
       EXPECT_EQ(body.pinTarget(0), target);
       body.step(dt, env);
-      ASSERT_EQ(p.position.col(0), target) << toString(type) << " step " << n << " off by "
-                                           << (p.position.col(0) - target).norm();
+      ASSERT_EQ(p.position.col(0), target)
+          << toString(type) << " step " << n << " off by " << (p.position.col(0) - target).norm();
     }
     EXPECT_TRUE(allFinite(body));
     EXPECT_FALSE(body.frozen()) << body.frozenReason();
@@ -363,7 +363,8 @@ TEST(Integrator, UnpinnedParticleIsReleasedAndFalls)
     const ParticlePool& p = body.particles();
     const int last = p.size() - 1;
     const Environment env = gravityOnly();
-    for (int n = 0; n < 120; ++n) body.step(1.0 / 120.0, env);
+    for (int n = 0; n < 120; ++n)
+      body.step(1.0 / 120.0, env);
     const Eigen::Vector3d held = p.position.col(last);
     EXPECT_EQ(held, buildRope(def).positions[last]);
 
@@ -371,7 +372,8 @@ TEST(Integrator, UnpinnedParticleIsReleasedAndFalls)
     EXPECT_FALSE(body.isPinned(last));
     EXPECT_EQ(body.pinnedCount(), 1);
     EXPECT_NEAR(p.inverse_mass[last], def.particles / def.mass, 1e-12);
-    for (int n = 0; n < 60; ++n) body.step(1.0 / 120.0, env);
+    for (int n = 0; n < 60; ++n)
+      body.step(1.0 / 120.0, env);
     EXPECT_LT(p.position(2, last), held.z() - 0.1) << toString(type);
     EXPECT_GT((p.position.col(last) - held).norm(), 0.1) << toString(type);
     // The other pin still holds.
@@ -487,7 +489,8 @@ TEST(Integrator, ImplicitEulerStaysStableWhereSymplecticEulerBlowsUp)
   const RopeDef implicit_def = stiffRope(IntegratorType::ImplicitEuler);
   SpringNetworkBody implicit_body(buildRope(implicit_def));
   const double rope_length = (implicit_def.end - implicit_def.start).norm();
-  for (int n = 0; n < 300; ++n) implicit_body.step(dt, env);
+  for (int n = 0; n < 300; ++n)
+    implicit_body.step(dt, env);
   EXPECT_FALSE(implicit_body.frozen()) << implicit_body.frozenReason();
   EXPECT_TRUE(allFinite(implicit_body));
   const ParticlePool& p = implicit_body.particles();
@@ -498,7 +501,8 @@ TEST(Integrator, ImplicitEulerStaysStableWhereSymplecticEulerBlowsUp)
   RopeDef single_step_def = stiffRope(IntegratorType::SymplecticEuler);
   single_step_def.integrator.max_substeps = 1;
   SpringNetworkBody explicit_body(buildRope(single_step_def));
-  for (int n = 0; n < 300; ++n) explicit_body.step(dt, env);
+  for (int n = 0; n < 300; ++n)
+    explicit_body.step(dt, env);
   EXPECT_TRUE(explicit_body.frozen());
   EXPECT_FALSE(explicit_body.frozenReason().empty());
   // A frozen body keeps its last finite state and no longer moves.
@@ -509,7 +513,8 @@ TEST(Integrator, ImplicitEulerStaysStableWhereSymplecticEulerBlowsUp)
 
   // With its default cap it sees the instability coming, splits each step and stays finite.
   SpringNetworkBody substepped(buildRope(stiffRope(IntegratorType::SymplecticEuler)));
-  for (int n = 0; n < 300; ++n) substepped.step(dt, env);
+  for (int n = 0; n < 300; ++n)
+    substepped.step(dt, env);
   EXPECT_FALSE(substepped.frozen()) << substepped.frozenReason();
   EXPECT_TRUE(allFinite(substepped));
   EXPECT_GT(substepped.lastSubsteps(), 50);  // dt omega_max is about 105, the limit 2 (with 10 % margin)

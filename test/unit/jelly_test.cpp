@@ -4,6 +4,8 @@
 // it and comes to rest there with its shape, and without external forces its momentum is
 // conserved and a uniform motion is a rigid translation.
 
+#include "particle_sim/core/jelly.h"
+
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
@@ -16,7 +18,6 @@
 #include <string>
 #include <vector>
 
-#include "particle_sim/core/jelly.h"
 #include "particle_sim/core/world.h"
 
 using namespace particle_sim::core;
@@ -25,12 +26,15 @@ namespace
 {
 const double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-bool mentions(const Status& status, const std::string& field) { return status.message.find(field) != std::string::npos; }
+bool mentions(const Status& status, const std::string& field)
+{
+  return status.message.find(field) != std::string::npos;
+}
 
 int countClass(const std::vector<Spring>& springs, SpringClass spring_class)
 {
-  return static_cast<int>(std::count_if(springs.begin(), springs.end(),
-                                        [&](const Spring& s) { return s.spring_class == spring_class; }));
+  return static_cast<int>(
+      std::count_if(springs.begin(), springs.end(), [&](const Spring& s) { return s.spring_class == spring_class; }));
 }
 
 JellyDef boxJelly(int nx, int ny, int nz)
@@ -88,7 +92,8 @@ TEST(Jelly, BuildPlacesTheLatticeWithEqualMassesAndTheInitialVelocity)
       {
         const int index = (c * 3 + b) * 4 + a;
         const Eigen::Vector3d expected = def.origin + Eigen::Vector3d(0.6 * a / 3.0, 0.4 * b / 2.0, 0.5 * c / 4.0);
-        EXPECT_LE((net.positions[index] - expected).norm(), 1e-12) << "particle (" << a << ", " << b << ", " << c << ")";
+        EXPECT_LE((net.positions[index] - expected).norm(), 1e-12)
+            << "particle (" << a << ", " << b << ", " << c << ")";
         EXPECT_EQ(net.velocities[index], def.velocity);
         EXPECT_NEAR(net.masses[index], 2.0 / 60, 1e-15);
         total += net.masses[index];
@@ -122,9 +127,10 @@ TEST(Jelly, SpringCountsPerClassMatchTheLatticeNeighbourCounts)
       const int face_diagonals = 2 * ((nx - 1) * (ny - 1) * nz + nx * (ny - 1) * (nz - 1) + (nx - 1) * ny * (nz - 1));
       const int body_diagonals = 4 * (nx - 1) * (ny - 1) * (nz - 1);
       // Two apart along an axis: (nx − 2) ny nz along x, and so on.
-      const int bend = bend_stiffness > 0.0 ? (std::max(0, nx - 2) * ny * nz + nx * std::max(0, ny - 2) * nz +
-                                               nx * ny * std::max(0, nz - 2))
-                                            : 0;
+      const int bend =
+          bend_stiffness > 0.0
+              ? (std::max(0, nx - 2) * ny * nz + nx * std::max(0, ny - 2) * nz + nx * ny * std::max(0, nz - 2))
+              : 0;
       EXPECT_EQ(countClass(net.springs, SpringClass::Stretch), stretch) << where;
       EXPECT_EQ(countClass(net.springs, SpringClass::Shear), face_diagonals + body_diagonals) << where;
       EXPECT_EQ(countClass(net.springs, SpringClass::Bend), bend) << where;
@@ -139,7 +145,8 @@ TEST(Jelly, SpringCountsPerClassMatchTheLatticeNeighbourCounts)
         EXPECT_NEAR(s.rest_length, (net.positions[s.j] - net.positions[s.i]).norm(), 1e-12) << where;
         const std::array<int, 3> li = lattice(s.i, nx, ny), lj = lattice(s.j, nx, ny);
         std::array<int, 3> d;
-        for (int k = 0; k < 3; ++k) d[k] = std::abs(li[k] - lj[k]);
+        for (int k = 0; k < 3; ++k)
+          d[k] = std::abs(li[k] - lj[k]);
         const int ones = static_cast<int>(std::count(d.begin(), d.end(), 1));
         const int twos = static_cast<int>(std::count(d.begin(), d.end(), 2));
         const int zeros = static_cast<int>(std::count(d.begin(), d.end(), 0));
@@ -255,7 +262,8 @@ TEST(Jelly, ValidateRefusesBadFieldsNamingThem)
     c.edit(def);
     const Status status = validate(def, 60);
     EXPECT_FALSE(status.ok) << c.what;
-    for (const std::string& word : c.words) EXPECT_TRUE(mentions(status, word)) << c.what << ": " << status.message;
+    for (const std::string& word : c.words)
+      EXPECT_TRUE(mentions(status, word)) << c.what << ": " << status.message;
   }
 
   WorldDef world_def;
@@ -283,7 +291,7 @@ struct DropResult
   Eigen::Vector3d extent_end = Eigen::Vector3d::Zero();  // bounding box size at the end
   Eigen::Vector3d centre_end = Eigen::Vector3d::Zero();  // mean position at the end
   double max_speed_end = 0.0;
-  double moved_last = 0.0;  // largest displacement of a particle over the last 0.25 s
+  double moved_last = 0.0;                                   // largest displacement of a particle over the last 0.25 s
   double fell_to = std::numeric_limits<double>::infinity();  // lowest mean height reached
   bool frozen = false;
 };
@@ -375,7 +383,8 @@ TEST(JellyFree, UniformVelocityIsARigidTranslationWithConstantMomentum)
     const Eigen::Matrix3Xd start = body.particles().position;
     const double dt = 1e-3;
     const int steps = 300;
-    for (int k = 0; k < steps; ++k) body.step(dt, env);
+    for (int k = 0; k < steps; ++k)
+      body.step(dt, env);
     ASSERT_FALSE(body.frozen()) << toString(type);
 
     EXPECT_LE((body.momentum() - def.mass * def.velocity).norm(), 1e-12) << toString(type);
@@ -406,7 +415,8 @@ TEST(JellyFree, InternalForcesConserveMomentumUnderRandomVelocities)
     std::mt19937 rng(7);
     std::normal_distribution<double> normal(0.0, 0.5);
     net.velocities.assign(net.positions.size(), Eigen::Vector3d::Zero());
-    for (Eigen::Vector3d& v : net.velocities) v = Eigen::Vector3d(normal(rng), normal(rng), normal(rng));
+    for (Eigen::Vector3d& v : net.velocities)
+      v = Eigen::Vector3d(normal(rng), normal(rng), normal(rng));
     SpringNetworkBody body(net);
     const Eigen::Vector3d initial = body.momentum();
     ASSERT_GT(initial.norm(), 0.1);

@@ -2,11 +2,11 @@
 // checkMarkerMsg): unit quaternion, non-zero scale, alpha > 0, one colour per point, finite
 // values, non-empty point lists; DELETEALL first and only when asked; DELETE for removed bodies.
 
+#include "particle_sim/ros/marker_builder.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
-
-#include "particle_sim/ros/marker_builder.h"
 
 using namespace particle_sim;
 using visualization_msgs::Marker;
@@ -35,8 +35,10 @@ void expectRvizValid(const Marker& m)
   }
   EXPECT_FALSE(m.points.empty());
   EXPECT_TRUE(m.colors.empty() || m.colors.size() == m.points.size());
-  for (const auto& p : m.points) EXPECT_TRUE(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z));
-  for (const auto& c : m.colors) EXPECT_GT(c.a, 0.0f);
+  for (const auto& p : m.points)
+    EXPECT_TRUE(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z));
+  for (const auto& c : m.colors)
+    EXPECT_GT(c.a, 0.0f);
 }
 
 core::World makeWorld()
@@ -54,7 +56,8 @@ core::World makeWorld()
   e.name = "idle";  // emits nothing for a long time: an empty pool
   e.rate = 0.001;
   EXPECT_TRUE(world.addEmitter(e).ok);
-  for (int k = 0; k < 200; ++k) world.step();
+  for (int k = 0; k < 200; ++k)
+    world.step();
   return world;
 }
 }  // namespace
@@ -65,7 +68,8 @@ TEST(MarkerBuilder, EveryMarkerPassesRvizChecksWithOneNamespacePerBody)
   ros_interface::MarkerStyle style;
   const auto array = ros_interface::buildMarkers(world, ros::Time(1.0), style, false, {});
   ASSERT_EQ(array.markers.size(), 3u);
-  for (const Marker& m : array.markers) expectRvizValid(m);
+  for (const Marker& m : array.markers)
+    expectRvizValid(m);
 
   const Marker& ball = array.markers[0];
   EXPECT_EQ(ball.ns, ros_interface::kCollidersNamespace);
@@ -93,8 +97,10 @@ TEST(MarkerBuilder, DeleteAllComesFirstOnlyWhenAskedAndRemovedBodiesGetDelete)
   EXPECT_EQ(array.markers[0].ns, "");
   EXPECT_EQ(array.markers[1].action, Marker::DELETE);
   EXPECT_EQ(array.markers[1].ns, "gone");
-  for (std::size_t i = 1; i < array.markers.size(); ++i) EXPECT_NE(array.markers[i].action, Marker::DELETEALL);
-  for (const Marker& m : array.markers) EXPECT_EQ(m.header.stamp, ros::Time(2.0));
+  for (std::size_t i = 1; i < array.markers.size(); ++i)
+    EXPECT_NE(array.markers[i].action, Marker::DELETEALL);
+  for (const Marker& m : array.markers)
+    EXPECT_EQ(m.header.stamp, ros::Time(2.0));
 }
 
 TEST(MarkerBuilder, ParticlesAreColouredByAge)
@@ -105,7 +111,8 @@ TEST(MarkerBuilder, ParticlesAreColouredByAge)
   e.rate = 100.0;
   e.lifetime = 1.0;
   ASSERT_TRUE(world.addEmitter(e).ok);
-  for (int k = 0; k < 900; ++k) world.step();
+  for (int k = 0; k < 900; ++k)
+    world.step();
   const auto array = ros_interface::buildMarkers(world, ros::Time(1.0), {}, false, {});
   const auto& p = world.findBody("f")->particles();
   const Marker& m = array.markers[0];
@@ -137,7 +144,8 @@ TEST(MarkerBuilder, RopeIsALineStripWithFreeAndPinnedParticlesApart)
 
   const auto array = ros_interface::buildMarkers(world, ros::Time(1.0), {}, false, {});
   ASSERT_EQ(array.markers.size(), 6u);
-  for (const Marker& m : array.markers) expectRvizValid(m);
+  for (const Marker& m : array.markers)
+    expectRvizValid(m);
   const Marker& free = array.markers[0];
   const Marker& line = array.markers[1];
   const Marker& pins = array.markers[2];
@@ -186,7 +194,8 @@ TEST(MarkerBuilder, ClothAndJellySurfacesAreShadedTriangleListsThatPassRvizCheck
     style.color_by_strain = by_strain;
     const auto array = ros_interface::buildMarkers(world, ros::Time(1.0), style, false, {});
     ASSERT_EQ(array.markers.size(), 6u);
-    for (const Marker& m : array.markers) expectRvizValid(m);
+    for (const Marker& m : array.markers)
+      expectRvizValid(m);
     const Marker& surface = array.markers[1];
     EXPECT_EQ(surface.type, Marker::TRIANGLE_LIST);
     EXPECT_EQ(surface.points.size() % 3, 0u);

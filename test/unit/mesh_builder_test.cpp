@@ -1,12 +1,13 @@
 // ClothMesh messages: vertices are the surface particles with their indices, triangles are
 // renumbered to them and stay fixed, normals are unit and strains match the springs.
 
+#include "particle_sim/ros/mesh_builder.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 
 #include "particle_sim/core/world.h"
-#include "particle_sim/ros/mesh_builder.h"
 
 using namespace particle_sim;
 
@@ -36,7 +37,8 @@ TEST(MeshBuilder, FlatClothHasEveryParticleAsAVertexWithTheSheetNormal)
   for (std::size_t k = 0; k < 24; ++k)
   {
     const auto& t = body.definition().triangles[k];
-    for (int c = 0; c < 3; ++c) EXPECT_EQ(msg.mesh.triangles[k].vertex_indices[c], static_cast<std::uint32_t>(t[c]));
+    for (int c = 0; c < 3; ++c)
+      EXPECT_EQ(msg.mesh.triangles[k].vertex_indices[c], static_cast<std::uint32_t>(t[c]));
   }
 }
 
@@ -63,6 +65,7 @@ TEST(MeshBuilder, JellyLeavesItsInsideParticlesOutAndRenumbersItsTriangles)
   }
   for (const auto& t : msg.mesh.triangles)
   {
-    for (std::uint32_t v : t.vertex_indices) EXPECT_LT(v, 56u);
+    for (std::uint32_t v : t.vertex_indices)
+      EXPECT_LT(v, 56u);
   }
 }

@@ -19,7 +19,10 @@ namespace
 {
 const double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-bool mentions(const Status& status, const std::string& field) { return status.message.find(field) != std::string::npos; }
+bool mentions(const Status& status, const std::string& field)
+{
+  return status.message.find(field) != std::string::npos;
+}
 
 // The rope's spring constants may be named as the C++ field (stretch_stiffness) or as the scene
 // file's path (stretch.stiffness).
@@ -83,7 +86,8 @@ TEST(Rope, BuildLaysOutEvenlySpacedParticlesWithEqualMasses)
   ASSERT_EQ(net.positions.size(), 11u);
   ASSERT_EQ(net.masses.size(), 11u);
   EXPECT_TRUE(net.velocities.empty() || net.velocities.size() == 11u);
-  for (const Eigen::Vector3d& v : net.velocities) EXPECT_EQ(v.norm(), 0.0);
+  for (const Eigen::Vector3d& v : net.velocities)
+    EXPECT_EQ(v.norm(), 0.0);
   double total = 0.0;
   for (int i = 0; i < 11; ++i)
   {
@@ -216,7 +220,10 @@ TEST(Rope, ValidateRefusesEachBadFieldByName)
       {"rest_length", [](RopeDef& d) { d.rest_length = -1.0; }},
       {"start", [](RopeDef& d) { d.start.y() = kNaN; }},
       {"end", [](RopeDef& d) { d.end.x() = std::numeric_limits<double>::infinity(); }},
-      {"pins", [](RopeDef& d) { d.pins = {0, 20}; }},
+      {"pins",
+       [](RopeDef& d) {
+         d.pins = {0, 20};
+       }},
       {"pins", [](RopeDef& d) { d.pins = {-21}; }},
       {"cg_tolerance", [](RopeDef& d) { d.integrator.cg_tolerance = 0.0; }},
   };
@@ -259,7 +266,8 @@ TEST(Rope, ValidateRefusesEachBadNetworkFieldByName)
     c.spoil(def);
     const Status s = validate(def, 100);
     EXPECT_FALSE(s.ok) << c.words.front();
-    for (const char* word : c.words) EXPECT_TRUE(mentions(s, word)) << "expected '" << word << "' in: " << s.message;
+    for (const char* word : c.words)
+      EXPECT_TRUE(mentions(s, word)) << "expected '" << word << "' in: " << s.message;
   }
   // More particles than allowed.
   EXPECT_FALSE(validate(threeParticles(), 2).ok);
@@ -287,7 +295,8 @@ TEST(Rope, HangingRopeSettlesBelowItsPin)
   const ParticlePool& p = body.particles();
   // The swing (a rigid-like motion that spring damping barely sees) decays by about 4x every
   // 10 s under implicit Euler's numerical damping; after 150 s it is below 1 mm/s.
-  for (int n = 0; n < 150 * 60; ++n) body.step(1.0 / 60.0, env);
+  for (int n = 0; n < 150 * 60; ++n)
+    body.step(1.0 / 60.0, env);
   ASSERT_FALSE(body.frozen()) << body.frozenReason();
   EXPECT_LT(maxSpeed(body), 5e-3);
   EXPECT_EQ(p.position.col(0), def.start);
@@ -317,7 +326,8 @@ TEST(Rope, HangingRopeReachesTheAnalyticStaticStretch)
   SpringNetworkBody body(buildRope(def));
   Environment env;
   env.ground.enabled = false;
-  for (int n = 0; n < 30 * 60; ++n) body.step(1.0 / 60.0, env);
+  for (int n = 0; n < 30 * 60; ++n)
+    body.step(1.0 / 60.0, env);
   const ParticlePool& p = body.particles();
   const int n = def.particles;
   const double m = def.mass / n, g = -env.gravity.z(), segment = 2.0 / (n - 1);
@@ -377,7 +387,8 @@ TEST(Rope, SpringConstantsChangeOnlyForClassesTheBodyHas)
     EXPECT_EQ(spring.damping, spring.spring_class == SpringClass::Bend ? 0.5 : def.stretch_damping);
   }
   ASSERT_TRUE(body.setSpringConstants(std::nullopt, 12.0, 0.0).ok);
-  for (const Spring& spring : body.springs()) EXPECT_EQ(spring.stiffness, 12.0);
+  for (const Spring& spring : body.springs())
+    EXPECT_EQ(spring.stiffness, 12.0);
 
   // Without bend springs, bend is refused too.
   RopeDef plain;

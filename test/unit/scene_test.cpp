@@ -1,12 +1,13 @@
 // Scene files: every shipped scene loads and builds; each kind of bad input is refused with a
 // message naming the key, the value and what is allowed; toYaml() round-trips.
 
+#include "particle_sim/scene/scene.h"
+
 #include <gtest/gtest.h>
 
 #include <filesystem>
 
 #include "particle_sim/scene/obj_mesh.h"
-#include "particle_sim/scene/scene.h"
 
 using namespace particle_sim;
 
@@ -53,7 +54,8 @@ TEST(SceneFiles, EveryShippedSceneLoadsAndBuilds)
     const core::Status built = scene::buildWorld(def, world);
     ASSERT_TRUE(built.ok) << entry.path() << ": " << built.message;
     EXPECT_FALSE(world->bodies().empty()) << entry.path();
-    for (int k = 0; k < 100; ++k) world->step();
+    for (int k = 0; k < 100; ++k)
+      world->step();
   }
   EXPECT_GE(count, 8);  // one per emitter, the demo, ropes and a network
 }
@@ -92,7 +94,8 @@ TEST(SceneFiles, RefusesUnknownKeysNamingThemAndTheAllowedOnes)
 
 TEST(SceneFiles, RefusesWrongTypes)
 {
-  EXPECT_TRUE(contains(refusal(std::string(kEmitterHead) + "    rate: fast\n"), "bodies[0].rate = 'fast' must be a number"));
+  EXPECT_TRUE(
+      contains(refusal(std::string(kEmitterHead) + "    rate: fast\n"), "bodies[0].rate = 'fast' must be a number"));
   EXPECT_TRUE(contains(refusal(std::string(kEmitterHead) + "    origin: [0, 1]\n"), "must be a list of 3 numbers"));
   EXPECT_TRUE(contains(refusal(std::string(kEmitterHead) + "    max_particles: 1.5\n"), "must be an integer"));
   EXPECT_TRUE(contains(refusal("world:\n  ground: {enabled: maybe}\n"), "must be true or false"));
@@ -104,14 +107,15 @@ TEST(SceneFiles, RefusesOutOfRangeAndNonFiniteValues)
   EXPECT_TRUE(contains(refusal(std::string(kEmitterHead) + "    rate: -3\n"),
                        "bodies[0].rate = -3 is out of range: must be >= 0"));
   EXPECT_TRUE(contains(refusal(std::string(kEmitterHead) + "    lifetime: 0\n"), "lifetime = 0 is out of range"));
-  EXPECT_TRUE(contains(refusal(std::string(kEmitterHead) + "    origin: [0, .nan, 0]\n"), "origin = [0, nan, 0] is not finite"));
+  EXPECT_TRUE(contains(refusal(std::string(kEmitterHead) + "    origin: [0, .nan, 0]\n"),
+                       "origin = [0, nan, 0] is not finite"));
   EXPECT_TRUE(contains(refusal(std::string(kEmitterHead) + "    speed: .inf\n"), "speed = inf is not a finite number"));
   EXPECT_TRUE(contains(refusal("world:\n  dt: 0.5\n"), "world.dt = 0.5 is out of range: must be in [0, 0.1]"));
   EXPECT_TRUE(contains(refusal("world:\n  ground: {restitution: 1.5}\n"), "ground.restitution = 1.5"));
   EXPECT_TRUE(contains(refusal("world:\n  spheres:\n    - {center: [0, 0, 0], radius: -1}\n"), "radius = -1"));
-  EXPECT_TRUE(contains(refusal("world:\n  max_particles_per_body: 100\n" + std::string(kEmitterHead) +
-                               "    max_particles: 500\n"),
-                       "max_particles = 500 is out of range: must be in [1, 100]"));
+  EXPECT_TRUE(contains(
+      refusal("world:\n  max_particles_per_body: 100\n" + std::string(kEmitterHead) + "    max_particles: 500\n"),
+      "max_particles = 500 is out of range: must be in [1, 100]"));
 }
 
 TEST(SceneFiles, RefusesUnknownKindsTypesDuplicatesMissingKeysAndBadYaml)
@@ -219,8 +223,9 @@ TEST(SceneFiles, RefusesBadRopesAndNetworks)
   EXPECT_TRUE(contains(refusal(rope + "    stretch: {stifness: 2}\n"), "stretch.stifness is not a known key"));
   EXPECT_TRUE(contains(refusal(rope + "    pins: [0, 25]\n"), "pins[1] = 25 is out of range"));
   EXPECT_TRUE(contains(refusal(rope + "    pins: [first]\n"), "pins[0] must be an integer"));
-  EXPECT_TRUE(contains(refusal(rope + "    integrator: euler\n"),
-                       "integrator = 'euler' is not an integrator; allowed: symplectic_euler, verlet, implicit_euler, rk4"));
+  EXPECT_TRUE(
+      contains(refusal(rope + "    integrator: euler\n"),
+               "integrator = 'euler' is not an integrator; allowed: symplectic_euler, verlet, implicit_euler, rk4"));
   EXPECT_TRUE(contains(refusal(rope + "    verlet_damping: 1.5\n"), "verlet_damping = 1.5 is out of range"));
   EXPECT_TRUE(contains(refusal("world:\n  cg_max_iterations: 0\n"), "cg_max_iterations = 0 is out of range"));
 
@@ -231,7 +236,8 @@ TEST(SceneFiles, RefusesBadRopesAndNetworks)
   EXPECT_TRUE(contains(refusal(net + "    particles: [{position: [0, 0, 0]}, {position: [1, 0, 0]}]\n"
                                      "    springs: [{particles: [0]}]\n"),
                        "must be two particle indices"));
-  EXPECT_TRUE(contains(refusal(net + "    particles: [{position: [0, 0, 0], mass: 0}]\n"), "masses[0] = 0 is out of range"));
+  EXPECT_TRUE(
+      contains(refusal(net + "    particles: [{position: [0, 0, 0], mass: 0}]\n"), "masses[0] = 0 is out of range"));
   EXPECT_TRUE(contains(refusal(net + "    particles: [{position: [0, 0, 0]}, {position: [1, 0, 0]}]\n"
                                      "    springs: [{particles: [0, 1], class: twist}]\n"),
                        "class = 'twist' is not a spring class"));

@@ -2,13 +2,13 @@
 // both ends, its energy's negative gradient is the elastic force, and its Jacobian blocks are the
 // derivatives of the force (central finite differences), the definite form staying semi-definite.
 
+#include "particle_sim/core/spring.h"
+
 #include <gtest/gtest.h>
 
 #include <Eigen/Eigenvalues>
 #include <cmath>
 #include <random>
-
-#include "particle_sim/core/spring.h"
 
 using namespace particle_sim::core;
 
@@ -28,11 +28,12 @@ Config randomConfig(std::mt19937_64& rng, double stretch)
   auto vec = [&]() { return Eigen::Vector3d(unit(rng), unit(rng), unit(rng)); };
   Config c;
   c.rest_length = 0.5 + 1.5 * 0.5 * (unit(rng) + 1.0);  // [0.5, 2]
-  c.stiffness = std::pow(10.0, 1.0 + unit(rng));         // [1, 100]
-  c.damping = 5.0 * 0.5 * (unit(rng) + 1.0) + 0.1;       // [0.1, 5.1]
+  c.stiffness = std::pow(10.0, 1.0 + unit(rng));        // [1, 100]
+  c.damping = 5.0 * 0.5 * (unit(rng) + 1.0) + 0.1;      // [0.1, 5.1]
   c.xi = vec();
   Eigen::Vector3d direction = vec();
-  while (direction.norm() < 0.1) direction = vec();
+  while (direction.norm() < 0.1)
+    direction = vec();
   c.xj = c.xi + stretch * c.rest_length * direction.normalized();
   c.vi = vec();
   c.vj = vec();

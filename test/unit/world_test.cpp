@@ -1,12 +1,12 @@
 // The world and its colliders: free particles follow the analytic parabola, never end a step
 // inside the ground or a sphere, bounce with the given restitution, and runs are reproducible.
 
+#include "particle_sim/core/world.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstring>
-
-#include "particle_sim/core/world.h"
 
 using namespace particle_sim::core;
 
@@ -35,7 +35,8 @@ std::uint64_t stateHash(const World& world)
   std::uint64_t hash = 1469598103934665603ULL;
   auto mix = [&](const double* data, int count) {
     const auto* bytes = reinterpret_cast<const unsigned char*>(data);
-    for (std::size_t i = 0; i < count * sizeof(double); ++i) hash = (hash ^ bytes[i]) * 1099511628211ULL;
+    for (std::size_t i = 0; i < count * sizeof(double); ++i)
+      hash = (hash ^ bytes[i]) * 1099511628211ULL;
   };
   for (const auto& body : world.bodies())
   {
@@ -72,7 +73,8 @@ TEST(World, SimTimeIsExactlyStepsTimesDt)
   WorldDef def;
   def.dt = 0.001;
   World world(def);
-  for (int k = 0; k < 12345; ++k) world.step();
+  for (int k = 0; k < 12345; ++k)
+    world.step();
   EXPECT_EQ(world.stepCount(), 12345u);
   EXPECT_EQ(world.simTime(), 12345 * 0.001);
 }
@@ -185,7 +187,8 @@ TEST(World, SameSceneAndSeedGiveBitIdenticalStates)
       e.seed = deriveSeed(seed, e.name);
       EXPECT_TRUE(world.addEmitter(e).ok);
     }
-    for (int k = 0; k < 2000; ++k) world.step();
+    for (int k = 0; k < 2000; ++k)
+      world.step();
     return stateHash(world);
   };
   EXPECT_EQ(run(3), run(3));

@@ -26,7 +26,7 @@ namespace core
 struct BwTriangle
 {
   std::array<int, 3> v{};
-  double area = 0.0;                 ///< a [m²], in (u, v) space
+  double area = 0.0;                   ///< a [m²], in (u, v) space
   std::array<double, 3> dwu{}, dwv{};  ///< ∂w_u/∂x_m = dwu[m] I, ∂w_v/∂x_m = dwv[m] I
 };
 

@@ -27,12 +27,12 @@ struct BaraffWitkinDef
 {
   std::vector<BwTriangle> triangles;
   std::vector<BwBend> bends;
-  std::vector<double> bend_weights;  ///< per bend, |e|² / (a₁ + a₂) [-]
+  std::vector<double> bend_weights;     ///< per bend, |e|² / (a₁ + a₂) [-]
   SpringConstants stretch{500.0, 0.5};  ///< [N/m], [N·s/m]
   SpringConstants shear{50.0, 0.05};    ///< [N/m], [N·s/m]
   SpringConstants bend{1e-3, 1e-5};     ///< [N·m], [N·m·s]
-  double b_u = 1.0;  ///< rest stretch along u (< 1 shrinks, > 1 grows the cloth)
-  double b_v = 1.0;  ///< rest stretch along v
+  double b_u = 1.0;                     ///< rest stretch along u (< 1 shrinks, > 1 grows the cloth)
+  double b_v = 1.0;                     ///< rest stretch along v
 
   bool empty() const { return triangles.empty(); }
 };

@@ -41,7 +41,7 @@ constexpr SpringConstants kBaraffWitkinBend{0.005, 5e-5};
 struct ClothGridDef
 {
   std::string name;
-  ClothModel model = ClothModel::Springs;  ///< springs, or Baraff–Witkin with (u, v) from the grid
+  ClothModel model = ClothModel::Springs;                    ///< springs, or Baraff–Witkin with (u, v) from the grid
   Eigen::Vector3d origin = Eigen::Vector3d(-0.5, 0.0, 2.0);  ///< [m] particle (0, 0)
   Eigen::Vector3d edge_u = Eigen::Vector3d(1.0, 0.0, 0.0);   ///< [m] from (0, 0) to (nu − 1, 0)
   Eigen::Vector3d edge_v = Eigen::Vector3d(0.0, 1.0, 0.0);   ///< [m] from (0, 0) to (0, nv − 1)
@@ -50,10 +50,11 @@ struct ClothGridDef
   double mass = 0.5;                                         ///< [kg] total, shared equally
   SpringConstants stretch{1000.0, 0.5};
   SpringConstants shear{200.0, 0.2};
-  SpringConstants bend{20.0, 0.05};   ///< stiffness 0 = no bend springs (Baraff–Witkin: see BaraffWitkinDef units)
-  double b_u = 1.0, b_v = 1.0;        ///< Baraff–Witkin rest stretch along u and v, > 0
-  std::vector<int> pins;              ///< indices; negative counts from the end
-  std::vector<std::string> named_pins;  ///< corner_00, corner_10, corner_01, corner_11, edge_u0, edge_u1, edge_v0, edge_v1
+  SpringConstants bend{20.0, 0.05};  ///< stiffness 0 = no bend springs (Baraff–Witkin: see BaraffWitkinDef units)
+  double b_u = 1.0, b_v = 1.0;       ///< Baraff–Witkin rest stretch along u and v, > 0
+  std::vector<int> pins;             ///< indices; negative counts from the end
+  std::vector<std::string>
+      named_pins;  ///< corner_00, corner_10, corner_01, corner_11, edge_u0, edge_u1, edge_v0, edge_v1
   StrainLimitDef strain_limit;
   IntegratorDef integrator;
 };
@@ -79,9 +80,9 @@ struct MeshClothDef
   std::vector<Eigen::Vector2d> uvs;        ///< per vertex texture coordinates; needed by Baraff–Witkin
   double mass = 0.5;                       ///< [kg] total, shared equally by the vertices
   SpringConstants stretch{1000.0, 0.5};
-  SpringConstants shear{200.0, 0.2};       ///< Baraff–Witkin only
-  SpringConstants bend{20.0, 0.05};        ///< stiffness 0 = no bend springs
-  double b_u = 1.0, b_v = 1.0;             ///< Baraff–Witkin rest stretch
+  SpringConstants shear{200.0, 0.2};  ///< Baraff–Witkin only
+  SpringConstants bend{20.0, 0.05};   ///< stiffness 0 = no bend springs
+  double b_u = 1.0, b_v = 1.0;        ///< Baraff–Witkin rest stretch
   std::vector<int> pins;
   StrainLimitDef strain_limit;
   IntegratorDef integrator;

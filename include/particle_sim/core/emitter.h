@@ -34,14 +34,14 @@ struct EmitterDef
   std::string name;
   EmitterType type = EmitterType::Fountain;
   Eigen::Vector3d origin = Eigen::Vector3d::Zero();  ///< [m] in the world frame
-  double rate = 100.0;        ///< [particles/s] emitted continuously; 0 = none
-  int burst_count = 0;        ///< [particles] emitted at once when the emitter starts (and on reset)
-  double speed = 10.0;        ///< [m/s] initial speed (vertical component for fountain and waterfall)
-  double spread = 1.0;        ///< [m/s] width of the random horizontal velocity of fountain and waterfall
-  double lifetime = 3.0;      ///< [s] after which a particle is recycled
+  double rate = 100.0;                               ///< [particles/s] emitted continuously; 0 = none
+  int burst_count = 0;          ///< [particles] emitted at once when the emitter starts (and on reset)
+  double speed = 10.0;          ///< [m/s] initial speed (vertical component for fountain and waterfall)
+  double spread = 1.0;          ///< [m/s] width of the random horizontal velocity of fountain and waterfall
+  double lifetime = 3.0;        ///< [s] after which a particle is recycled
   double particle_mass = 0.01;  ///< [kg]
-  int max_particles = 2000;   ///< size of the fixed particle pool
-  std::uint64_t seed = 1;     ///< random seed: the same seed gives the same particles
+  int max_particles = 2000;     ///< size of the fixed particle pool
+  std::uint64_t seed = 1;       ///< random seed: the same seed gives the same particles
 };
 
 /// Upper bound on `max_particles` of one emitter unless the caller allows more (the node's
@@ -72,8 +72,7 @@ public:
 
   /// Draws one particle's initial position and velocity by the lecture's formula for `type`.
   /// Exposed so tests can check the formulas directly.
-  static void sample(const EmitterDef& def, std::mt19937_64& rng, Eigen::Vector3d& position,
-                     Eigen::Vector3d& velocity);
+  static void sample(const EmitterDef& def, std::mt19937_64& rng, Eigen::Vector3d& position, Eigen::Vector3d& velocity);
 
 private:
   void emit(int count);

@@ -14,8 +14,8 @@ namespace core
 /// How a collider answers a particle that reached it.
 struct ContactDef
 {
-  double restitution = 0.5;  ///< [-] in [0, 1]: share of the normal speed kept after a bounce
-  double friction = 0.3;     ///< [-] >= 0: Coulomb coefficient, tangential speed lost <= friction * normal impulse / m
+  double restitution = 0.5;   ///< [-] in [0, 1]: share of the normal speed kept after a bounce
+  double friction = 0.3;      ///< [-] >= 0: Coulomb coefficient, tangential speed lost <= friction * normal impulse / m
   double bounce_speed = 0.2;  ///< [m/s] >= 0: slower impacts do not bounce (resting contact stays at rest)
 };
 
@@ -41,7 +41,7 @@ struct SphereColliderDef
 /// three corners (only the normal component: a sheet moving in its own plane feels none).
 struct AirDef
 {
-  double drag = 0.0;                              ///< [N·s/m³] >= 0; 0 = no air (nothing computed)
+  double drag = 0.0;                               ///< [N·s/m³] >= 0; 0 = no air (nothing computed)
   Eigen::Vector3d wind = Eigen::Vector3d::Zero();  ///< [m/s] wind velocity
 };
 

@@ -25,7 +25,7 @@ struct JellyDef
   double mass = 1.0;                                            ///< [kg] total
   SpringConstants stretch{2000.0, 1.0};
   SpringConstants shear{1000.0, 0.5};
-  SpringConstants bend{200.0, 0.2};   ///< stiffness 0 = no bend springs
+  SpringConstants bend{200.0, 0.2};  ///< stiffness 0 = no bend springs
   std::vector<int> pins;
   Eigen::Vector3d velocity = Eigen::Vector3d::Zero();  ///< [m/s] initial velocity of every particle
   StrainLimitDef strain_limit;

@@ -48,9 +48,9 @@ struct SpringNetworkDef
   std::vector<Eigen::Vector3d> velocities;  ///< [m/s] initial velocities; empty = all zero
   std::vector<double> masses;               ///< [kg] > 0, one per particle
   std::vector<Spring> springs;
-  std::vector<int> pins;                    ///< indices pinned where they start
-  std::vector<Eigen::Vector3i> triangles;   ///< surface triangles (cloth, jelly): drawn, published, feel the air
-  BaraffWitkinDef baraff_witkin;            ///< Baraff–Witkin energies (cloth model baraff_witkin); empty = none
+  std::vector<int> pins;                   ///< indices pinned where they start
+  std::vector<Eigen::Vector3i> triangles;  ///< surface triangles (cloth, jelly): drawn, published, feel the air
+  BaraffWitkinDef baraff_witkin;           ///< Baraff–Witkin energies (cloth model baraff_witkin); empty = none
   StrainLimitDef strain_limit;
   IntegratorDef integrator;
 };
@@ -175,17 +175,17 @@ private:
   SpringNetworkDef def_;
   std::vector<Spring> springs_;
   IntegratorDef integrator_;
-  AirDef air_;                      // the air of the current step
-  double damping_ = 0.0;            // [1/s] global damping of the current step (Environment::damping)
-  Eigen::VectorXd mass_;            // [kg], kept for pinned particles too
+  AirDef air_;            // the air of the current step
+  double damping_ = 0.0;  // [1/s] global damping of the current step (Environment::damping)
+  Eigen::VectorXd mass_;  // [kg], kept for pinned particles too
   std::vector<char> pinned_;
   Eigen::Matrix3Xd pin_target_;
-  bool verlet_started_ = false;     // Verlet needs its second-order start after build, reset or a switch
+  bool verlet_started_ = false;  // Verlet needs its second-order start after build, reset or a switch
   IntegratorType last_integrator_ = IntegratorType::ImplicitEuler;
   int last_substeps_ = 1;
-  double omega_bound_ = 0.0;        // [1/s]
-  double damping_bound_ = 0.0;      // [1/s], springs and conditions (global damping added at use)
-  double energy_scale_ = 0.0;       // [J] total mass · (|g| + 1 m/s²) · size, for the blow-up check
+  double omega_bound_ = 0.0;    // [1/s]
+  double damping_bound_ = 0.0;  // [1/s], springs and conditions (global damping added at use)
+  double energy_scale_ = 0.0;   // [J] total mass · (|g| + 1 m/s²) · size, for the blow-up check
   std::string auto_choice_;
   long long stability_events_ = 0;
   std::string last_stability_event_;
@@ -197,7 +197,7 @@ private:
   std::vector<std::array<int, 4>> spring_blocks_;  // per spring: its blocks ii, ij, ji, jj
   std::optional<BaraffWitkinModel> baraff_witkin_;
   Eigen::Matrix3Xd force_, saved_position_, saved_velocity_, unlimited_position_;
-  Eigen::Matrix3Xd step_target_;  // pin targets at the end of the whole step (substeps approach them)
+  Eigen::Matrix3Xd step_target_;                // pin targets at the end of the whole step (substeps approach them)
   Eigen::Matrix3Xd implicit_x0_, implicit_v0_;  // state at the start of an implicit (sub)step
   static constexpr int kNewtonIterations = 8;
   Eigen::Matrix3Xd rk_x_, rk_v_, rk_kx_[4], rk_kv_[4];
@@ -208,11 +208,12 @@ private:
 struct RopeDef
 {
   std::string name;
-  int particles = 20;                                  ///< >= 2
-  Eigen::Vector3d start = Eigen::Vector3d(0, 0, 2);    ///< [m] particle 0
-  Eigen::Vector3d end = Eigen::Vector3d(2, 0, 2);      ///< [m] particle N − 1
-  double mass = 1.0;                                   ///< [kg] total, shared equally
-  double rest_length = 0.0;  ///< [m] total rest length; 0 = |end − start| (a larger or smaller value starts it slack or stretched)
+  int particles = 20;                                ///< >= 2
+  Eigen::Vector3d start = Eigen::Vector3d(0, 0, 2);  ///< [m] particle 0
+  Eigen::Vector3d end = Eigen::Vector3d(2, 0, 2);    ///< [m] particle N − 1
+  double mass = 1.0;                                 ///< [kg] total, shared equally
+  double rest_length =
+      0.0;  ///< [m] total rest length; 0 = |end − start| (a larger or smaller value starts it slack or stretched)
   double stretch_stiffness = 500.0;  ///< [N/m]
   double stretch_damping = 0.5;      ///< [N·s/m]
   double bend_stiffness = 0.0;       ///< [N/m]; 0 = no bend springs

@@ -84,9 +84,9 @@ Status checkPinIndices(const Container& pins, int count)
   {
     const long long pin = pins[k];
     if (pin < -count || pin >= count)
-      return Status::failure("pins[" + std::to_string(k) + "] = " + std::to_string(pin) + " is out of range: must be in [" +
-                             std::to_string(-count) + ", " + std::to_string(count - 1) +
-                             "] (negative counts from the end)");
+      return Status::failure("pins[" + std::to_string(k) + "] = " + std::to_string(pin) +
+                             " is out of range: must be in [" + std::to_string(-count) + ", " +
+                             std::to_string(count - 1) + "] (negative counts from the end)");
   }
   return Status::success();
 }

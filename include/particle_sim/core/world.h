@@ -6,11 +6,11 @@
 #include <vector>
 
 #include "particle_sim/core/body.h"
-#include "particle_sim/core/emitter.h"
 #include "particle_sim/core/cloth.h"
+#include "particle_sim/core/emitter.h"
 #include "particle_sim/core/environment.h"
-#include "particle_sim/core/jelly.h"
 #include "particle_sim/core/integrator.h"
+#include "particle_sim/core/jelly.h"
 #include "particle_sim/core/spring_network.h"
 #include "particle_sim/core/status.h"
 
@@ -23,9 +23,9 @@ struct WorldDef
 {
   Eigen::Vector3d gravity = Eigen::Vector3d(0.0, 0.0, -9.81);  ///< [m/s^2]
   double dt = 0.001;                                           ///< [s] fixed physics step
-  std::uint64_t seed = 1;                   ///< default seed of bodies that do not set their own
-  int max_particles_per_body = 100000;      ///< cap on any body's particle count
-  IntegratorDef integrator;                 ///< default integrator of spring bodies that set none
+  std::uint64_t seed = 1;                                      ///< default seed of bodies that do not set their own
+  int max_particles_per_body = 100000;                         ///< cap on any body's particle count
+  IntegratorDef integrator;                                    ///< default integrator of spring bodies that set none
   GroundPlaneDef ground;
   std::vector<SphereColliderDef> spheres;
   AirDef air;

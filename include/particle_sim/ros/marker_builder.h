@@ -16,9 +16,9 @@ namespace ros_interface
 struct MarkerStyle
 {
   std::string frame_id = "world";
-  double particle_size = 0.05;  ///< [m] side of a POINTS square, diameter of a spring body's particle
-  double line_width = 0.02;     ///< [m] rope and spring lines
-  bool color_by_strain = false;  ///< colour cloth and jelly surfaces by strain instead of shading them
+  double particle_size = 0.05;    ///< [m] side of a POINTS square, diameter of a spring body's particle
+  double line_width = 0.02;       ///< [m] rope and spring lines
+  bool color_by_strain = false;   ///< colour cloth and jelly surfaces by strain instead of shading them
   double strain_color_max = 0.1;  ///< [-] strain drawn fully red (0 is blue)
 };
 
@@ -35,9 +35,8 @@ struct MarkerStyle
 ///   - sphere colliders are drawn in the namespace "_colliders".
 /// Every marker passes rviz's checks: unit quaternion, non-zero scale, alpha > 0, one colour per
 /// point, finite values (non-finite particles are left out).
-visualization_msgs::MarkerArray buildMarkers(const core::World& world, const ros::Time& stamp,
-                                              const MarkerStyle& style, bool delete_all,
-                                              const std::vector<std::string>& removed);
+visualization_msgs::MarkerArray buildMarkers(const core::World& world, const ros::Time& stamp, const MarkerStyle& style,
+                                             bool delete_all, const std::vector<std::string>& removed);
 
 /// Colour of a strain (l − L)/L: blue at 0 (or compressed), through green, to red at `max`.
 std_msgs::ColorRGBA strainColor(double strain, double max);

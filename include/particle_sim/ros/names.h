@@ -8,10 +8,10 @@ namespace particle_sim
 namespace names
 {
 // Topics
-constexpr const char* kMarkersTopic = "markers";  // ~markers, visualization_msgs/MarkerArray
-constexpr const char* kClockTopic = "/clock";     // rosgraph_msgs/Clock
-constexpr const char* kMeshesTopic = "meshes";    // ~meshes, particle_sim/ClothMesh
-constexpr const char* kStatusTopic = "status";    // ~status, particle_sim/SimStatus
+constexpr const char* kMarkersTopic = "markers";           // ~markers, visualization_msgs/MarkerArray
+constexpr const char* kClockTopic = "/clock";              // rosgraph_msgs/Clock
+constexpr const char* kMeshesTopic = "meshes";             // ~meshes, particle_sim/ClothMesh
+constexpr const char* kStatusTopic = "status";             // ~status, particle_sim/SimStatus
 constexpr const char* kDiagnosticsTopic = "/diagnostics";  // diagnostic_msgs/DiagnosticArray (diagnostic_updater)
 // dynamic_reconfigure's own, under the node's private namespace: ~set_parameters (service),
 // ~parameter_descriptions and ~parameter_updates (latched topics).

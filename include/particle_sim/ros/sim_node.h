@@ -1,6 +1,5 @@
 #pragma once
 
-#include <boost/thread/recursive_mutex.hpp>
 #include <diagnostic_updater/diagnostic_updater.h>
 #include <dynamic_reconfigure/server.h>
 #include <ros/callback_queue.h>
@@ -11,6 +10,7 @@
 #include <tf2_ros/transform_listener.h>
 
 #include <atomic>
+#include <boost/thread/recursive_mutex.hpp>
 #include <chrono>
 #include <map>
 #include <memory>
@@ -41,27 +41,27 @@ namespace ros_interface
 /// The node's settings, read once from private parameters (README "Parameters").
 struct NodeSettings
 {
-  std::string scene_path;          ///< ~scene, YAML scene file; empty = an empty world
-  double rate = 50.0;              ///< ~rate [Hz] publish rate (and physics ticks)
-  double dt = 0.0;                 ///< ~dt [s] physics step; 0 = the scene's world.dt
-  double real_time_factor = 1.0;   ///< ~real_time_factor [-]; 0 = as fast as possible
-  bool paused = false;             ///< ~paused: start paused
-  std::string frame_id = "world";  ///< ~frame_id: frame of every marker
-  std::string parent_frame_id = "map";  ///< ~parent_frame_id: tf parent of frame_id
+  std::string scene_path;                              ///< ~scene, YAML scene file; empty = an empty world
+  double rate = 50.0;                                  ///< ~rate [Hz] publish rate (and physics ticks)
+  double dt = 0.0;                                     ///< ~dt [s] physics step; 0 = the scene's world.dt
+  double real_time_factor = 1.0;                       ///< ~real_time_factor [-]; 0 = as fast as possible
+  bool paused = false;                                 ///< ~paused: start paused
+  std::string frame_id = "world";                      ///< ~frame_id: frame of every marker
+  std::string parent_frame_id = "map";                 ///< ~parent_frame_id: tf parent of frame_id
   std::vector<double> frame_offset = {0.0, 0.0, 0.0};  ///< ~frame_offset [m]: frame_id's origin in parent_frame_id
-  bool publish_clock = true;       ///< ~publish_clock: publish /clock from sim time
-  double particle_size = 0.05;     ///< ~particle_size [m]
-  int max_particles_per_body = 0;  ///< ~max_particles_per_body; 0 = the scene's value
-  double status_period = 1.0;      ///< ~status_period [s] of wall time between status lines; 0 = none
-  bool color_by_strain = false;    ///< ~color_by_strain: colour cloth and jelly by strain
-  double strain_color_max = 0.1;   ///< ~strain_color_max [-]: strain drawn fully red
-  double diagnostic_period = 1.0;  ///< ~diagnostic_period [s] of wall time between /diagnostics updates
+  bool publish_clock = true;                           ///< ~publish_clock: publish /clock from sim time
+  double particle_size = 0.05;                         ///< ~particle_size [m]
+  int max_particles_per_body = 0;                      ///< ~max_particles_per_body; 0 = the scene's value
+  double status_period = 1.0;          ///< ~status_period [s] of wall time between status lines; 0 = none
+  bool color_by_strain = false;        ///< ~color_by_strain: colour cloth and jelly by strain
+  double strain_color_max = 0.1;       ///< ~strain_color_max [-]: strain drawn fully red
+  double diagnostic_period = 1.0;      ///< ~diagnostic_period [s] of wall time between /diagnostics updates
   double diagnostic_max_strain = 0.5;  ///< ~diagnostic_max_strain [-]: a larger max strain is a WARN
 };
 
 /// Diagnostic thresholds (README "Diagnostics").
-constexpr double kRealTimeFactorWarnRatio = 0.9;  ///< WARN when the measured real-time factor is below 90 % of the target
-
+constexpr double kRealTimeFactorWarnRatio =
+    0.9;  ///< WARN when the measured real-time factor is below 90 % of the target
 
 /// The simulator: owns a core::World, steps it at a fixed rate on steady (wall) time, serves its
 /// services, dynamic_reconfigure and diagnostics between steps and publishes markers, meshes,
@@ -193,7 +193,7 @@ private:
   std::vector<FramePin> frame_pins_;
   std::vector<Eigen::Vector3d> frame_pin_start_, frame_pin_goal_;  // per frame pin, this tick
 
-  std::set<std::string> reported_frozen_;  // frozen bodies already logged
+  std::set<std::string> reported_frozen_;             // frozen bodies already logged
   std::map<std::string, long long> reported_events_;  // per body, stability events already logged
   std::map<std::string, std::string> reported_auto_;  // per body, auto's choice already logged
   long long events_since_diagnostics_ = 0;
