@@ -72,6 +72,17 @@ void addBaraffWitkin(const std::vector<Eigen::Vector2d>& uvs, const SpringConsta
   bw.b_v = b_v;
 }
 
+// A cloth network with nothing in it yet.
+SpringNetworkDef emptyCloth(const std::string& name, const IntegratorDef& integrator, const StrainLimitDef& limit)
+{
+  SpringNetworkDef net;
+  net.name = name;
+  net.shape = NetworkShape::Cloth;
+  net.integrator = integrator;
+  net.strain_limit = limit;
+  return net;
+}
+
 Status checkBaraffWitkinRest(double b_u, double b_v)
 {
   if (Status s = checkPositive("b_u", b_u); !s) return s;
@@ -137,11 +148,7 @@ Status validate(const ClothGridDef& def, int max_particles)
 
 SpringNetworkDef buildClothGrid(const ClothGridDef& def)
 {
-  SpringNetworkDef net;
-  net.name = def.name;
-  net.shape = NetworkShape::Cloth;
-  net.integrator = def.integrator;
-  net.strain_limit = def.strain_limit;
+  SpringNetworkDef net = emptyCloth(def.name, def.integrator, def.strain_limit);
   const int nu = def.nu, nv = def.nv, n = nu * nv;
   auto index = [nu](int a, int b) { return b * nu + a; };
 
@@ -248,11 +255,7 @@ Status validate(const MeshClothDef& def, int max_particles)
 
 SpringNetworkDef buildMeshCloth(const MeshClothDef& def)
 {
-  SpringNetworkDef net;
-  net.name = def.name;
-  net.shape = NetworkShape::Cloth;
-  net.integrator = def.integrator;
-  net.strain_limit = def.strain_limit;
+  SpringNetworkDef net = emptyCloth(def.name, def.integrator, def.strain_limit);
   net.positions = def.vertices;
   net.triangles = def.triangles;
   const int n = static_cast<int>(def.vertices.size());

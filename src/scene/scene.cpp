@@ -706,6 +706,19 @@ YAML::Node framePins(const SceneDef& scene, const std::string& body)
   return list;
 }
 
+// The keys grid and mesh cloth share: mass, stretch, bend, pins, frame pins, strain limit, integrator.
+template <typename ClothDef>
+void clothTail(YAML::Node node, const SceneDef& scene, const ClothDef& cloth, const YAML::Node& pins)
+{
+  node["mass"] = cloth.mass;
+  node["stretch"] = springConstants(cloth.stretch.stiffness, cloth.stretch.damping);
+  node["bend"] = springConstants(cloth.bend.stiffness, cloth.bend.damping);
+  node["pins"] = pins;
+  node["frame_pins"] = framePins(scene, cloth.name);
+  strainLimit(node, cloth.strain_limit);
+  integrator(node, cloth.integrator);
+}
+
 YAML::Node contact(YAML::Node node, const core::ContactDef& c)
 {
   node["restitution"] = c.restitution;
@@ -831,17 +844,11 @@ std::string toYaml(const SceneDef& scene)
       node["edge_u"] = vector3(c->edge_u);
       node["edge_v"] = vector3(c->edge_v);
       node["resolution"] = indexList({c->nu, c->nv});
-      node["mass"] = c->mass;
-      node["stretch"] = springConstants(c->stretch.stiffness, c->stretch.damping);
       node["shear"] = springConstants(c->shear.stiffness, c->shear.damping);
-      node["bend"] = springConstants(c->bend.stiffness, c->bend.damping);
       YAML::Node pins = indexList(c->pins);
       for (const std::string& name : c->named_pins)
         pins.push_back(name);
-      node["pins"] = pins;
-      node["frame_pins"] = framePins(scene, c->name);
-      strainLimit(node, c->strain_limit);
-      integrator(node, c->integrator);
+      clothTail(node, scene, *c, pins);
       root["bodies"].push_back(node);
     }
     else if (const auto* m = std::get_if<core::MeshClothDef>(&body))
@@ -868,13 +875,7 @@ std::string toYaml(const SceneDef& scene)
         node["b_u"] = m->b_u;
         node["b_v"] = m->b_v;
       }
-      node["mass"] = m->mass;
-      node["stretch"] = springConstants(m->stretch.stiffness, m->stretch.damping);
-      node["bend"] = springConstants(m->bend.stiffness, m->bend.damping);
-      node["pins"] = indexList(m->pins);
-      node["frame_pins"] = framePins(scene, m->name);
-      strainLimit(node, m->strain_limit);
-      integrator(node, m->integrator);
+      clothTail(node, scene, *m, indexList(m->pins));
       root["bodies"].push_back(node);
     }
     else if (const auto* j = std::get_if<core::JellyDef>(&body))
