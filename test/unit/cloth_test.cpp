@@ -21,23 +21,16 @@
 #include <vector>
 
 #include "particle_sim/core/world.h"
+#include "test_helpers.h"
 
 using namespace particle_sim::core;
 
+using particle_sim_test::countClass;
+using particle_sim_test::kNaN;
+using particle_sim_test::mentions;
+
 namespace
 {
-const double kNaN = std::numeric_limits<double>::quiet_NaN();
-
-bool mentions(const Status& status, const std::string& field)
-{
-  return status.message.find(field) != std::string::npos;
-}
-
-int countClass(const std::vector<Spring>& springs, SpringClass spring_class)
-{
-  return static_cast<int>(
-      std::count_if(springs.begin(), springs.end(), [&](const Spring& s) { return s.spring_class == spring_class; }));
-}
 
 std::pair<int, int> sortedPair(int i, int j)
 {
