@@ -625,6 +625,13 @@ bool SimNode::readSpringConstants(const std::string& body_name, const std::strin
   core::SpringClass spring_class = core::SpringClass::Stretch;
   const bool any = class_name == "all";
   if (!any && !core::parseSpringClass(class_name, spring_class)) return false;
+  // A Baraff–Witkin cloth has conditions, not springs: show those of the class (stretch for "all").
+  if (const core::BaraffWitkinModel* model = body->baraffWitkin())
+  {
+    stiffness = model->constants(spring_class).stiffness;
+    damping = model->constants(spring_class).damping;
+    return true;
+  }
   for (const core::Spring& spring : body->springs())
   {
     if (!any && spring.spring_class != spring_class) continue;

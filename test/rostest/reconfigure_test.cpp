@@ -8,6 +8,7 @@
 
 #include "node_listener.h"
 #include "particle_sim/SetSpringConstants.h"
+#include "particle_sim/SpawnCloth.h"
 #include "particle_sim/SpawnRope.h"
 #include "sim_probe.h"
 
@@ -159,6 +160,36 @@ TEST_F(ReconfigureTest, DefaultIntegratorAndBodySelection)
   // An unknown integrator is refused too.
   answered = probe_.reconfigure({}, {{"integrator", "leapfrog"}});
   EXPECT_EQ(answered.strs.at("integrator"), "rk4");
+}
+
+TEST_F(ReconfigureTest, BaraffWitkinClothShowsAndTakesItsConditionConstants)
+{
+  particle_sim::SpawnCloth::Request req;
+  req.name = "bw";
+  req.model = "baraff_witkin";
+  req.origin.z = 1.0;
+  req.edge_u.x = 0.5;
+  req.edge_v.y = 0.5;
+  req.nu = req.nv = 4;
+  req.stretch_stiffness = 1500.0;
+  req.stretch_damping = 1.5;
+  req.shear_stiffness = 120.0;
+  req.shear_damping = 0.12;
+  req.bend_stiffness = 0.004;
+  req.bend_damping = 4e-5;
+  const auto spawned = call<particle_sim::SpawnCloth>("spawn_cloth", req);
+  ASSERT_TRUE(spawned.success) << spawned.message;
+
+  // Selecting the cloth and its shear class shows the conditions' constants ...
+  auto answered = probe_.reconfigure({}, {{"body", "bw"}, {"spring_class", "shear"}});
+  EXPECT_EQ(answered.strs.at("body"), "bw");
+  EXPECT_DOUBLE_EQ(answered.doubles.at("stiffness"), 120.0);
+  EXPECT_DOUBLE_EQ(answered.doubles.at("damping"), 0.12);
+  // ... and setting them there is seen when the class is shown again.
+  probe_.reconfigure({{"stiffness", 80.0}});
+  probe_.reconfigure({}, {{"spring_class", "stretch"}});
+  answered = probe_.reconfigure({}, {{"spring_class", "shear"}});
+  EXPECT_DOUBLE_EQ(answered.doubles.at("stiffness"), 80.0);
 }
 
 int main(int argc, char** argv)
