@@ -223,6 +223,19 @@ void SimNode::run()
     if (next_tick < now - std::chrono::duration_cast<SteadyClock::duration>(paused_period)) next_tick = now;
     if (next_tick > now) std::this_thread::sleep_until(next_tick);
   }
+
+  // Let go of every ROS handle here, in the loop's thread, while ROS still exists: in a nodelet
+  // manager the simulator may otherwise be destroyed after ROS's own singletons, and its
+  // publishers and servers would unregister from destroyed objects.
+  reconfigure_server_.reset();
+  diagnostics_.reset();
+  services_.clear();
+  tf_listener_.reset();
+  tf_buffer_.reset();
+  tf_broadcaster_.reset();
+  for (ros::Publisher* publisher : {&markers_pub_, &meshes_pub_, &clock_pub_, &status_pub_}) publisher->shutdown();
+  callback_queue_.disable();
+  callback_queue_.clear();
 }
 
 void SimNode::tick()

@@ -35,7 +35,18 @@ private:
       sim_.reset();
       return;
     }
-    thread_ = std::thread([this] { sim_->run(); });
+    thread_ = std::thread([this] {
+      // At shutdown ROS may tear down what the loop uses while it runs (a mutex it locks then
+      // throws): end the loop quietly instead of terminating the manager's process.
+      try
+      {
+        sim_->run();
+      }
+      catch (const std::exception& error)
+      {
+        if (ros::ok()) NODELET_ERROR("particle_sim loop stopped: %s", error.what());
+      }
+    });
   }
 
   std::unique_ptr<SimNode> sim_;
