@@ -450,7 +450,7 @@ void SimNode::printStatus()
   {
     if (body->kind() != core::BodyKind::SpringNetwork) continue;
     const auto& spring_body = static_cast<const core::SpringNetworkBody&>(*body);
-    if (spring_body.integrator().type != core::IntegratorType::ImplicitEuler) continue;
+    if (spring_body.lastIntegrator() != core::IntegratorType::ImplicitEuler) continue;
     any_implicit = true;
     cg_iterations = std::max(cg_iterations, spring_body.lastSolve().iterations);
     cg_residual = std::max(cg_residual, spring_body.lastSolve().relative_residual);
