@@ -367,6 +367,23 @@ std::string resolvePath(const std::string& source, const std::string& path)
   return (std::filesystem::path(source).parent_path() / p).string();
 }
 
+// What grid and mesh cloth start with: name, model, the world's integrator and, for a
+// Baraff–Witkin cloth, its default constants and its rest stretch b_u, b_v.
+template <typename ClothDef>
+void startCloth(MapReader& reader, const std::string& name, core::ClothModel model,
+                const core::IntegratorDef& integrator, ClothDef& def)
+{
+  def.name = name;
+  def.model = model;
+  def.integrator = integrator;
+  if (model != core::ClothModel::BaraffWitkin) return;
+  def.stretch = core::kBaraffWitkinStretch;
+  def.shear = core::kBaraffWitkinShear;
+  def.bend = core::kBaraffWitkinBend;
+  reader.read("b_u", def.b_u);
+  reader.read("b_v", def.b_v);
+}
+
 BodyDef readCloth(MapReader& reader, SceneDef& scene, const std::string& source)
 {
   const core::WorldDef& world = scene.world;
@@ -384,15 +401,7 @@ BodyDef readCloth(MapReader& reader, SceneDef& scene, const std::string& source)
   if (reader.has("mesh") || reader.has("vertices"))
   {
     core::MeshClothDef def;
-    def.name = name;
-    def.model = model;
-    def.integrator = world.integrator;
-    if (baraff_witkin)
-    {
-      def.stretch = core::kBaraffWitkinStretch;
-      def.shear = core::kBaraffWitkinShear;
-      def.bend = core::kBaraffWitkinBend;
-    }
+    startCloth(reader, name, model, world.integrator, def);
     if (reader.has("mesh"))
     {
       std::string file;
@@ -436,11 +445,6 @@ BodyDef readCloth(MapReader& reader, SceneDef& scene, const std::string& source)
     }
     reader.read("mass", def.mass);
     readClothConstants(reader, def.stretch, baraff_witkin ? &def.shear : nullptr, def.bend, source);
-    if (baraff_witkin)
-    {
-      reader.read("b_u", def.b_u);
-      reader.read("b_v", def.b_v);
-    }
     readPins(reader, def.pins, nullptr);
     readStrainLimit(reader, def.strain_limit);
     readIntegrator(reader, def.integrator);
@@ -453,17 +457,7 @@ BodyDef readCloth(MapReader& reader, SceneDef& scene, const std::string& source)
   }
 
   core::ClothGridDef def;
-  def.name = name;
-  def.model = model;
-  def.integrator = world.integrator;
-  if (baraff_witkin)
-  {
-    def.stretch = core::kBaraffWitkinStretch;
-    def.shear = core::kBaraffWitkinShear;
-    def.bend = core::kBaraffWitkinBend;
-    reader.read("b_u", def.b_u);
-    reader.read("b_v", def.b_v);
-  }
+  startCloth(reader, name, model, world.integrator, def);
   reader.read("origin", def.origin);
   reader.read("edge_u", def.edge_u);
   reader.read("edge_v", def.edge_v);
