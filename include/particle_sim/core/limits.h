@@ -1,0 +1,38 @@
+#pragma once
+
+#include <cstddef>
+
+namespace particle_sim
+{
+namespace core
+{
+/// The one allowed range of every user-settable quantity, with its unit. Scene files, services,
+/// dynamic_reconfigure (config/Sim.cfg reads this file) and particle_sim_run all check against
+/// these, so a value is accepted or refused the same way wherever it comes from.
+///
+/// Keep each entry on one line of the form `constexpr Range kName{min, max, "unit"};`:
+/// config/Sim.cfg parses them.
+namespace limits
+{
+struct Range
+{
+  double min;        ///< smallest allowed value (inclusive)
+  double max;        ///< largest allowed value (inclusive)
+  const char* unit;  ///< SI unit, as printed in messages ("-" for none)
+};
+
+// clang-format off
+constexpr Range kStiffness{0.0, 1e9, "N/m"};           // spring stiffness k_e (Baraff–Witkin: per unit area)
+constexpr Range kDamping{0.0, 1e6, "N·s/m"};           // spring damping k_d
+constexpr Range kGravityComponent{-100.0, 100.0, "m/s^2"};
+constexpr Range kWindComponent{-100.0, 100.0, "m/s"};
+constexpr Range kGlobalDamping{0.0, 100.0, "1/s"};
+constexpr Range kRealTimeFactor{0.0, 1000.0, "-"};     // 0 = as fast as possible
+constexpr Range kPublishRate{0.1, 1000.0, "Hz"};
+// clang-format on
+
+/// Longest body name [characters].
+constexpr std::size_t kMaxNameLength = 64;
+}  // namespace limits
+}  // namespace core
+}  // namespace particle_sim
