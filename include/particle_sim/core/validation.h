@@ -151,6 +151,10 @@ inline Status checkRange(const std::string& field, double value, const limits::R
 /// vector, e.g. "wind.x = 1e+308 is out of range: must be in [-100, 100] m/s (wind = [1e+308, 0, 0])".
 inline Status checkRange(const std::string& field, const Eigen::Vector3d& value, const limits::Range& range)
 {
+  if (!value.allFinite())
+    return Status::failure(field + " = " + formatValue(value) +
+                           " is not finite: every component must be a number in [" + formatValue(range.min) + ", " +
+                           formatValue(range.max) + "] " + range.unit);
   const char* const axes[3] = {".x", ".y", ".z"};
   for (int axis = 0; axis < 3; ++axis)
   {
