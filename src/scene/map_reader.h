@@ -10,6 +10,7 @@
 #include <type_traits>
 
 #include "particle_sim/core/status.h"
+#include "particle_sim/core/validation.h"
 
 namespace particle_sim
 {
@@ -116,7 +117,7 @@ public:
 private:
   static std::string text(const YAML::Node& node)
   {
-    if (node.IsScalar()) return "'" + node.Scalar() + "'";
+    if (node.IsScalar()) return core::quoteReceived(node.Scalar());  // cut, valid UTF-8
     YAML::Emitter out;
     out << YAML::Flow << node;
     return out.c_str();

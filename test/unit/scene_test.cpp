@@ -495,3 +495,20 @@ TEST(ObjMesh, RefusesTooManyVerticesOrTrianglesAndZeroAreaTriangles)
                                "    triangles: [[0, 1, 3], [0, 1, 2]]\n"),
                        "triangles[1] = [0, 1, 2] has zero area"));
 }
+
+// A received string echoed in a scene error is cut after 64 characters, at a character boundary.
+TEST(SceneFiles, EchoedValuesAreCutAtACharacterBoundary)
+{
+  std::string long_value;
+  for (int k = 0; k < 200; ++k)
+    long_value += "\xC3\xA9";  // 'é', two bytes
+  const std::string m = refusal(std::string(kEmitterHead) + "    rate: " + long_value + "\n");
+  EXPECT_TRUE(contains(m, "bodies[0].rate = '")) << m;
+  EXPECT_TRUE(contains(m, "...' (200 characters) must be a number")) << m;
+  EXPECT_LT(m.size(), 250u) << m;
+  const std::size_t start = m.find("rate = '") + 8;
+  const std::string shown = m.substr(start, m.find("...'") - start);
+  EXPECT_EQ(shown.size(), 128u) << "64 whole two-byte characters";
+  const std::string kind = refusal("bodies:\n  - {name: a, kind: " + long_value + "}\n");
+  EXPECT_TRUE(contains(kind, "(200 characters) is not a body kind")) << kind;
+}
