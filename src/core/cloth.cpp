@@ -21,8 +21,9 @@ Spring makeSpring(const std::vector<Eigen::Vector3d>& x, int i, int j, const Spr
 }
 
 Status checkCommon(const std::string& name, const SpringConstants& stretch, const SpringConstants& bend, double mass,
-                   const StrainLimitDef& strain_limit, const IntegratorDef& integrator)
+                   const StrainLimitDef& strain_limit, const IntegratorDef& integrator, double contact_thickness)
 {
+  if (Status s = checkRange("contact_thickness", contact_thickness, limits::kContactThickness); !s) return s;
   if (Status s = validateBodyName(name); !s) return s;
   if (Status s = checkPositive("mass", mass); !s) return s;
   if (Status s = checkSpringConstants("stretch.", stretch.stiffness, stretch.damping); !s) return s;
@@ -73,9 +74,11 @@ void addBaraffWitkin(const std::vector<Eigen::Vector2d>& uvs, const SpringConsta
 }
 
 // A cloth network with nothing in it yet.
-SpringNetworkDef emptyCloth(const std::string& name, const IntegratorDef& integrator, const StrainLimitDef& limit)
+SpringNetworkDef emptyCloth(const std::string& name, const IntegratorDef& integrator, const StrainLimitDef& limit,
+                            double contact_thickness)
 {
   SpringNetworkDef net;
+  net.contact_thickness = contact_thickness;
   net.name = name;
   net.shape = NetworkShape::Cloth;
   net.integrator = integrator;
@@ -89,6 +92,53 @@ Status checkBaraffWitkinRest(double b_u, double b_v)
   return checkPositive("b_v", b_v);
 }
 }  // namespace
+
+SpringConstants defaultClothConstants(ClothModel model, SpringClass spring_class)
+{
+  const bool bw = model == ClothModel::BaraffWitkin;
+  switch (spring_class)
+  {
+    case SpringClass::Stretch:
+      return bw ? kBaraffWitkinStretch : kSpringClothStretch;
+    case SpringClass::Shear:
+      return bw ? kBaraffWitkinShear : kSpringClothShear;
+    case SpringClass::Bend:
+      return bw ? kBaraffWitkinBend : kSpringClothBend;
+  }
+  return {};
+}
+
+ClothGridDef::ClothGridDef(ClothModel cloth_model)
+    : model(cloth_model),
+      stretch(defaultClothConstants(cloth_model, SpringClass::Stretch)),
+      shear(defaultClothConstants(cloth_model, SpringClass::Shear)),
+      bend(defaultClothConstants(cloth_model, SpringClass::Bend))
+{}
+
+MeshClothDef::MeshClothDef(ClothModel cloth_model)
+    : model(cloth_model),
+      stretch(defaultClothConstants(cloth_model, SpringClass::Stretch)),
+      shear(defaultClothConstants(cloth_model, SpringClass::Shear)),
+      bend(defaultClothConstants(cloth_model, SpringClass::Bend))
+{}
+
+double clothContactThickness(const std::vector<Eigen::Vector3d>& positions,
+                             const std::vector<Eigen::Vector3i>& triangles,
+                             const std::vector<SphereColliderDef>& spheres)
+{
+  if (spheres.empty()) return 0.0;
+  double radius = spheres.front().radius;
+  for (const SphereColliderDef& sphere : spheres)
+    radius = std::min(radius, sphere.radius);
+  double longest = 0.0;
+  for (const Eigen::Vector3i& t : triangles)
+    for (int c = 0; c < 3; ++c)
+      longest = std::max(longest, (positions[t[(c + 1) % 3]] - positions[t[c]]).norm());
+  // Depth of the circumcentre of a triangle of circumradius ρ ≤ L/√3 inscribed in the sphere.
+  const double rho_squared = longest * longest / 3.0;
+  const double depth = rho_squared / (radius + std::sqrt(std::max(0.0, radius * radius - rho_squared)));
+  return std::min(depth, limits::kContactThickness.max);
+}
 
 const char* namedGridPinNames()
 {
@@ -120,7 +170,10 @@ bool namedGridPins(const std::string& name, int nu, int nv, std::vector<int>& in
 
 Status validate(const ClothGridDef& def, int max_particles)
 {
-  if (Status s = checkCommon(def.name, def.stretch, def.bend, def.mass, def.strain_limit, def.integrator); !s) return s;
+  if (Status s = checkCommon(def.name, def.stretch, def.bend, def.mass, def.strain_limit, def.integrator,
+                             def.contact_thickness);
+      !s)
+    return s;
   if (Status s = checkSpringConstants("shear.", def.shear.stiffness, def.shear.damping); !s) return s;
   if (Status s = checkFinite("origin", def.origin); !s) return s;
   if (Status s = checkFinite("edge_u", def.edge_u); !s) return s;
@@ -148,7 +201,7 @@ Status validate(const ClothGridDef& def, int max_particles)
 
 SpringNetworkDef buildClothGrid(const ClothGridDef& def)
 {
-  SpringNetworkDef net = emptyCloth(def.name, def.integrator, def.strain_limit);
+  SpringNetworkDef net = emptyCloth(def.name, def.integrator, def.strain_limit, def.contact_thickness);
   const int nu = def.nu, nv = def.nv, n = nu * nv;
   auto index = [nu](int a, int b) { return b * nu + a; };
 
@@ -218,7 +271,10 @@ SpringNetworkDef buildClothGrid(const ClothGridDef& def)
 
 Status validate(const MeshClothDef& def, int max_particles)
 {
-  if (Status s = checkCommon(def.name, def.stretch, def.bend, def.mass, def.strain_limit, def.integrator); !s) return s;
+  if (Status s = checkCommon(def.name, def.stretch, def.bend, def.mass, def.strain_limit, def.integrator,
+                             def.contact_thickness);
+      !s)
+    return s;
   const int n = static_cast<int>(def.vertices.size());
   if (Status s = checkIntRange("vertices (count)", n, 3, max_particles); !s) return s;
   if (def.triangles.empty()) return Status::failure("triangles is empty: a mesh cloth needs at least one triangle");
@@ -237,6 +293,12 @@ Status validate(const MeshClothDef& def, int max_particles)
     }
     if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2])
       return Status::failure("triangles[" + std::to_string(k) + "] repeats a vertex");
+    // A triangle of zero area has no normal (drawn and lit as garbage, no air force).
+    const Eigen::Vector3d e1 = def.vertices[t[1]] - def.vertices[t[0]], e2 = def.vertices[t[2]] - def.vertices[t[0]];
+    if (e1.cross(e2).norm() <= 1e-12 * e1.norm() * e2.norm())
+      return Status::failure("triangles[" + std::to_string(k) + "] = [" + std::to_string(t[0]) + ", " +
+                             std::to_string(t[1]) + ", " + std::to_string(t[2]) +
+                             "] has zero area (its corners are on one line): it has no normal");
   }
   if (Status s = checkPinIndices(def.pins, n); !s) return s;
   if (def.model == ClothModel::BaraffWitkin)
@@ -255,7 +317,7 @@ Status validate(const MeshClothDef& def, int max_particles)
 
 SpringNetworkDef buildMeshCloth(const MeshClothDef& def)
 {
-  SpringNetworkDef net = emptyCloth(def.name, def.integrator, def.strain_limit);
+  SpringNetworkDef net = emptyCloth(def.name, def.integrator, def.strain_limit, def.contact_thickness);
   net.positions = def.vertices;
   net.triangles = def.triangles;
   const int n = static_cast<int>(def.vertices.size());

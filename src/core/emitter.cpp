@@ -1,6 +1,8 @@
 #include "particle_sim/core/emitter.h"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "particle_sim/core/validation.h"
 #include "particle_sim/core/world.h"
@@ -56,11 +58,18 @@ bool parseEmitterType(const std::string& text, EmitterType& type)
   return false;
 }
 
-Status validate(const EmitterDef& def, int max_particles_cap)
+Status validate(const EmitterDef& def, int max_particles_cap, double dt)
 {
   if (Status s = validateBodyName(def.name); !s) return s;
   if (Status s = checkFinite("origin", def.origin); !s) return s;
   if (Status s = checkMin("rate", def.rate, 0.0); !s) return s;
+  // One step can emit at most the whole pool: a rate owing more per step could only drop particles.
+  if (Status s = checkIntRange("max_particles", def.max_particles, 1, max_particles_cap); !s) return s;
+  if (dt > 0.0 && def.rate > maxEmitterRate(def.max_particles, dt))
+    return Status::failure("rate = " + formatValue(def.rate) + " is out of range: must be in [0, " +
+                           formatValue(maxEmitterRate(def.max_particles, dt)) +
+                           "] particles/s (max_particles = " + std::to_string(def.max_particles) +
+                           " per step of dt = " + formatValue(dt) + " s; a faster rate could only drop particles)");
   if (Status s = checkIntRange("burst_count", def.burst_count, 0, max_particles_cap); !s) return s;
   if (def.rate == 0.0 && def.burst_count == 0)
     return Status::failure("rate = 0 and burst_count = 0: the emitter would never emit; set one of them > 0");
@@ -72,8 +81,12 @@ Status validate(const EmitterDef& def, int max_particles_cap)
   if (Status s = checkMin("spread", def.spread, 0.0); !s) return s;
   if (Status s = checkPositive("lifetime", def.lifetime); !s) return s;
   if (Status s = checkPositive("particle_mass", def.particle_mass); !s) return s;
-  if (Status s = checkIntRange("max_particles", def.max_particles, 1, max_particles_cap); !s) return s;
-  return Status::success();
+  return checkRange("contact_thickness", def.contact_thickness, limits::kContactThickness);
+}
+
+double maxEmitterRate(int max_particles, double dt)
+{
+  return static_cast<double>(max_particles) / dt;
 }
 
 namespace
@@ -186,7 +199,7 @@ void EmitterBody::step(double dt, const Environment& env)
     p.velocity.col(i) += g_dt;
     p.age[i] += dt;
   }
-  resolveCollisions(env, p, nullptr, &p.previous_position);
+  resolveCollisions(env, p, nullptr, &p.previous_position, def_.contact_thickness);
 
   // 2. Recycle particles older than their lifetime: the last live particle takes the slot.
   for (int i = 0; i < p.live_count;)
@@ -197,10 +210,19 @@ void EmitterBody::step(double dt, const Environment& env)
       ++i;
   }
 
-  // 3. Emit what the continuous rate owes for this step; new particles start at age 0.
-  pending_ += def_.rate * dt;
-  const int due = static_cast<int>(pending_);
-  pending_ -= due;
+  // 3. Emit what the continuous rate owes for this step; new particles start at age 0. The debt
+  //    is counted in doubles (capped at 2^53, where they stop being exact integers) and only what
+  //    fits in the pool is converted to int; the rest is dropped and counted.
+  constexpr double kMaxOwed = 9007199254740992.0;  // 2^53
+  const double owed_now = def_.rate * dt;
+  pending_ = std::isfinite(owed_now) ? std::min(pending_ + owed_now, kMaxOwed) : kMaxOwed;
+  const double owed = std::floor(pending_);
+  pending_ -= owed;
+  const int room = p.capacity() - p.live_count;
+  const int due = owed < room ? static_cast<int>(owed) : room;
+  const long long not_emitted = static_cast<long long>(owed) - due;
+  dropped_ = dropped_ > std::numeric_limits<long long>::max() - not_emitted ? std::numeric_limits<long long>::max()
+                                                                            : dropped_ + not_emitted;
   emit(due);
 }
 

@@ -19,7 +19,7 @@ Status validate(const ContactDef& def, const std::string& where)
 Status validate(const AirDef& def)
 {
   if (Status s = checkMin("air.drag", def.drag, 0.0); !s) return s;
-  return checkFinite("air.wind", def.wind);
+  return checkRange("air.wind", def.wind, limits::kWindComponent);
 }
 
 Status validate(const GroundPlaneDef& def)
@@ -62,12 +62,12 @@ void respond(const ContactDef& contact, const Eigen::Vector3d& n, double depth, 
 
 namespace
 {
-// The first s in (0, 1] where the segment a + s (b − a) enters the sphere, or −1 when it does not
-// (both ends outside).
-double entryOnSegment(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const SphereColliderDef& sphere)
+// The first s in (0, 1] where the segment a + s (b − a) enters the sphere (center, radius), or −1
+// when it does not (both ends outside).
+double entryOnSegment(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& center, double radius)
 {
-  const Eigen::Vector3d d = b - a, f = a - sphere.center;
-  const double qa = d.squaredNorm(), qb = 2.0 * f.dot(d), qc = f.squaredNorm() - sphere.radius * sphere.radius;
+  const Eigen::Vector3d d = b - a, f = a - center;
+  const double qa = d.squaredNorm(), qb = 2.0 * f.dot(d), qc = f.squaredNorm() - radius * radius;
   if (qa == 0.0 || qc < 0.0) return -1.0;
   const double discriminant = qb * qb - 4.0 * qa * qc;
   if (discriminant < 0.0) return -1.0;
@@ -77,8 +77,10 @@ double entryOnSegment(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const 
 }  // namespace
 
 void resolveCollisions(const Environment& env, ParticlePool& pool, const Eigen::Matrix3Xd* start_velocity,
-                       const Eigen::Matrix3Xd* start_position)
+                       const Eigen::Matrix3Xd* start_position, double thickness)
 {
+  // The contact thickness grows every collider: the ground rises by it, spheres get thicker.
+  const double ground_height = env.ground.height + thickness;
   const int n = pool.size();
   for (int i = 0; i < n; ++i)
   {
@@ -89,30 +91,31 @@ void resolveCollisions(const Environment& env, ParticlePool& pool, const Eigen::
     auto start_vn = [&](const Eigen::Vector3d& n) { return start_velocity ? start_velocity->col(i).dot(n) : v.dot(n); };
 
     // Ground plane z = height, normal +z.
-    if (env.ground.enabled && x.z() < env.ground.height)
-      respond(env.ground.contact, Eigen::Vector3d::UnitZ(), env.ground.height - x.z(), x, v,
+    if (env.ground.enabled && x.z() < ground_height)
+      respond(env.ground.contact, Eigen::Vector3d::UnitZ(), ground_height - x.z(), x, v,
               start_vn(Eigen::Vector3d::UnitZ()));
 
     // Spheres: outward normal from the centre through the particle.
     for (const SphereColliderDef& sphere : env.spheres)
     {
+      const double radius = sphere.radius + thickness;
       // A path that entered the sphere (and maybe left it again): back to where it entered, just
       // inside, so that the contact below bounces it there rather than pushing it out of the far
       // side.
       if (start_position)
       {
-        const double s = entryOnSegment(start_position->col(i), x, sphere);
+        const double s = entryOnSegment(start_position->col(i), x, sphere.center, radius);
         if (s > 0.0)
         {
           const Eigen::Vector3d entry = start_position->col(i) + s * (x - start_position->col(i));
-          x = entry + 1e-9 * sphere.radius * (sphere.center - entry).normalized();
+          x = entry + 1e-9 * radius * (sphere.center - entry).normalized();
         }
       }
       const Eigen::Vector3d offset = x - sphere.center;
       const double distance = offset.norm();
-      if (distance >= sphere.radius) continue;
+      if (distance >= radius) continue;
       const Eigen::Vector3d normal = distance > 1e-12 ? Eigen::Vector3d(offset / distance) : Eigen::Vector3d::UnitZ();
-      respond(sphere.contact, normal, sphere.radius - distance, x, v, start_vn(normal));
+      respond(sphere.contact, normal, radius - distance, x, v, start_vn(normal));
     }
   }
 }

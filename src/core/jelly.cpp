@@ -34,6 +34,7 @@ Status validate(const JellyDef& def, int max_particles)
   if (Status s = checkPinIndices(def.pins, static_cast<int>(n)); !s) return s;
   if (Status s = checkMin("max_strain", def.strain_limit.max_strain, 0.0); !s) return s;
   if (Status s = checkIntRange("strain_iterations", def.strain_limit.iterations, 1, 100000); !s) return s;
+  if (Status s = checkRange("contact_thickness", def.contact_thickness, limits::kContactThickness); !s) return s;
   return validate(def.integrator);
 }
 
@@ -43,6 +44,7 @@ SpringNetworkDef buildJelly(const JellyDef& def)
   net.name = def.name;
   net.shape = NetworkShape::Jelly;
   net.integrator = def.integrator;
+  net.contact_thickness = def.contact_thickness;
   net.strain_limit = def.strain_limit;
   const int nx = def.nx, ny = def.ny, nz = def.nz, n = nx * ny * nz;
   auto index = [=](int a, int b, int c) { return (c * ny + b) * nx + a; };

@@ -99,6 +99,7 @@ Status validate(const SpringNetworkDef& def, int max_particles)
       return Status::failure(indexed("triangles", k) + " repeats a particle: a triangle needs three different ones");
   }
   if (Status s = validate(def.strain_limit); !s) return s;
+  if (Status s = checkRange("contact_thickness", def.contact_thickness, limits::kContactThickness); !s) return s;
   const BaraffWitkinDef& bw = def.baraff_witkin;
   for (const BwTriangle& t : bw.triangles)
     for (int c : t.v)
@@ -502,6 +503,9 @@ void SpringNetworkBody::step(double dt, const Environment& env)
     verlet_started_ = verlet_was_started;
     if (substeps >= integrator_.max_substeps)
     {
+      // What ran, not what the body was built with.
+      last_integrator_ = type;
+      last_substeps_ = substeps;
       frozen_reason_ = std::string(toString(type)) + " blew up at dt = " + formatValue(dt) + " s even with " +
                        std::to_string(substeps) + " substeps (integrator.max_substeps); the body is frozen at its " +
                        "last good state";
@@ -567,11 +571,11 @@ void SpringNetworkBody::substep(double h, IntegratorType type, const Environment
     if (pinned_[i]) p.position.col(i) = pin_target_.col(i);
   }
   // Restriction forces: collisions, strain limiting, and collisions again for what it moved.
-  resolveCollisions(env, p, &saved_velocity_);
+  resolveCollisions(env, p, &saved_velocity_, nullptr, def_.contact_thickness);
   if (def_.strain_limit.max_strain > 0.0)
   {
     limitStrain(h);
-    resolveCollisions(env, p, &saved_velocity_);
+    resolveCollisions(env, p, &saved_velocity_, nullptr, def_.contact_thickness);
   }
 }
 
@@ -775,6 +779,7 @@ Status validate(const RopeDef& def, int max_particles)
   if (Status s = checkSpringConstants("stretch.", def.stretch_stiffness, def.stretch_damping); !s) return s;
   if (Status s = checkSpringConstants("bend.", def.bend_stiffness, def.bend_damping); !s) return s;
   if (Status s = checkPinIndices(def.pins, def.particles); !s) return s;
+  if (Status s = checkRange("contact_thickness", def.contact_thickness, limits::kContactThickness); !s) return s;
   return validate(def.integrator);
 }
 
@@ -784,6 +789,7 @@ SpringNetworkDef buildRope(const RopeDef& def)
   net.name = def.name;
   net.shape = NetworkShape::Rope;
   net.integrator = def.integrator;
+  net.contact_thickness = def.contact_thickness;
   const int n = def.particles;
   const double total_rest = def.rest_length > 0.0 ? def.rest_length : (def.end - def.start).norm();
   const double segment = total_rest / (n - 1);

@@ -11,7 +11,8 @@ namespace core
 {
 Status validate(const WorldDef& def)
 {
-  if (Status s = checkFinite("gravity", def.gravity); !s) return s;
+  if (Status s = checkRange("gravity", def.gravity, limits::kGravityComponent); !s) return s;
+  if (Status s = checkRange("global_damping", def.global_damping, limits::kGlobalDamping); !s) return s;
   if (Status s = checkPositive("dt", def.dt); !s) return s;
   if (Status s = checkRange("dt", def.dt, 0.0, kMaxDt); !s) return s;
   if (Status s = checkIntRange("max_particles_per_body", def.max_particles_per_body, 1, 100000000); !s) return s;
@@ -28,12 +29,22 @@ Status validate(const WorldDef& def)
 Status validateBodyName(const std::string& name)
 {
   if (name.empty()) return Status::failure("name is empty: every body needs a unique name");
-  if (name[0] == '_') return Status::failure("name = '" + name + "' starts with '_', which is reserved");
-  for (char c : name)
+  // The length first, so that a long name is refused without echoing it whole.
+  const std::size_t length = characterCount(name);
+  if (length > limits::kMaxNameLength)
+    return Status::failure("name = " + quoteReceived(name) + " is " + std::to_string(length) +
+                           " characters long: at most " + std::to_string(limits::kMaxNameLength) + " allowed");
+  if (name[0] == '_') return Status::failure("name = " + quoteReceived(name) + " starts with '_', which is reserved");
+  for (std::size_t at = 0; at < name.size(); ++at)
   {
+    const char c = name[at];
     if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' || c == '/'))
-      return Status::failure("name = '" + name + "' has the character '" + std::string(1, c) +
-                             "'; allowed: letters, digits, '_', '-', '/'");
+    {
+      // The whole character, not one byte of it.
+      const std::size_t bytes = std::max<std::size_t>(1, utf8CharacterLength(name, at));
+      return Status::failure("name = " + quoteReceived(name) + " has the character " +
+                             quoteReceived(name.substr(at, bytes)) + "; allowed: letters, digits, '_', '-', '/'");
+    }
   }
   return Status::success();
 }
@@ -44,6 +55,7 @@ World::World(const WorldDef& def) : def_(def)
   env_.ground = def.ground;
   env_.spheres = def.spheres;
   env_.air = def.air;
+  env_.damping = def.global_damping;
 }
 
 Status World::setSphereCenter(const std::string& name, const Eigen::Vector3d& center)
@@ -55,26 +67,26 @@ Status World::setSphereCenter(const std::string& name, const Eigen::Vector3d& ce
     sphere.center = center;
     return Status::success();
   }
-  return Status::failure("sphere = '" + name + "': no sphere collider has that name");
+  return Status::failure("sphere = " + quoteReceived(name) + ": no sphere collider has that name");
 }
 
 Status World::setWind(const Eigen::Vector3d& wind)
 {
-  if (Status s = checkFinite("wind", wind); !s) return s;
+  if (Status s = checkRange("wind", wind, limits::kWindComponent); !s) return s;
   env_.air.wind = wind;
   return Status::success();
 }
 
 Status World::setGravity(const Eigen::Vector3d& gravity)
 {
-  if (Status s = checkFinite("gravity", gravity); !s) return s;
+  if (Status s = checkRange("gravity", gravity, limits::kGravityComponent); !s) return s;
   env_.gravity = gravity;
   return Status::success();
 }
 
 Status World::setGlobalDamping(double damping)
 {
-  if (Status s = checkMin("damping", damping, 0.0); !s) return s;
+  if (Status s = checkRange("global_damping", damping, limits::kGlobalDamping); !s) return s;
   env_.damping = damping;
   return Status::success();
 }
@@ -94,7 +106,7 @@ void World::reset()
 
 Status World::addEmitter(const EmitterDef& def)
 {
-  if (Status s = validate(def, def_.max_particles_per_body); !s) return s;
+  if (Status s = validate(def, def_.max_particles_per_body, def_.dt); !s) return s;
   return addBody(std::make_unique<EmitterBody>(def));
 }
 
@@ -132,7 +144,7 @@ Status World::addBody(std::unique_ptr<Body> body)
 {
   if (Status s = validateBodyName(body->name()); !s) return s;
   if (findBody(body->name()))
-    return Status::failure("name = '" + body->name() + "' is already taken: body names must be unique");
+    return Status::failure("name = " + quoteReceived(body->name()) + " is already taken: body names must be unique");
   bodies_.push_back(std::move(body));
   return Status::success();
 }
@@ -140,7 +152,7 @@ Status World::addBody(std::unique_ptr<Body> body)
 Status World::removeBody(const std::string& name)
 {
   auto it = std::find_if(bodies_.begin(), bodies_.end(), [&](const auto& b) { return b->name() == name; });
-  if (it == bodies_.end()) return Status::failure("name = '" + name + "': no body has that name");
+  if (it == bodies_.end()) return Status::failure("name = " + quoteReceived(name) + ": no body has that name");
   bodies_.erase(it);
   return Status::success();
 }

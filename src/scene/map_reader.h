@@ -4,11 +4,13 @@
 #include <yaml-cpp/yaml.h>
 
 #include <Eigen/Core>
+#include <map>
 #include <set>
 #include <string>
 #include <type_traits>
 
 #include "particle_sim/core/status.h"
+#include "particle_sim/core/validation.h"
 
 namespace particle_sim
 {
@@ -38,9 +40,24 @@ public:
       : node_(node), path_(std::move(path)), source_(source)
   {
     if (!node_.IsMap()) fail(node_, path_ + " must be a mapping of key: value");
+    // yaml-cpp keeps both entries of a repeated key and lets one win silently: refuse it here.
+    std::map<std::string, int> first_line;
+    for (const auto& entry : node_)
+    {
+      const std::string key = entry.first.Scalar();
+      const auto [where, inserted] = first_line.emplace(key, entry.first.Mark().line + 1);
+      if (!inserted)
+        fail(entry.first, field(key) + " is given twice (first on line " + std::to_string(where->second) +
+                              "): each key may appear once");
+    }
   }
 
-  bool has(const std::string& key) const { return static_cast<bool>(node_[key]); }
+  // Whether `key` is present. Asking makes it an accepted key (listed by finish()).
+  bool has(const std::string& key)
+  {
+    known_.insert(key);
+    return static_cast<bool>(node_[key]);
+  }
 
   template <typename T>
   void read(const std::string& key, T& value)
@@ -75,12 +92,13 @@ public:
     return node_[key];
   }
 
-  // Refuses every key that no read() asked for, listing the accepted ones.
+  // Refuses every key that no read(), child() or has() asked for, listing exactly those: the
+  // message and the check come from the same set.
   void finish() const
   {
     for (const auto& entry : node_)
     {
-      const std::string key = entry.first.as<std::string>();
+      const std::string key = entry.first.Scalar();
       if (known_.count(key)) continue;
       std::string allowed;
       for (const std::string& k : known_)
@@ -99,7 +117,7 @@ public:
 private:
   static std::string text(const YAML::Node& node)
   {
-    if (node.IsScalar()) return "'" + node.Scalar() + "'";
+    if (node.IsScalar()) return core::quoteReceived(node.Scalar());  // cut, valid UTF-8
     YAML::Emitter out;
     out << YAML::Flow << node;
     return out.c_str();

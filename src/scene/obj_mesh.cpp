@@ -1,6 +1,8 @@
 #include "particle_sim/scene/obj_mesh.h"
 
+#include <Eigen/Geometry>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 
@@ -41,6 +43,9 @@ core::Status parseObj(const std::string& text, const std::string& source, ObjMes
     {
       Eigen::Vector3d v;
       if (!(in >> v.x() >> v.y() >> v.z()) || !v.allFinite()) return fail("a vertex needs three numbers: v x y z");
+      if (mesh.vertices.size() == kMaxObjVertices)
+        return fail("more than " + std::to_string(kMaxObjVertices) +
+                    " vertices: an OBJ mesh may have at most that many");
       mesh.vertices.push_back(v);
       uv_of_vertex.push_back(-1);
     }
@@ -75,7 +80,17 @@ core::Status parseObj(const std::string& text, const std::string& source, ObjMes
       }
       if (corners.size() < 3) return fail("a face needs at least three corners");
       for (std::size_t k = 1; k + 1 < corners.size(); ++k)
-        mesh.triangles.emplace_back(corners[0], corners[k], corners[k + 1]);
+      {
+        if (mesh.triangles.size() == kMaxObjTriangles)
+          return fail("more than " + std::to_string(kMaxObjTriangles) +
+                      " triangles: an OBJ mesh may have at most that many");
+        const Eigen::Vector3i t(corners[0], corners[k], corners[k + 1]);
+        if (zeroArea(mesh.vertices[t[0]], mesh.vertices[t[1]], mesh.vertices[t[2]]))
+          return fail("the face has a triangle of zero area (vertices " + std::to_string(t[0] + 1) + ", " +
+                      std::to_string(t[1] + 1) + ", " + std::to_string(t[2] + 1) +
+                      " are on one line or repeated): it has no normal; remove it from the mesh");
+        mesh.triangles.push_back(t);
+      }
     }
   }
   if (mesh.vertices.empty() || mesh.triangles.empty())
@@ -95,13 +110,39 @@ core::Status parseObj(const std::string& text, const std::string& source, ObjMes
   return core::Status::success();
 }
 
+bool zeroArea(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c)
+{
+  const Eigen::Vector3d e1 = b - a, e2 = c - a;
+  return e1.cross(e2).norm() <= 1e-12 * e1.norm() * e2.norm();
+}
+
 core::Status loadObjFile(const std::string& path, ObjMesh& mesh)
 {
-  std::ifstream in(path);
+  // What the path is, before opening it: a device (/dev/zero), a fifo or a folder never ends or
+  // is not a mesh.
+  std::error_code error;
+  const std::filesystem::file_status status = std::filesystem::status(path, error);
+  if (error || !std::filesystem::exists(status))
+    return core::Status::failure(path + ": cannot open the mesh file (" +
+                                 (error ? error.message() : std::string("no such file")) + ")");
+  if (!std::filesystem::is_regular_file(status))
+    return core::Status::failure(path + ": is not a regular file; a mesh must be an OBJ file");
+  const std::uintmax_t size = std::filesystem::file_size(path, error);
+  if (error) return core::Status::failure(path + ": cannot read the mesh file's size (" + error.message() + ")");
+  if (size > kMaxObjFileBytes)
+    return core::Status::failure(path + ": is " + std::to_string(size) + " bytes, over the limit of " +
+                                 std::to_string(kMaxObjFileBytes) + " bytes (64 MiB) for an OBJ mesh");
+
+  // Read at most one byte more than the limit, in case the file grew since.
+  std::ifstream in(path, std::ios::binary);
   if (!in) return core::Status::failure(path + ": cannot open the mesh file");
-  std::stringstream text;
-  text << in.rdbuf();
-  return parseObj(text.str(), path, mesh);
+  std::string text(static_cast<std::size_t>(size) + 1, '\0');
+  in.read(&text[0], static_cast<std::streamsize>(text.size()));
+  text.resize(static_cast<std::size_t>(in.gcount()));
+  if (text.size() > kMaxObjFileBytes)
+    return core::Status::failure(path + ": is over the limit of " + std::to_string(kMaxObjFileBytes) +
+                                 " bytes (64 MiB) for an OBJ mesh");
+  return parseObj(text, path, mesh);
 }
 
 }  // namespace scene

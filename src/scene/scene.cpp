@@ -36,13 +36,13 @@ void readContact(MapReader& reader, core::ContactDef& contact)
 // The integrator keys, read at world level (the default) and per body (an override).
 void readIntegrator(MapReader& reader, core::IntegratorDef& integrator)
 {
+  std::string name;
+  reader.read("integrator", name);
   if (reader.has("integrator"))
   {
-    std::string name;
-    reader.read("integrator", name);
     if (!core::parseIntegratorType(name, integrator.type))
-      reader.fail(reader.node()["integrator"], reader.field("integrator") + " = '" + name +
-                                                   "' is not an integrator; allowed: " + core::integratorTypeNames());
+      reader.fail(reader.node()["integrator"], reader.field("integrator") + " = " + core::quoteReceived(name) +
+                                                   " is not an integrator; allowed: " + core::integratorTypeNames());
   }
   reader.read("verlet_damping", integrator.verlet_damping);
   reader.read("cg_tolerance", integrator.cg_tolerance);
@@ -57,6 +57,7 @@ void readWorld(const YAML::Node& node, const std::string& source, SceneDef& scen
   readIntegrator(reader, world.integrator);
   reader.read("gravity", world.gravity);
   reader.read("dt", world.dt);
+  reader.read("global_damping", world.global_damping);
   reader.read("seed", world.seed);
   reader.read("max_particles_per_body", world.max_particles_per_body);
 
@@ -118,7 +119,7 @@ void readFrames(const YAML::Node& node, const std::string& source, SceneDef& sce
     check(reader, reader.field(""), core::checkPositive("period", frame.period));
     check(reader, reader.field(""), core::checkFinite("phase", frame.phase));
     if (findFrame(scene, frame.name))
-      reader.fail(node[i], reader.field("name") + " = '" + frame.name + "' is already taken");
+      reader.fail(node[i], reader.field("name") + " = " + core::quoteReceived(frame.name) + " is already taken");
     scene.frames.push_back(frame);
   }
 }
@@ -131,8 +132,8 @@ core::EmitterDef readEmitter(MapReader& reader, const core::WorldDef& world)
   std::string type;
   reader.require("type", type);
   if (!core::parseEmitterType(type, def.type))
-    reader.fail(reader.node()["type"], reader.field("type") + " = '" + type +
-                                           "' is not an emitter type; allowed: " + core::emitterTypeNames());
+    reader.fail(reader.node()["type"], reader.field("type") + " = " + core::quoteReceived(type) +
+                                           " is not an emitter type; allowed: " + core::emitterTypeNames());
   // The waterfall pours over an edge: no vertical speed unless the scene asks for one.
   if (def.type == core::EmitterType::Waterfall) def.speed = 0.0;
   // An explosion is one burst unless the scene asks for a rate.
@@ -152,8 +153,9 @@ core::EmitterDef readEmitter(MapReader& reader, const core::WorldDef& world)
   reader.read("particle_mass", def.particle_mass);
   reader.read("max_particles", def.max_particles);
   reader.read("seed", def.seed);
+  reader.read("contact_thickness", def.contact_thickness);
   reader.finish();
-  check(reader, reader.field(""), core::validate(def, world.max_particles_per_body));
+  check(reader, reader.field(""), core::validate(def, world.max_particles_per_body, world.dt));
   return def;
 }
 
@@ -199,6 +201,7 @@ core::RopeDef readRope(MapReader& reader, const core::WorldDef& world, const std
   readSpringConstants(reader, "bend", def.bend_stiffness, def.bend_damping, source);
   def.pins = readIndexList(reader, "pins");
   readIntegrator(reader, def.integrator);
+  reader.read("contact_thickness", def.contact_thickness);
   reader.finish();
   check(reader, reader.field(""), core::validate(def, world.max_particles_per_body));
   return def;
@@ -254,8 +257,8 @@ core::SpringNetworkDef readSpringNetwork(MapReader& reader, const core::WorldDef
         std::string name;
         s.read("class", name);
         if (!core::parseSpringClass(name, spring.spring_class))
-          s.fail(springs[k]["class"],
-                 s.field("class") + " = '" + name + "' is not a spring class; allowed: stretch, shear, bend");
+          s.fail(springs[k]["class"], s.field("class") + " = " + core::quoteReceived(name) +
+                                          " is not a spring class; allowed: stretch, shear, bend");
       }
       s.finish();
       const int n = static_cast<int>(def.positions.size());
@@ -266,6 +269,7 @@ core::SpringNetworkDef readSpringNetwork(MapReader& reader, const core::WorldDef
   }
   def.pins = readIndexList(reader, "pins");
   readIntegrator(reader, def.integrator);
+  reader.read("contact_thickness", def.contact_thickness);
   reader.finish();
   check(reader, reader.field(""), core::validate(def, world.max_particles_per_body));
   return def;
@@ -339,8 +343,8 @@ void addFramePins(MapReader& reader, const std::vector<FramePinEntry>& entries, 
     if (YAML::convert<int>::decode(e.node["pin"], index))
       indices.push_back(index < 0 ? count + index : index);
     else if (!resolve_name(e.pin, indices))
-      reader.fail(e.node["pin"],
-                  reader.field("frame_pins") + ": pin = '" + e.pin + "' is neither an index nor a pin name");
+      reader.fail(e.node["pin"], reader.field("frame_pins") + ": pin = " + core::quoteReceived(e.pin) +
+                                     " is neither an index nor a pin name");
     for (int i : indices)
     {
       if (i < 0 || i >= count)
@@ -360,6 +364,16 @@ void readClothConstants(MapReader& reader, core::SpringConstants& stretch, core:
   readSpringConstants(reader, "bend", bend.stiffness, bend.damping, source);
 }
 
+// A cloth's contact_thickness: a number [m], or "auto" (also when absent) for
+// core::clothContactThickness(). True when a number was given.
+bool readContactThickness(MapReader& reader, double& thickness)
+{
+  const YAML::Node node = reader.child("contact_thickness");
+  if (!node || (node.IsScalar() && node.Scalar() == "auto")) return false;
+  reader.read("contact_thickness", thickness);
+  return true;
+}
+
 std::string resolvePath(const std::string& source, const std::string& path)
 {
   const std::filesystem::path p(path);
@@ -367,19 +381,16 @@ std::string resolvePath(const std::string& source, const std::string& path)
   return (std::filesystem::path(source).parent_path() / p).string();
 }
 
-// What grid and mesh cloth start with: name, model, the world's integrator and, for a
-// Baraff–Witkin cloth, its default constants and its rest stretch b_u, b_v.
+// What grid and mesh cloth start with: name, model with its default constants, the world's
+// integrator and, for a Baraff–Witkin cloth, its rest stretch b_u, b_v.
 template <typename ClothDef>
 void startCloth(MapReader& reader, const std::string& name, core::ClothModel model,
                 const core::IntegratorDef& integrator, ClothDef& def)
 {
+  def = ClothDef(model);  // the model's default constants
   def.name = name;
-  def.model = model;
   def.integrator = integrator;
   if (model != core::ClothModel::BaraffWitkin) return;
-  def.stretch = core::kBaraffWitkinStretch;
-  def.shear = core::kBaraffWitkinShear;
-  def.bend = core::kBaraffWitkinBend;
   reader.read("b_u", def.b_u);
   reader.read("b_v", def.b_v);
 }
@@ -392,8 +403,8 @@ BodyDef readCloth(MapReader& reader, SceneDef& scene, const std::string& source)
   reader.read("model", model_name);
   core::ClothModel model = core::ClothModel::Springs;
   if (!core::parseClothModel(model_name, model))
-    reader.fail(reader.node()["model"], reader.field("model") + " = '" + model_name +
-                                            "' is not a cloth model; allowed: springs, baraff_witkin");
+    reader.fail(reader.node()["model"], reader.field("model") + " = " + core::quoteReceived(model_name) +
+                                            " is not a cloth model; allowed: springs, baraff_witkin");
   const bool baraff_witkin = model == core::ClothModel::BaraffWitkin;
   const std::vector<FramePinEntry> frame_pins = readFramePinEntries(reader, source);
 
@@ -448,8 +459,11 @@ BodyDef readCloth(MapReader& reader, SceneDef& scene, const std::string& source)
     readPins(reader, def.pins, nullptr);
     readStrainLimit(reader, def.strain_limit);
     readIntegrator(reader, def.integrator);
+    const bool thickness_given = readContactThickness(reader, def.contact_thickness);
     reader.finish();
     check(reader, reader.field(""), core::validate(def, world.max_particles_per_body));
+    if (!thickness_given)
+      def.contact_thickness = core::clothContactThickness(def.vertices, def.triangles, world.spheres);
     addFramePins(
         reader, frame_pins, name, static_cast<int>(def.vertices.size()),
         [](const std::string&, std::vector<int>&) { return false; }, def.pins, scene);
@@ -473,8 +487,14 @@ BodyDef readCloth(MapReader& reader, SceneDef& scene, const std::string& source)
   readPins(reader, def.pins, &def.named_pins);
   readStrainLimit(reader, def.strain_limit);
   readIntegrator(reader, def.integrator);
+  const bool thickness_given = readContactThickness(reader, def.contact_thickness);
   reader.finish();
   check(reader, reader.field(""), core::validate(def, world.max_particles_per_body));
+  if (!thickness_given)
+  {
+    const core::SpringNetworkDef net = core::buildClothGrid(def);
+    def.contact_thickness = core::clothContactThickness(net.positions, net.triangles, world.spheres);
+  }
   addFramePins(
       reader, frame_pins, name, def.nu * def.nv,
       [&](const std::string& pin, std::vector<int>& indices) {
@@ -505,6 +525,7 @@ core::JellyDef readJelly(MapReader& reader, SceneDef& scene, const std::string& 
   readPins(reader, def.pins, nullptr);
   readStrainLimit(reader, def.strain_limit);
   readIntegrator(reader, def.integrator);
+  reader.read("contact_thickness", def.contact_thickness);
   reader.finish();
   check(reader, reader.field(""), core::validate(def, scene.world.max_particles_per_body));
   return def;
@@ -530,12 +551,13 @@ void readBodies(const YAML::Node& node, const std::string& source, SceneDef& sce
     else if (kind == "jelly")
       scene.bodies.emplace_back(readJelly(reader, scene, source));
     else
-      reader.fail(node[i]["kind"], reader.field("kind") + " = '" + kind +
-                                       "' is not a body kind; allowed: emitter, rope, spring_network, cloth, jelly");
+      reader.fail(node[i]["kind"], reader.field("kind") + " = " + core::quoteReceived(kind) +
+                                       " is not a body kind; allowed: emitter, rope, spring_network, cloth, jelly");
 
     const std::string name = std::visit([](const auto& def) { return def.name; }, scene.bodies.back());
     if (!names.insert(name).second)
-      reader.fail(node[i], reader.field("name") + " = '" + name + "' is already taken: body names must be unique");
+      reader.fail(node[i], reader.field("name") + " = " + core::quoteReceived(name) +
+                               " is already taken: body names must be unique");
   }
 }
 }  // namespace
@@ -711,6 +733,7 @@ void clothTail(YAML::Node node, const SceneDef& scene, const ClothDef& cloth, co
   node["frame_pins"] = framePins(scene, cloth.name);
   strainLimit(node, cloth.strain_limit);
   integrator(node, cloth.integrator);
+  node["contact_thickness"] = cloth.contact_thickness;
 }
 
 YAML::Node contact(YAML::Node node, const core::ContactDef& c)
@@ -728,6 +751,7 @@ std::string toYaml(const SceneDef& scene)
   const core::WorldDef& w = scene.world;
   root["world"]["gravity"] = vector3(w.gravity);
   root["world"]["dt"] = w.dt;
+  root["world"]["global_damping"] = w.global_damping;
   root["world"]["seed"] = w.seed;
   root["world"]["max_particles_per_body"] = w.max_particles_per_body;
   integrator(root["world"], w.integrator);
@@ -776,6 +800,7 @@ std::string toYaml(const SceneDef& scene)
       node["particle_mass"] = e->particle_mass;
       node["max_particles"] = e->max_particles;
       node["seed"] = e->seed;
+      node["contact_thickness"] = e->contact_thickness;
       root["bodies"].push_back(node);
     }
     else if (const auto* r = std::get_if<core::RopeDef>(&body))
@@ -791,6 +816,7 @@ std::string toYaml(const SceneDef& scene)
       node["stretch"] = springConstants(r->stretch_stiffness, r->stretch_damping);
       node["bend"] = springConstants(r->bend_stiffness, r->bend_damping);
       node["pins"] = indexList(r->pins);
+      node["contact_thickness"] = r->contact_thickness;
       integrator(node, r->integrator);
       root["bodies"].push_back(node);
     }
@@ -820,6 +846,7 @@ std::string toYaml(const SceneDef& scene)
         node["springs"].push_back(s);
       }
       node["pins"] = indexList(net->pins);
+      node["contact_thickness"] = net->contact_thickness;
       integrator(node, net->integrator);
       root["bodies"].push_back(node);
     }
@@ -886,6 +913,7 @@ std::string toYaml(const SceneDef& scene)
       node["shear"] = springConstants(j->shear.stiffness, j->shear.damping);
       node["bend"] = springConstants(j->bend.stiffness, j->bend.damping);
       node["pins"] = indexList(j->pins);
+      node["contact_thickness"] = j->contact_thickness;
       strainLimit(node, j->strain_limit);
       integrator(node, j->integrator);
       root["bodies"].push_back(node);

@@ -10,6 +10,8 @@
 #include <fstream>
 #include <iostream>
 #include <string>
+#include <type_traits>
+#include <variant>
 #include <vector>
 
 #include "particle_sim/scene/scene.h"
@@ -19,9 +21,10 @@ namespace
 constexpr const char* kUsage =
     "usage: particle_sim_run SCENE.yaml --duration T [--dt DT] [--integrator NAME] [--output states.csv] [--every N]\n"
     "  SCENE.yaml       scene file (see README, 'Scene files')\n"
-    "  --duration T     sim time to run [s], > 0\n"
+    "  --duration T     sim time to run [s], > 0; duration / dt must give 1 to 2^64 - 1 steps\n"
     "  --dt DT          physics step [s], overrides the scene's world.dt, in (0, 0.1]\n"
-    "  --integrator NAME  integrator of every spring body: symplectic_euler, verlet, implicit_euler, rk4, auto\n"
+    "  --integrator NAME  integrator of every spring body (rope, spring network, cloth, jelly): symplectic_euler,\n"
+    "                   verlet, implicit_euler, rk4, auto\n"
     "  --output FILE    write time,body,index,x,y,z,vx,vy,vz rows for every live particle\n"
     "  --every N        write every N-th step (default 1); the initial state is always written\n";
 
@@ -120,10 +123,15 @@ int main(int argc, char** argv)
     particle_sim::core::IntegratorType type;
     particle_sim::core::parseIntegratorType(integrator_name, type);
     scene.world.integrator.type = type;
+    // Every spring body: ropes, spring networks, grid and mesh cloth, jelly (emitters have none).
     for (auto& body : scene.bodies)
     {
-      if (auto* rope = std::get_if<particle_sim::core::RopeDef>(&body)) rope->integrator.type = type;
-      if (auto* net = std::get_if<particle_sim::core::SpringNetworkDef>(&body)) net->integrator.type = type;
+      std::visit(
+          [type](auto& def) {
+            if constexpr (!std::is_same_v<std::decay_t<decltype(def)>, particle_sim::core::EmitterDef>)
+              def.integrator.type = type;
+          },
+          body);
     }
   }
   std::unique_ptr<particle_sim::core::World> world;
@@ -133,6 +141,17 @@ int main(int argc, char** argv)
     return 1;
   }
 
+  // Step until the duration is covered: at least one step, and a count that fits in 64 bits.
+  const double step_count = std::max(0.0, std::ceil(duration / world->dt() - 1e-9));  // never -0
+  constexpr double kTwoTo64 = 18446744073709551616.0;
+  char figures[160];
+  std::snprintf(figures, sizeof(figures), "--duration %g s with dt = %g s gives %g steps", duration, world->dt(),
+                step_count);
+  if (!(step_count >= 1.0))
+    return usageError(std::string(figures) + ": at least 1 is needed (a longer duration or a smaller dt)");
+  if (!(step_count < kTwoTo64))
+    return usageError(std::string(figures) + ": more than fit in 64 bits (at most 18446744073709551615)");
+  const auto steps = static_cast<std::uint64_t>(step_count);
   std::ofstream output;
   if (!output_path.empty())
   {
@@ -146,8 +165,7 @@ int main(int argc, char** argv)
     writeStates(output, *world);
   }
 
-  // Step until the duration is covered; report progress on stderr every second of wall time.
-  const auto steps = static_cast<std::uint64_t>(std::ceil(duration / world->dt() - 1e-9));
+  // Report progress on stderr every second of wall time.
   const auto write_every = static_cast<std::uint64_t>(every);
   using Clock = std::chrono::steady_clock;
   const auto start = Clock::now();

@@ -250,3 +250,52 @@ TEST(BaraffWitkinCloth, SpringConstantsChangeTheConditionsAndMeshesNeedTextureCo
   mesh.uvs = {{0, 0}, {1, 1}, {2, 2}};
   EXPECT_NE(validate(mesh, 100).message.find("degenerate"), std::string::npos);
 }
+
+// The Baraff–Witkin defaults are defined once: a C++ caller choosing the model through the
+// definition's constructor, a scene file and BaraffWitkinDef all get the documented constants
+// (stretch 1000 N/m, shear 100 N/m, bend 0.005 N·m), never the spring cloth's 20 N/m bend.
+TEST(BaraffWitkinDefaults, GridMeshSceneAndModelAgreeOnTheDocumentedConstants)
+{
+  const SpringConstants stretch{1000.0, 1.0}, shear{100.0, 0.1}, bend{0.005, 5e-5};
+  auto expectConstants = [&](const BaraffWitkinModel& model, const std::string& where) {
+    EXPECT_EQ(model.constants(SpringClass::Stretch).stiffness, stretch.stiffness) << where;
+    EXPECT_EQ(model.constants(SpringClass::Stretch).damping, stretch.damping) << where;
+    EXPECT_EQ(model.constants(SpringClass::Shear).stiffness, shear.stiffness) << where;
+    EXPECT_EQ(model.constants(SpringClass::Shear).damping, shear.damping) << where;
+    EXPECT_EQ(model.constants(SpringClass::Bend).stiffness, bend.stiffness) << where;
+    EXPECT_EQ(model.constants(SpringClass::Bend).damping, bend.damping) << where;
+  };
+
+  World world{WorldDef{}};
+  ClothGridDef grid(ClothModel::BaraffWitkin);
+  grid.name = "grid";
+  ASSERT_TRUE(world.addClothGrid(grid).ok);
+  ASSERT_NE(world.findSpringBody("grid")->baraffWitkin(), nullptr);
+  expectConstants(*world.findSpringBody("grid")->baraffWitkin(), "ClothGridDef(BaraffWitkin)");
+
+  MeshClothDef mesh(ClothModel::BaraffWitkin);
+  mesh.name = "mesh";
+  mesh.vertices = {{0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
+  mesh.uvs = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+  mesh.triangles = {{0, 1, 2}, {0, 2, 3}};
+  ASSERT_TRUE(world.addMeshCloth(mesh).ok);
+  expectConstants(*world.findSpringBody("mesh")->baraffWitkin(), "MeshClothDef(BaraffWitkin)");
+
+  particle_sim::scene::SceneDef scene;
+  ASSERT_TRUE(
+      particle_sim::scene::parseScene("bodies:\n  - {name: c, kind: cloth, model: baraff_witkin}\n", "test.yaml", scene)
+          .ok);
+  std::unique_ptr<World> from_scene;
+  ASSERT_TRUE(particle_sim::scene::buildWorld(scene, from_scene).ok);
+  expectConstants(*from_scene->findSpringBody("c")->baraffWitkin(), "scene file");
+
+  const BaraffWitkinDef plain;
+  EXPECT_EQ(plain.bend.stiffness, bend.stiffness);
+  EXPECT_EQ(plain.stretch.stiffness, stretch.stiffness);
+  EXPECT_EQ(plain.shear.stiffness, shear.stiffness);
+
+  // The spring model keeps the spring cloth's defaults.
+  const ClothGridDef springs(ClothModel::Springs);
+  EXPECT_EQ(springs.bend.stiffness, 20.0);
+  EXPECT_EQ(ClothGridDef().bend.stiffness, 20.0);
+}

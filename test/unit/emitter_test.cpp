@@ -6,6 +6,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
+
+#include "particle_sim/core/world.h"
 
 using particle_sim::core::EmitterBody;
 using particle_sim::core::EmitterDef;
@@ -219,4 +222,56 @@ TEST(EmitterValidation, RefusesEachBadFieldNamingIt)
   EXPECT_FALSE(status.ok);
   EXPECT_NE(status.message.find("max_particles = 5000"), std::string::npos) << status.message;
   EXPECT_NE(status.message.find("1000"), std::string::npos) << status.message;
+}
+
+// A rate beyond one whole pool per step could only drop particles: refused with the bound it
+// comes from. 1e300 particles/s used to overflow an int and emit nothing, silently.
+TEST(EmitterRate, RatesBeyondOnePoolPerStepAreRefusedNamingTheBound)
+{
+  particle_sim::core::WorldDef world_def;
+  world_def.dt = 0.001;
+  particle_sim::core::World world(world_def);
+  EmitterDef def = makeDef(EmitterType::Fountain);
+  def.max_particles = 2000;
+  def.rate = 1e300;
+  const particle_sim::core::Status refused = world.addEmitter(def);
+  EXPECT_FALSE(refused.ok);
+  EXPECT_NE(refused.message.find("rate = 1e+300 is out of range: must be in [0, 2e+06] particles/s"), std::string::npos)
+      << refused.message;
+  EXPECT_NE(refused.message.find("max_particles = 2000"), std::string::npos) << refused.message;
+  EXPECT_DOUBLE_EQ(particle_sim::core::maxEmitterRate(2000, 0.001), 2e6);
+
+  // The bound itself is allowed, and fills the pool in one step.
+  def.rate = particle_sim::core::maxEmitterRate(2000, 0.001);
+  ASSERT_TRUE(world.addEmitter(def).ok);
+  world.step();
+  EXPECT_EQ(world.findBody("e")->particles().size(), 2000);
+}
+
+// Emission arithmetic never overflows, even for a body built without validation: a huge rate
+// fills the pool, and what did not fit is counted as dropped.
+TEST(EmitterRate, HugeRatesFillThePoolAndCountTheRestAsDropped)
+{
+  EmitterDef def = makeDef(EmitterType::Fountain);
+  def.max_particles = 100;
+  def.lifetime = 10.0;
+  for (double rate : {1e300, 1e12, std::numeric_limits<double>::max()})
+  {
+    def.rate = rate;
+    EmitterBody emitter(def);
+    Environment env;
+    env.ground.enabled = false;
+    emitter.step(0.01, env);
+    EXPECT_EQ(emitter.particles().size(), 100) << "rate " << rate;
+    EXPECT_EQ(emitter.emittedCount(), 100) << "rate " << rate;
+    EXPECT_GT(emitter.droppedCount(), 0) << "rate " << rate;
+    const long long dropped_once = emitter.droppedCount();
+    emitter.step(0.01, env);
+    EXPECT_GE(emitter.droppedCount(), dropped_once) << "rate " << rate << ": the count never wraps";
+  }
+  def.rate = 1e12;
+  EmitterBody emitter(def);
+  Environment env;
+  emitter.step(0.01, env);
+  EXPECT_EQ(emitter.droppedCount(), 10000000000LL - 100);  // 1e12 · 0.01 owed, 100 fitted
 }

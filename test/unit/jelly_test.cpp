@@ -427,3 +427,28 @@ TEST(JellyFree, InternalForcesConserveMomentumUnderRandomVelocities)
     EXPECT_GT(largest_deformation, 1e-3) << toString(type) << ": the jelly should wobble";
   }
 }
+
+// A jelly that blows up under symplectic Euler even at its substep cap is frozen, and reports the
+// method that ran (it used to report implicit_euler, the value before any step) and why it froze.
+TEST(JellyFrozen, ReportsTheIntegratorThatRanAndItsReason)
+{
+  WorldDef world_def;
+  world_def.dt = 0.01;
+  World world(world_def);
+  JellyDef def;
+  def.name = "cube";
+  def.nx = def.ny = def.nz = 3;
+  def.mass = 0.01;
+  def.stretch = {1e9, 0.0};
+  def.velocity = {0.0, 0.0, -5.0};
+  def.origin = {-0.25, -0.25, 0.01};
+  def.integrator.type = IntegratorType::SymplecticEuler;
+  def.integrator.max_substeps = 1;
+  ASSERT_TRUE(world.addJelly(def).ok);
+  const SpringNetworkBody& body = *world.findSpringBody("cube");
+  for (int k = 0; k < 50 && !body.frozen(); ++k)
+    world.step();
+  ASSERT_TRUE(body.frozen()) << "the guard should have frozen this jelly";
+  EXPECT_EQ(body.lastIntegrator(), IntegratorType::SymplecticEuler);
+  EXPECT_NE(body.frozenReason().find("symplectic_euler blew up"), std::string::npos) << body.frozenReason();
+}

@@ -6,6 +6,10 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <utility>
+#include <vector>
 
 #include "particle_sim/scene/obj_mesh.h"
 
@@ -348,4 +352,163 @@ TEST(ObjMesh, ParsesVerticesFacesPolygonsAndTextureCoordinates)
   EXPECT_TRUE(contains(scene::parseObj("v 0 0 0\nf 1 2 3\n", "bad.obj", mesh).message,
                        "bad.obj:2: face corner '2' names no vertex"));
   EXPECT_TRUE(contains(scene::parseObj("v 0 0 0\n", "bad.obj", mesh).message, "no triangles"));
+}
+
+TEST(SceneFiles, RefusesDuplicateKeysWithFileAndLine)
+{
+  const std::string m = refusal("world:\n  dt: 0.01\n  dt: 0.02\n");
+  EXPECT_TRUE(contains(m, "test.yaml:3: world.dt is given twice (first on line 2)")) << m;
+  EXPECT_TRUE(contains(refusal(std::string(kEmitterHead) + "    rate: 10\n    rate: 20\n"),
+                       "test.yaml:6: bodies[0].rate is given twice (first on line 5)"));
+  EXPECT_TRUE(contains(refusal("bodies:\n  - {name: r, kind: rope, stretch: {stiffness: 1, stiffness: 2}}\n"),
+                       "bodies[0].stretch.stiffness is given twice"));
+  EXPECT_TRUE(contains(refusal("world: {}\nworld: {}\n"), "test.yaml:2: world is given twice"));
+}
+
+TEST(SceneFiles, AcceptsWorldGlobalDampingInItsRange)
+{
+  const scene::SceneDef def = parseOk("world:\n  global_damping: 0.5\n");
+  EXPECT_EQ(def.world.global_damping, 0.5);
+  std::unique_ptr<core::World> world;
+  ASSERT_TRUE(scene::buildWorld(def, world).ok);
+  EXPECT_EQ(world->environment().damping, 0.5);
+  EXPECT_TRUE(contains(refusal("world:\n  global_damping: 1e9\n"),
+                       "world.global_damping = 1e+09 is out of range: must be in [0, 100] 1/s"));
+  EXPECT_TRUE(contains(refusal("world:\n  air: {wind: [0, 0, 1e308]}\n"),
+                       "air.wind.z = 1e+308 is out of range: must be in [-100, 100] m/s"));
+  EXPECT_TRUE(contains(refusal("bodies:\n  - {name: r, kind: rope, stretch: {stiffness: 1e200}}\n"),
+                       "stretch.stiffness = 1e+200 is out of range: must be in [0, 1e+09] N/m"));
+}
+
+// Every unknown-key message lists exactly the keys its reader accepts: each listed key, given,
+// is never refused as unknown (it may be refused for its value), and the world's list has the
+// integrator and global damping.
+TEST(SceneFiles, EveryKeyAnUnknownKeyMessageListsIsAccepted)
+{
+  const std::string rope = "bodies:\n  - name: r\n    kind: rope\n";
+  const std::string net = "bodies:\n  - name: n\n    kind: spring_network\n    particles:\n";
+  const std::string cloth = "bodies:\n  - name: c\n    kind: cloth\n";
+  const std::vector<std::pair<std::string, std::string>> readers = {
+      {"world", "world:\n  KEY\n"},
+      {"world.ground", "world:\n  ground:\n    KEY\n"},
+      {"world.spheres[0]", "world:\n  spheres:\n    - center: [0, 0, 0]\n      radius: 1\n      KEY\n"},
+      {"world.air", "world:\n  air:\n    KEY\n"},
+      {"frames[0]", "frames:\n  - name: f\n    KEY\n"},
+      {"bodies[0]", std::string(kEmitterHead) + "    KEY\n"},
+      {"bodies[0]", rope + "    KEY\n"},
+      {"bodies[0].stretch", rope + "    stretch:\n      KEY\n"},
+      {"bodies[0]", net + "      - {position: [0, 0, 0]}\n      - {position: [1, 0, 0]}\n    KEY\n"},
+      {"bodies[0].particles[0]", net + "      - position: [0, 0, 0]\n        KEY\n"},
+      {"bodies[0].springs[0]", net + "      - {position: [0, 0, 0]}\n      - {position: [1, 0, 0]}\n    springs:\n"
+                                     "      - particles: [0, 1]\n        KEY\n"},
+      {"bodies[0]", cloth + "    KEY\n"},
+      {"bodies[0]", cloth + "    model: baraff_witkin\n    KEY\n"},
+      {"bodies[0]", cloth + "    vertices: [[0, 0, 0], [1, 0, 0], [0, 1, 0]]\n    triangles: [[0, 1, 2]]\n    KEY\n"},
+      {"bodies[0].frame_pins[0]", cloth + "    frame_pins:\n      - pin: 0\n        frame: f\n        KEY\n"},
+      {"bodies[0]", "bodies:\n  - name: j\n    kind: jelly\n    KEY\n"},
+  };
+  const std::string marker = "allowed keys: ";
+  for (const auto& [path, text] : readers)
+  {
+    auto with = [&, text = text](const std::string& line) {
+      std::string out = text;
+      out.replace(out.find("KEY"), 3, line);
+      return out;
+    };
+    // The entry without the key is valid (where it has other keys), so that only the added key can
+    // be refused.
+    std::string base = text;
+    base.erase(base.find("KEY"), 4);
+    base.erase(base.find_last_not_of(' ') + 1);
+    if (base.back() != ':' && base.substr(base.size() - 2) != ":\n") parseOk(base);
+
+    const std::string m = refusal(with("no_such_key: 1"));
+    ASSERT_TRUE(contains(m, path + ".no_such_key is not a known key")) << m;
+    std::vector<std::string> allowed;
+    std::stringstream list(m.substr(m.find(marker) + marker.size()));
+    for (std::string key; std::getline(list, key, ',');)
+      allowed.push_back(key.substr(key.find_first_not_of(' ')));
+    ASSERT_GE(allowed.size(), 2u) << m;
+    for (const std::string& key : allowed)
+    {
+      scene::SceneDef def;
+      const core::Status status = scene::parseScene(with(key + ": 1"), "test.yaml", def);
+      EXPECT_FALSE(contains(status.message, key + " is not a known key"))
+          << path << ": '" << key << "' is listed as allowed but refused: " << status.message;
+    }
+    if (path == "world")
+    {
+      EXPECT_TRUE(contains(m, "integrator")) << m;
+      EXPECT_TRUE(contains(m, "global_damping")) << m;
+    }
+  }
+}
+
+TEST(ObjMesh, RefusesWhatIsNotARegularFileOrIsTooLarge)
+{
+  scene::ObjMesh mesh;
+  const core::Status device = scene::loadObjFile("/dev/zero", mesh);
+  EXPECT_FALSE(device.ok);
+  EXPECT_TRUE(contains(device.message, "/dev/zero: is not a regular file"));
+  EXPECT_TRUE(contains(scene::loadObjFile("/tmp", mesh).message, "/tmp: is not a regular file"));
+
+  // A sparse file one byte over the limit: refused by its size, before anything is read.
+  const std::string big = (std::filesystem::temp_directory_path() / "particle_sim_too_big.obj").string();
+  {
+    std::ofstream out(big);
+  }
+  std::filesystem::resize_file(big, scene::kMaxObjFileBytes + 1);
+  const core::Status too_big = scene::loadObjFile(big, mesh);
+  std::filesystem::remove(big);
+  EXPECT_FALSE(too_big.ok);
+  EXPECT_TRUE(contains(too_big.message, "is 67108865 bytes, over the limit of 67108864 bytes"));
+
+  // A scene naming a device gets the same refusal at the mesh key's line.
+  EXPECT_TRUE(contains(refusal("bodies:\n  - name: c\n    kind: cloth\n    mesh: /dev/zero\n"),
+                       "test.yaml:4: /dev/zero: is not a regular file"));
+}
+
+TEST(ObjMesh, RefusesTooManyVerticesOrTrianglesAndZeroAreaTriangles)
+{
+  scene::ObjMesh mesh;
+  std::string vertices;
+  for (std::size_t k = 0; k <= scene::kMaxObjVertices; ++k)
+    vertices += "v 0 0 0\n";
+  EXPECT_TRUE(
+      contains(scene::parseObj(vertices, "many.obj", mesh).message, "many.obj:1000001: more than 1000000 vertices"));
+  EXPECT_TRUE(mesh.vertices.size() <= scene::kMaxObjVertices);
+
+  std::string triangles = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
+  for (std::size_t k = 0; k <= scene::kMaxObjTriangles; ++k)
+    triangles += "f 1 2 3\n";
+  EXPECT_TRUE(
+      contains(scene::parseObj(triangles, "many.obj", mesh).message, "many.obj:2000004: more than 2000000 triangles"));
+
+  // Three corners on one line, and a corner used twice: no area, no normal.
+  EXPECT_TRUE(contains(scene::parseObj("v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n", "flat.obj", mesh).message,
+                       "flat.obj:4: the face has a triangle of zero area (vertices 1, 2, 3"));
+  EXPECT_TRUE(contains(scene::parseObj("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 2\n", "flat.obj", mesh).message,
+                       "flat.obj:4: the face has a triangle of zero area"));
+  // Inline vertices in a scene are checked alike.
+  EXPECT_TRUE(contains(refusal("bodies:\n  - name: c\n    kind: cloth\n"
+                               "    vertices: [[0, 0, 0], [1, 0, 0], [2, 0, 0], [0, 1, 0]]\n"
+                               "    triangles: [[0, 1, 3], [0, 1, 2]]\n"),
+                       "triangles[1] = [0, 1, 2] has zero area"));
+}
+
+// A received string echoed in a scene error is cut after 64 characters, at a character boundary.
+TEST(SceneFiles, EchoedValuesAreCutAtACharacterBoundary)
+{
+  std::string long_value;
+  for (int k = 0; k < 200; ++k)
+    long_value += "\xC3\xA9";  // 'é', two bytes
+  const std::string m = refusal(std::string(kEmitterHead) + "    rate: " + long_value + "\n");
+  EXPECT_TRUE(contains(m, "bodies[0].rate = '")) << m;
+  EXPECT_TRUE(contains(m, "...' (200 characters) must be a number")) << m;
+  EXPECT_LT(m.size(), 250u) << m;
+  const std::size_t start = m.find("rate = '") + 8;
+  const std::string shown = m.substr(start, m.find("...'") - start);
+  EXPECT_EQ(shown.size(), 128u) << "64 whole two-byte characters";
+  const std::string kind = refusal("bodies:\n  - {name: a, kind: " + long_value + "}\n");
+  EXPECT_TRUE(contains(kind, "(200 characters) is not a body kind")) << kind;
 }

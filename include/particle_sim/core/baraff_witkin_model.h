@@ -23,16 +23,22 @@ namespace core
 /// energy k/2 |C|² = stiffness · a · ε²/2 with ε the strain [stiffness in N/m]; a bend element gets
 /// k = stiffness · |e|² / (a₁ + a₂) (its rest edge length e and the areas of its two triangles),
 /// the discrete-shells scaling [stiffness in N·m]. Damping scales alike.
+/// Default constants of a Baraff–Witkin cloth, defined here only: stretch and shear per unit area
+/// [N/m] and [N·s/m], bend [N·m] and [N·m·s].
+constexpr SpringConstants kBaraffWitkinStretch{1000.0, 1.0};
+constexpr SpringConstants kBaraffWitkinShear{100.0, 0.1};
+constexpr SpringConstants kBaraffWitkinBend{0.005, 5e-5};
+
 struct BaraffWitkinDef
 {
   std::vector<BwTriangle> triangles;
   std::vector<BwBend> bends;
-  std::vector<double> bend_weights;     ///< per bend, |e|² / (a₁ + a₂) [-]
-  SpringConstants stretch{500.0, 0.5};  ///< [N/m], [N·s/m]
-  SpringConstants shear{50.0, 0.05};    ///< [N/m], [N·s/m]
-  SpringConstants bend{1e-3, 1e-5};     ///< [N·m], [N·m·s]
-  double b_u = 1.0;                     ///< rest stretch along u (< 1 shrinks, > 1 grows the cloth)
-  double b_v = 1.0;                     ///< rest stretch along v
+  std::vector<double> bend_weights;                ///< per bend, |e|² / (a₁ + a₂) [-]
+  SpringConstants stretch = kBaraffWitkinStretch;  ///< [N/m], [N·s/m]
+  SpringConstants shear = kBaraffWitkinShear;      ///< [N/m], [N·s/m]
+  SpringConstants bend = kBaraffWitkinBend;        ///< [N·m], [N·m·s]
+  double b_u = 1.0;                                ///< rest stretch along u (< 1 shrinks, > 1 grows the cloth)
+  double b_v = 1.0;                                ///< rest stretch along v
 
   bool empty() const { return triangles.empty(); }
 };

@@ -22,10 +22,24 @@ const char* toString(ClothModel model);
 /// Parses "springs" or "baraff_witkin"; false when unknown.
 bool parseClothModel(const std::string& text, ClothModel& model);
 
-/// Default constants of a Baraff–Witkin cloth: stretch and shear per unit area [N/m], bend [N·m].
-constexpr SpringConstants kBaraffWitkinStretch{1000.0, 1.0};
-constexpr SpringConstants kBaraffWitkinShear{100.0, 0.1};
-constexpr SpringConstants kBaraffWitkinBend{0.005, 5e-5};
+/// Default constants of a spring cloth (Provot's springs) [N/m], [N·s/m]. Those of a Baraff–Witkin
+/// cloth are kBaraffWitkinStretch, kBaraffWitkinShear and kBaraffWitkinBend (baraff_witkin_model.h).
+constexpr SpringConstants kSpringClothStretch{1000.0, 0.5};
+constexpr SpringConstants kSpringClothShear{200.0, 0.2};
+constexpr SpringConstants kSpringClothBend{20.0, 0.05};
+
+/// The default constants of `spring_class` for a cloth of `model`.
+SpringConstants defaultClothConstants(ClothModel model, SpringClass spring_class);
+
+/// Contact thickness [m] that keeps a cloth's flat triangles outside every sphere of `spheres`: a
+/// triangle whose edges are at most L long (L = the longest rest edge of `triangles`) and whose
+/// corners lie on a sphere of radius R dips into it by at most its circumradius ρ ≤ L/√3 as
+/// R − √(R² − ρ²) = ρ² / (R + √(R² − ρ²)); that depth for the smallest sphere, capped at
+/// limits::kContactThickness.max. 0 without spheres (a flat ground needs none). Scene files give it
+/// to cloth that does not set contact_thickness.
+double clothContactThickness(const std::vector<Eigen::Vector3d>& positions,
+                             const std::vector<Eigen::Vector3i>& triangles,
+                             const std::vector<SphereColliderDef>& spheres);
 
 /// A regular grid cloth after Provot (1995): particle (a, b), a in [0, nu), b in [0, nv), sits at
 /// origin + a/(nu−1) edge_u + b/(nv−1) edge_v and has index b·nu + a. Stretch springs join grid
@@ -40,6 +54,11 @@ constexpr SpringConstants kBaraffWitkinBend{0.005, 5e-5};
 ///     origin corner_00 ---- edge_v0 ---- corner_10  --> edge_u
 struct ClothGridDef
 {
+  ClothGridDef() = default;
+  /// A cloth of `cloth_model` with that model's default constants (defaultClothConstants()). Choose
+  /// the model here: assigning `model` afterwards keeps the constants already set.
+  explicit ClothGridDef(ClothModel cloth_model);
+
   std::string name;
   ClothModel model = ClothModel::Springs;                    ///< springs, or Baraff–Witkin with (u, v) from the grid
   Eigen::Vector3d origin = Eigen::Vector3d(-0.5, 0.0, 2.0);  ///< [m] particle (0, 0)
@@ -48,15 +67,17 @@ struct ClothGridDef
   int nu = 15;                                               ///< particles along u, >= 2
   int nv = 15;                                               ///< particles along v, >= 2
   double mass = 0.5;                                         ///< [kg] total, shared equally
-  SpringConstants stretch{1000.0, 0.5};
-  SpringConstants shear{200.0, 0.2};
-  SpringConstants bend{20.0, 0.05};  ///< stiffness 0 = no bend springs (Baraff–Witkin: see BaraffWitkinDef units)
-  double b_u = 1.0, b_v = 1.0;       ///< Baraff–Witkin rest stretch along u and v, > 0
-  std::vector<int> pins;             ///< indices; negative counts from the end
+  SpringConstants stretch = kSpringClothStretch;
+  SpringConstants shear = kSpringClothShear;
+  SpringConstants bend =
+      kSpringClothBend;         ///< stiffness 0 = no bend springs (Baraff–Witkin: see BaraffWitkinDef units)
+  double b_u = 1.0, b_v = 1.0;  ///< Baraff–Witkin rest stretch along u and v, > 0
+  std::vector<int> pins;        ///< indices; negative counts from the end
   std::vector<std::string>
       named_pins;  ///< corner_00, corner_10, corner_01, corner_11, edge_u0, edge_u1, edge_v0, edge_v1
   StrainLimitDef strain_limit;
   IntegratorDef integrator;
+  double contact_thickness = 0.0;  ///< [m] in limits::kContactThickness: kept from ground and spheres (0 = touch)
 };
 
 Status validate(const ClothGridDef& def, int max_particles);
@@ -73,19 +94,25 @@ const char* namedGridPinNames();
 /// that the (u, v) area equals the mesh's area.
 struct MeshClothDef
 {
+  MeshClothDef() = default;
+  /// A cloth of `cloth_model` with that model's default constants (defaultClothConstants()). Choose
+  /// the model here: assigning `model` afterwards keeps the constants already set.
+  explicit MeshClothDef(ClothModel cloth_model);
+
   std::string name;
   ClothModel model = ClothModel::Springs;
   std::vector<Eigen::Vector3d> vertices;   ///< [m]
   std::vector<Eigen::Vector3i> triangles;  ///< vertex indices
   std::vector<Eigen::Vector2d> uvs;        ///< per vertex texture coordinates; needed by Baraff–Witkin
   double mass = 0.5;                       ///< [kg] total, shared equally by the vertices
-  SpringConstants stretch{1000.0, 0.5};
-  SpringConstants shear{200.0, 0.2};  ///< Baraff–Witkin only
-  SpringConstants bend{20.0, 0.05};   ///< stiffness 0 = no bend springs
-  double b_u = 1.0, b_v = 1.0;        ///< Baraff–Witkin rest stretch
+  SpringConstants stretch = kSpringClothStretch;
+  SpringConstants shear = kSpringClothShear;  ///< Baraff–Witkin only
+  SpringConstants bend = kSpringClothBend;    ///< stiffness 0 = no bend springs
+  double b_u = 1.0, b_v = 1.0;                ///< Baraff–Witkin rest stretch
   std::vector<int> pins;
   StrainLimitDef strain_limit;
   IntegratorDef integrator;
+  double contact_thickness = 0.0;  ///< [m] in limits::kContactThickness: kept from ground and spheres (0 = touch)
 };
 
 Status validate(const MeshClothDef& def, int max_particles);

@@ -34,14 +34,15 @@ struct EmitterDef
   std::string name;
   EmitterType type = EmitterType::Fountain;
   Eigen::Vector3d origin = Eigen::Vector3d::Zero();  ///< [m] in the world frame
-  double rate = 100.0;                               ///< [particles/s] emitted continuously; 0 = none
-  int burst_count = 0;          ///< [particles] emitted at once when the emitter starts (and on reset)
-  double speed = 10.0;          ///< [m/s] initial speed (vertical component for fountain and waterfall)
-  double spread = 1.0;          ///< [m/s] width of the random horizontal velocity of fountain and waterfall
-  double lifetime = 3.0;        ///< [s] after which a particle is recycled
-  double particle_mass = 0.01;  ///< [kg]
-  int max_particles = 2000;     ///< size of the fixed particle pool
-  std::uint64_t seed = 1;       ///< random seed: the same seed gives the same particles
+  double rate = 100.0;    ///< [particles/s] emitted continuously, 0 = none; at most maxEmitterRate(max_particles, dt)
+  int burst_count = 0;    ///< [particles] emitted at once when the emitter starts (and on reset)
+  double speed = 10.0;    ///< [m/s] initial speed (vertical component for fountain and waterfall)
+  double spread = 1.0;    ///< [m/s] width of the random horizontal velocity of fountain and waterfall
+  double lifetime = 3.0;  ///< [s] after which a particle is recycled
+  double particle_mass = 0.01;     ///< [kg]
+  int max_particles = 2000;        ///< size of the fixed particle pool
+  std::uint64_t seed = 1;          ///< random seed: the same seed gives the same particles
+  double contact_thickness = 0.0;  ///< [m] in limits::kContactThickness: kept from ground and spheres (0 = touch)
 };
 
 /// Upper bound on `max_particles` of one emitter unless the caller allows more (the node's
@@ -49,7 +50,13 @@ struct EmitterDef
 constexpr int kDefaultMaxParticlesCap = 1000000;
 
 /// Checks every field; on failure the message names the field, its value and the allowed range.
-Status validate(const EmitterDef& def, int max_particles_cap = kDefaultMaxParticlesCap);
+/// With the world's step `dt` [s] (> 0) it also bounds the rate by maxEmitterRate().
+Status validate(const EmitterDef& def, int max_particles_cap = kDefaultMaxParticlesCap, double dt = 0.0);
+
+/// Largest emission rate [particles/s] of an emitter whose pool holds `max_particles`, stepped by
+/// `dt` [s]: max_particles / dt, one whole pool per step. A faster rate would owe more particles in
+/// one step than the pool can ever hold, so everything above it could only be dropped.
+double maxEmitterRate(int max_particles, double dt);
 
 /// An emitter and the particles it has emitted. Its pool holds `max_particles` particles, the
 /// live ones first; a particle older than `lifetime` is recycled, and an emission that finds the

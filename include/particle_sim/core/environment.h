@@ -61,6 +61,9 @@ struct Environment
 };
 
 /// Moves every live, non-pinned particle of `pool` that ended a step inside a collider back out.
+/// With a contact `thickness` t [m] > 0 the colliders act as if grown by t: particles stay at least
+/// t above the ground plane and t outside every sphere (a drawn surface between them then stays
+/// outside the sphere; see clothContactThickness()).
 /// `start_velocity`, when given, is each particle's velocity at the start of the step: a contact
 /// bounces only if the particle was already moving into the surface then (faster than
 /// bounce_speed), so a particle resting on a surface that an implicit step pulls into it is not
@@ -77,7 +80,7 @@ struct Environment
 /// whose straight path crossed a sphere (fast particles that would tunnel through it) is put back
 /// on the sphere where the path first met it and bounces there.
 void resolveCollisions(const Environment& env, ParticlePool& pool, const Eigen::Matrix3Xd* start_velocity = nullptr,
-                       const Eigen::Matrix3Xd* start_position = nullptr);
+                       const Eigen::Matrix3Xd* start_position = nullptr, double thickness = 0.0);
 
 }  // namespace core
 }  // namespace particle_sim

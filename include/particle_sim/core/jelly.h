@@ -30,6 +30,7 @@ struct JellyDef
   Eigen::Vector3d velocity = Eigen::Vector3d::Zero();  ///< [m/s] initial velocity of every particle
   StrainLimitDef strain_limit;
   IntegratorDef integrator;
+  double contact_thickness = 0.0;  ///< [m] in limits::kContactThickness: kept from ground and spheres (0 = touch)
 };
 
 Status validate(const JellyDef& def, int max_particles);

@@ -53,6 +53,7 @@ struct SpringNetworkDef
   BaraffWitkinDef baraff_witkin;           ///< Baraff–Witkin energies (cloth model baraff_witkin); empty = none
   StrainLimitDef strain_limit;
   IntegratorDef integrator;
+  double contact_thickness = 0.0;  ///< [m] in limits::kContactThickness: kept from ground and spheres (0 = touch)
 };
 
 /// Checks sizes, indices, masses, spring constants, pins and the integrator; the message names the
@@ -220,6 +221,7 @@ struct RopeDef
   double bend_damping = 0.0;         ///< [N·s/m]
   std::vector<int> pins;             ///< indices pinned where they start; negative counts from the end (-1 = last)
   IntegratorDef integrator;
+  double contact_thickness = 0.0;  ///< [m] in limits::kContactThickness: kept from ground and spheres (0 = touch)
 };
 
 Status validate(const RopeDef& def, int max_particles);

@@ -21,11 +21,12 @@ namespace core
 /// World settings with their defaults (Box2D's b2DefaultWorldDef() style).
 struct WorldDef
 {
-  Eigen::Vector3d gravity = Eigen::Vector3d(0.0, 0.0, -9.81);  ///< [m/s^2]
-  double dt = 0.001;                                           ///< [s] fixed physics step
-  std::uint64_t seed = 1;                                      ///< default seed of bodies that do not set their own
-  int max_particles_per_body = 100000;                         ///< cap on any body's particle count
-  IntegratorDef integrator;                                    ///< default integrator of spring bodies that set none
+  Eigen::Vector3d gravity = Eigen::Vector3d(0.0, 0.0, -9.81);  ///< [m/s^2], each component in limits::kGravityComponent
+  double global_damping = 0.0;  ///< [1/s] in limits::kGlobalDamping: f = −damping · m · v on spring-body particles
+  double dt = 0.001;            ///< [s] fixed physics step
+  std::uint64_t seed = 1;       ///< default seed of bodies that do not set their own
+  int max_particles_per_body = 100000;  ///< cap on any body's particle count
+  IntegratorDef integrator;             ///< default integrator of spring bodies that set none
   GroundPlaneDef ground;
   std::vector<SphereColliderDef> spheres;
   AirDef air;
@@ -36,7 +37,8 @@ constexpr double kMaxDt = 0.1;
 
 Status validate(const WorldDef& def);
 
-/// Body names: non-empty, of letters, digits, '_', '-' and '/', not starting with '_' (reserved).
+/// Body names: 1 to limits::kMaxNameLength characters, of letters, digits, '_', '-' and '/', not
+/// starting with '_' (reserved).
 Status validateBodyName(const std::string& name);
 
 /// A deterministic per-body seed from the world seed and the body name (FNV-1a hash), for
@@ -58,11 +60,13 @@ public:
 
   /// Moves the sphere collider called `name` to `center` [m] (a sphere carried by a robot's tool).
   Status setSphereCenter(const std::string& name, const Eigen::Vector3d& center);
-  /// Sets the wind velocity [m/s] felt by cloth and jelly from the next step.
+  /// Sets the wind velocity [m/s] felt by cloth and jelly from the next step; each component in
+  /// limits::kWindComponent, else refused (nothing changes).
   Status setWind(const Eigen::Vector3d& wind);
-  /// Sets gravity [m/s^2] from the next step (finite).
+  /// Sets gravity [m/s^2] from the next step; each component in limits::kGravityComponent.
   Status setGravity(const Eigen::Vector3d& gravity);
-  /// Sets the global damping [1/s] (f = −damping · m · v on spring-body particles) from the next step (finite, >= 0).
+  /// Sets the global damping [1/s] (f = −damping · m · v on spring-body particles) from the next
+  /// step; in limits::kGlobalDamping.
   Status setGlobalDamping(double damping);
 
   /// Sim time [s] = stepCount() * dt().

@@ -1,0 +1,103 @@
+#!/usr/bin/env bash
+# particle_sim_run through its command line, as a user runs it:
+#  - a dt or duration that gives zero steps, or more steps than fit in 64 bits, is refused (exit 2,
+#    message naming --duration, dt and the step count) instead of printing "steps 0" and exiting 0;
+#  - --integrator NAME applies to every spring body: rope, spring network, grid cloth, mesh cloth
+#    and jelly (it used to reach ropes and networks only).
+# Exits 0 when every check passes, 1 with a message per failed check otherwise.
+#
+# The binary is $PARTICLE_SIM_RUN, else $PARTICLE_SIM_BUILD/devel/lib/particle_sim/particle_sim_run
+# (PARTICLE_SIM_BUILD defaults to the package's build/ folder).
+set -uo pipefail
+
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
+build="${PARTICLE_SIM_BUILD:-$root/build}"
+run="${PARTICLE_SIM_RUN:-$build/devel/lib/particle_sim/particle_sim_run}"
+if [ ! -x "$run" ]; then
+  echo "FAIL: particle_sim_run not found at $run (build first, or set PARTICLE_SIM_BUILD)" >&2
+  exit 1
+fi
+
+work="$(mktemp -d)"
+trap 'rm -rf "$work"' EXIT
+failures=0
+fail() {
+  echo "FAIL: $*" >&2
+  failures=$((failures + 1))
+}
+
+# Runs particle_sim_run with "$@"; sets $status, $out (stdout) and $err (stderr).
+invoke() {
+  "$run" "$@" >"$work/out" 2>"$work/err"
+  status=$?
+  out="$(cat "$work/out")"
+  err="$(cat "$work/err")"
+}
+
+# expect_refusal DESCRIPTION TEXT_IN_STDERR ARGS...: exit status 2, nothing stepped, the message.
+expect_refusal() {
+  local what="$1" message="$2"
+  shift 2
+  invoke "$@"
+  [ "$status" -eq 2 ] || fail "$what: exit status $status, expected 2 (stdout: $out)"
+  case "$out" in *steps*) fail "$what: it stepped anyway: $out" ;; esac
+  case "$err" in *"$message"*) ;; *) fail "$what: stderr does not say '$message': $err" ;; esac
+}
+
+# A scene with one body of each spring kind, each asking for symplectic Euler itself.
+cat >"$work/bodies.yaml" <<'EOF'
+world:
+  dt: 0.001
+  integrator: symplectic_euler
+bodies:
+  - {name: rope, kind: rope, particles: 5, integrator: symplectic_euler}
+  - name: network
+    kind: spring_network
+    particles: [{position: [0, 0, 1]}, {position: [1, 0, 1]}]
+    springs: [{particles: [0, 1], stiffness: 50}]
+    integrator: symplectic_euler
+  - {name: grid, kind: cloth, resolution: [4, 4], integrator: symplectic_euler}
+  - name: mesh
+    kind: cloth
+    vertices: [[0, 0, 1], [1, 0, 1], [1, 1, 1], [0, 1, 1]]
+    triangles: [[0, 1, 2], [0, 2, 3]]
+    integrator: symplectic_euler
+  - {name: jelly, kind: jelly, resolution: [3, 3, 3], integrator: symplectic_euler}
+  - {name: spray, kind: emitter, type: fountain, rate: 10}
+EOF
+
+# 1. Step counts: zero steps, and more than 2^64 - 1 steps, are refused.
+expect_refusal "--dt 1e-300" "more than fit in 64 bits" "$work/bodies.yaml" --duration 1 --dt 1e-300
+expect_refusal "--duration 1e300" "more than fit in 64 bits" "$work/bodies.yaml" --duration 1e300
+expect_refusal "--duration 1e-300" "gives 0 steps: at least 1 is needed" "$work/bodies.yaml" --duration 1e-300
+expect_refusal "--duration 1e300 (figures)" "--duration 1e+300 s with dt = 0.001 s gives 1e+303 steps" \
+  "$work/bodies.yaml" --duration 1e300
+# A duration of exactly one step runs that step and exits 0.
+invoke "$work/bodies.yaml" --duration 0.001
+[ "$status" -eq 0 ] || fail "--duration 0.001 (one step): exit status $status: $err"
+case "$out" in "steps 1,"*) ;; *) fail "--duration 0.001 should run exactly 1 step: $out" ;; esac
+
+# 2. --integrator reaches every spring body (implicit_euler bodies print their CG figures).
+invoke "$work/bodies.yaml" --duration 0.01 --integrator implicit_euler
+[ "$status" -eq 0 ] || fail "--integrator implicit_euler: exit status $status: $err"
+for body in rope network grid mesh jelly; do
+  case "$out" in
+    *"body '$body' implicit_euler: CG iterations"*) ;;
+    *) fail "--integrator implicit_euler did not reach body '$body':"$'\n'"$out" ;;
+  esac
+done
+# And with auto, every spring body says what auto picked.
+invoke "$work/bodies.yaml" --duration 0.01 --integrator auto
+[ "$status" -eq 0 ] || fail "--integrator auto: exit status $status: $err"
+for body in rope network grid mesh jelly; do
+  case "$out" in
+    *"body '$body' auto: "*) ;;
+    *) fail "--integrator auto did not reach body '$body':"$'\n'"$out" ;;
+  esac
+done
+
+if [ "$failures" -ne 0 ]; then
+  echo "particle_sim_run_cli: $failures check(s) failed" >&2
+  exit 1
+fi
+echo "particle_sim_run_cli: all checks passed"
