@@ -65,6 +65,14 @@ geometry_msgs::Vector3 toVector3(const Eigen::Vector3d& v)
   return out;
 }
 
+// The integrator the body's last step ran: its own, or what auto chose (the core records the
+// latter only for completed steps, so a body that froze in its first step would otherwise show
+// the default).
+core::IntegratorType integratorThatRan(const core::SpringNetworkBody& body)
+{
+  return body.integrator().type == core::IntegratorType::Auto ? body.lastIntegrator() : body.integrator().type;
+}
+
 int clampCount(std::uint32_t value)
 {
   return static_cast<int>(std::min<std::uint32_t>(value, 2000000000u));
@@ -359,7 +367,7 @@ void SimNode::stepPhysics(std::uint64_t steps)
       reported_frozen_.erase(body->name());
     else if (reported_frozen_.insert(body->name()).second)
       ROS_ERROR_NAMED("sim", "body %s is frozen (integrator %s, last ran %s): %s", quoteName(body->name()).c_str(),
-                      core::toString(spring_body.integrator().type), core::toString(spring_body.lastIntegrator()),
+                      core::toString(spring_body.integrator().type), core::toString(integratorThatRan(spring_body)),
                       spring_body.frozenReason().c_str());
     long long& seen = reported_events_[body->name()];
     if (spring_body.stabilityEvents() > seen)
@@ -545,7 +553,7 @@ void SimNode::printStatus()
   {
     if (body->kind() != core::BodyKind::SpringNetwork) continue;
     const auto& spring_body = static_cast<const core::SpringNetworkBody&>(*body);
-    if (spring_body.lastIntegrator() != core::IntegratorType::ImplicitEuler) continue;
+    if (integratorThatRan(spring_body) != core::IntegratorType::ImplicitEuler) continue;
     any_implicit = true;
     cg_iterations = std::max(cg_iterations, spring_body.lastSolve().iterations);
     cg_residual = std::max(cg_residual, spring_body.lastSolve().relative_residual);
@@ -1194,7 +1202,7 @@ SimStatus::Ptr SimNode::buildStatus(const ros::Time& stamp) const
       b.model = spring_body.definition().baraff_witkin.empty() ? core::toString(core::ClothModel::Springs)
                                                                : core::toString(core::ClothModel::BaraffWitkin);
       b.integrator = core::toString(spring_body.integrator().type);
-      b.last_integrator = core::toString(spring_body.lastIntegrator());
+      b.last_integrator = core::toString(integratorThatRan(spring_body));
       b.auto_choice = spring_body.autoChoice();
       b.substeps = static_cast<std::uint32_t>(spring_body.lastSubsteps());
       b.stability_events = static_cast<std::uint64_t>(spring_body.stabilityEvents());
@@ -1232,10 +1240,11 @@ void SimNode::produceDiagnostics(diagnostic_updater::DiagnosticStatusWrapper& st
     const auto& spring_body = static_cast<const core::SpringNetworkBody&>(*body);
     if (spring_body.frozen())
     {
-      frozen.push_back(body->name() + " (" + spring_body.frozenReason() + ")");
+      frozen.push_back(toMessageText(body->name(), kMaxQuotedBytes) + " (" +
+                       core::toString(integratorThatRan(spring_body)) + ": " + spring_body.frozenReason() + ")");
       continue;
     }
-    if (spring_body.lastIntegrator() == core::IntegratorType::ImplicitEuler)
+    if (integratorThatRan(spring_body) == core::IntegratorType::ImplicitEuler)
     {
       iterations = std::max(iterations, spring_body.lastSolve().iterations);
       residual = std::max(residual, spring_body.lastSolve().relative_residual);
