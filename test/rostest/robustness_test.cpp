@@ -13,6 +13,7 @@
 #include <Eigen/Core>
 #include <atomic>
 #include <map>
+#include <memory>
 #include <mutex>
 #include <string>
 #include <thread>
@@ -102,6 +103,12 @@ private:
     for (const auto& max : msg->max.doubles)
       ranges_[max.name].second = max.value;
   }
+
+public:
+  // True once both subscriptions are connected to the node (/rosout: to this test and the node).
+  bool connected() const { return rosout_sub_.getNumPublishers() >= 2 && descriptions_sub_.getNumPublishers() > 0; }
+
+private:
   mutable std::mutex mutex_;
   std::vector<rosgraph_msgs::Log> logs_;
   std::map<std::string, std::pair<double, double>> ranges_;
@@ -115,18 +122,25 @@ protected:
   {
     for (const char* s : {"spawn_rope", "remove_body", "set_spring_constants", "pin_particle", "set_parameters"})
       ASSERT_TRUE(ros::service::waitForService(std::string("/particle_sim/") + s, ros::Duration(30.0))) << s;
+    // One subscription for the whole suite, connected before any test: a log line published
+    // before a subscriber connects is lost to it.
+    ros::NodeHandle nh;
+    rosout_ = std::make_unique<RosoutAndDescriptions>(nh);
+    ASSERT_TRUE(waitForWall([] { return rosout_->connected(); }));
   }
+  static void TearDownTestSuite() { rosout_.reset(); }
   ros::NodeHandle nh_;
   SimProbe probe_{nh_};
   Listener listener_{nh_};
-  RosoutAndDescriptions rosout_{nh_};
+  static std::unique_ptr<RosoutAndDescriptions> rosout_;
 };
+std::unique_ptr<RosoutAndDescriptions> RobustnessTest::rosout_;
 }  // namespace
 
 TEST_F(RobustnessTest, DynamicReconfigureRangesAreTheCoreLimits)
 {
-  ASSERT_TRUE(waitForWall([&] { return !rosout_.ranges().empty(); }));
-  const auto ranges = rosout_.ranges();
+  ASSERT_TRUE(waitForWall([&] { return !rosout_->ranges().empty(); }));
+  const auto ranges = rosout_->ranges();
   const std::map<std::string, limits::Range> expected = {{"gravity_x", limits::kGravityComponent},
                                                          {"gravity_y", limits::kGravityComponent},
                                                          {"gravity_z", limits::kGravityComponent},
@@ -195,8 +209,8 @@ TEST_F(RobustnessTest, AFrozenBodySaysSoWithTheIntegratorThatRan)
   })) << "no ERROR diagnostic naming 'brittle', symplectic_euler and the reason";
   // The log: once, as an ERROR naming the body, the integrator and the reason.
   EXPECT_TRUE(waitForWall([&] {
-    return rosout_.logged(rosgraph_msgs::Log::ERROR,
-                          {"'brittle' is frozen", "last ran symplectic_euler", body.frozen_reason});
+    return rosout_->logged(rosgraph_msgs::Log::ERROR,
+                           {"'brittle' is frozen", "last ran symplectic_euler", body.frozen_reason});
   })) << "no ERROR in the log";
 }
 
@@ -246,8 +260,8 @@ TEST_F(RobustnessTest, APinWhoseFrameStopsHoldsStillAndWarns)
   EXPECT_LT((particle() - held).norm(), 1e-12);
   EXPECT_TRUE(waitForWall(
       [&] {
-        return rosout_.logged(rosgraph_msgs::Log::WARN,
-                              {"particle 5 of 'held' follows frame 'hand'", "not available", "holds still"});
+        return rosout_->logged(rosgraph_msgs::Log::WARN,
+                               {"particle 5 of 'held' follows frame 'hand'", "not available", "holds still"});
       },
       10.0))
       << "no warning that the frame is gone";
