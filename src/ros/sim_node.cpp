@@ -7,6 +7,7 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <sstream>
 #include <thread>
 
@@ -73,9 +74,17 @@ core::IntegratorType integratorThatRan(const core::SpringNetworkBody& body)
   return body.integrator().type == core::IntegratorType::Auto ? body.lastIntegrator() : body.integrator().type;
 }
 
-int clampCount(std::uint32_t value)
+// A count field of a request (uint32) as the core's int: a value beyond int is refused as
+// received instead of being clamped (which would show the clamped value in the core's message);
+// the core checks the rest of the range.
+core::Status readCount(const char* field, std::uint32_t value, int& count)
 {
-  return static_cast<int>(std::min<std::uint32_t>(value, 2000000000u));
+  constexpr auto kMax = static_cast<std::uint32_t>(std::numeric_limits<int>::max());
+  if (value > kMax)
+    return core::Status::failure(std::string(field) + " = " + std::to_string(value) +
+                                 " is out of range: must be at most " + std::to_string(kMax));
+  count = static_cast<int>(value);
+  return core::Status::success();
 }
 }  // namespace
 
@@ -86,6 +95,26 @@ SimNode::SimNode(ros::NodeHandle node, ros::NodeHandle private_node, const std::
   // serves it between two ticks, whichever thread runs us.
   node_.setCallbackQueue(&callback_queue_);
   private_node_.setCallbackQueue(&callback_queue_);
+}
+
+SimNode::~SimNode()
+{
+  master_link_.stop();
+  // A ~step client still waiting (the loop never ran) gets an answer, so that its thread ends.
+  {
+    std::lock_guard<std::mutex> lock(step_mutex_);
+    step_service_closing_ = true;
+    if (step_requested_)
+    {
+      step_answer_.success = false;
+      step_answer_.message = "the node is shutting down";
+      step_requested_ = false;
+      step_answer_ready_ = true;
+    }
+  }
+  step_answered_.notify_all();
+  step_thread_running_ = false;
+  if (step_thread_.joinable()) step_thread_.join();
 }
 
 bool SimNode::initialize()
@@ -576,13 +605,15 @@ bool SimNode::spawnEmitter(SpawnEmitter::Request& req, SpawnEmitter::Response& r
                                              " is not an emitter type; allowed: " + core::emitterTypeNames()));
   def.origin = {req.origin.x, req.origin.y, req.origin.z};
   def.rate = req.rate;
-  def.burst_count = static_cast<int>(std::min<std::uint32_t>(req.burst_count, 2000000000u));
+  if (core::Status s = readCount("burst_count", req.burst_count, def.burst_count); !s) return answer(res, s);
   def.speed = req.speed;
   def.spread = req.spread;
   if (req.lifetime != 0.0) def.lifetime = req.lifetime;
   if (req.mass != 0.0) def.particle_mass = req.mass;
   if (req.max_particles != 0)
-    def.max_particles = static_cast<int>(std::min<std::uint32_t>(req.max_particles, 2000000000u));
+  {
+    if (core::Status s = readCount("max_particles", req.max_particles, def.max_particles); !s) return answer(res, s);
+  }
   def.seed = req.seed != 0 ? req.seed : core::deriveSeed(world_->definition().seed, def.name);
 
   core::Status status = world_->addEmitter(def);
@@ -598,7 +629,10 @@ bool SimNode::spawnRope(SpawnRope::Request& req, SpawnRope::Response& res)
   // The request becomes the same RopeDef a scene file builds, checked by the same validate().
   core::RopeDef def;
   def.name = req.name;
-  if (req.particles != 0) def.particles = static_cast<int>(std::min<std::uint32_t>(req.particles, 2000000000u));
+  if (req.particles != 0)
+  {
+    if (core::Status s = readCount("particles", req.particles, def.particles); !s) return answer(res, s);
+  }
   def.start = {req.start.x, req.start.y, req.start.z};
   def.end = {req.end.x, req.end.y, req.end.z};
   if (req.mass != 0.0) def.mass = req.mass;
@@ -911,8 +945,14 @@ bool SimNode::spawnCloth(SpawnCloth::Request& req, SpawnCloth::Response& res)
   def.origin = {req.origin.x, req.origin.y, req.origin.z};
   def.edge_u = {req.edge_u.x, req.edge_u.y, req.edge_u.z};
   def.edge_v = {req.edge_v.x, req.edge_v.y, req.edge_v.z};
-  if (req.nu != 0) def.nu = clampCount(req.nu);
-  if (req.nv != 0) def.nv = clampCount(req.nv);
+  if (req.nu != 0)
+  {
+    if (core::Status s = readCount("nu", req.nu, def.nu); !s) return answer(res, s);
+  }
+  if (req.nv != 0)
+  {
+    if (core::Status s = readCount("nv", req.nv, def.nv); !s) return answer(res, s);
+  }
   if (req.mass != 0.0) def.mass = req.mass;
   def.stretch = {req.stretch_stiffness, req.stretch_damping};
   def.shear = {req.shear_stiffness, req.shear_damping};
@@ -937,9 +977,18 @@ bool SimNode::spawnJelly(SpawnJelly::Request& req, SpawnJelly::Response& res)
   def.name = req.name;
   def.origin = {req.origin.x, req.origin.y, req.origin.z};
   def.size = {req.size.x, req.size.y, req.size.z};
-  if (req.nx != 0) def.nx = clampCount(req.nx);
-  if (req.ny != 0) def.ny = clampCount(req.ny);
-  if (req.nz != 0) def.nz = clampCount(req.nz);
+  if (req.nx != 0)
+  {
+    if (core::Status s = readCount("nx", req.nx, def.nx); !s) return answer(res, s);
+  }
+  if (req.ny != 0)
+  {
+    if (core::Status s = readCount("ny", req.ny, def.ny); !s) return answer(res, s);
+  }
+  if (req.nz != 0)
+  {
+    if (core::Status s = readCount("nz", req.nz, def.nz); !s) return answer(res, s);
+  }
   if (req.mass != 0.0) def.mass = req.mass;
   def.stretch = {req.stretch_stiffness, req.stretch_damping};
   def.shear = {req.shear_stiffness, req.shear_damping};

@@ -283,6 +283,15 @@ TEST_F(BadInputTest, EveryBadRequestIsRefusedAndTheNodeKeepsServingWithoutGrowin
     expectRefused(call<PinParticle>("pin_particle", pin), "point", {"nan"});
   }
   {
+    SCOPED_TRACE("counts beyond int: the value received, not a clamped one");
+    SpawnRope::Request req = rope("many");
+    req.particles = 4294967295u;
+    expectRefused(call<SpawnRope>("spawn_rope", req), "particles = 4294967295", {});
+    SpawnEmitter::Request burst = emitter("burst");
+    burst.burst_count = 3000000000u;
+    expectRefused(call<SpawnEmitter>("spawn_emitter", burst), "burst_count = 3000000000", {});
+  }
+  {
     SCOPED_TRACE("pin to a tf frame nobody publishes: refused at once");
     PinParticle::Request pin;
     pin.body = "anchor";

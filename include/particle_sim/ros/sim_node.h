@@ -90,6 +90,10 @@ public:
   /// `node` for /clock, `private_node` for every other name; `name` is the node's (or nodelet's)
   /// name, used as the diagnostics' hardware id and in their name.
   SimNode(ros::NodeHandle node, ros::NodeHandle private_node, const std::string& name);
+  /// Stops the helper threads if run() did not (initialized but never run).
+  ~SimNode();
+  SimNode(const SimNode&) = delete;
+  SimNode& operator=(const SimNode&) = delete;
 
   /// Reads parameters and loads the scene; false (after logging why) when they are unusable.
   bool initialize();
