@@ -620,7 +620,7 @@ bool SimNode::spawnEmitter(SpawnEmitter::Request& req, SpawnEmitter::Response& r
   if (status)
     status.message = "spawned " + std::string(core::toString(def.type)) + " emitter " + quoteName(def.name);
   else
-    ROS_WARN_NAMED("services", "spawn_emitter refused: %s", status.message.c_str());
+    ROS_WARN_NAMED("services", "spawn_emitter refused: %s", toMessageText(status.message).c_str());
   return answer(res, status);
 }
 
@@ -649,7 +649,7 @@ bool SimNode::spawnRope(SpawnRope::Request& req, SpawnRope::Response& res)
     status.message = "spawned rope " + quoteName(def.name) + " with " + std::to_string(def.particles) + " particles, " +
                      core::toString(def.integrator.type);
   else
-    ROS_WARN_NAMED("services", "spawn_rope refused: %s", status.message.c_str());
+    ROS_WARN_NAMED("services", "spawn_rope refused: %s", toMessageText(status.message).c_str());
   return answer(res, status);
 }
 
@@ -861,7 +861,7 @@ void SimNode::reconfigure(SimConfig& config, std::uint32_t level)
   // Runs in run()'s callAvailable(), between two steps. A value the world refuses is put back, so
   // rqt always shows what the simulation uses.
   auto refuse = [](const std::string& what, const core::Status& status) {
-    ROS_WARN_NAMED("reconfigure", "%s refused: %s", what.c_str(), status.message.c_str());
+    ROS_WARN_NAMED("reconfigure", "%s refused: %s", what.c_str(), toMessageText(status.message).c_str());
   };
   if (level & 1u)
   {
@@ -967,7 +967,7 @@ bool SimNode::spawnCloth(SpawnCloth::Request& req, SpawnCloth::Response& res)
     status.message = "spawned " + std::string(core::toString(def.model)) + " cloth " + quoteName(def.name) + " of " +
                      std::to_string(def.nu) + " x " + std::to_string(def.nv) + " particles";
   else
-    ROS_WARN_NAMED("services", "spawn_cloth refused: %s", status.message.c_str());
+    ROS_WARN_NAMED("services", "spawn_cloth refused: %s", toMessageText(status.message).c_str());
   return answer(res, status);
 }
 
@@ -1003,7 +1003,7 @@ bool SimNode::spawnJelly(SpawnJelly::Request& req, SpawnJelly::Response& res)
     status.message =
         "spawned jelly " + quoteName(def.name) + " of " + std::to_string(def.nx * def.ny * def.nz) + " particles";
   else
-    ROS_WARN_NAMED("services", "spawn_jelly refused: %s", status.message.c_str());
+    ROS_WARN_NAMED("services", "spawn_jelly refused: %s", toMessageText(status.message).c_str());
   return answer(res, status);
 }
 
