@@ -26,7 +26,7 @@ kill -0 "$node_pid" 2>/dev/null || fail "the node died without its master"
 
 # The master is back: the node registers again, and everything is served as before.
 start_roscore 2
-wait_for_log 15 "$work/node.log" 'ROS master at .* is back' || fail "no re-registration"
+wait_for_log 20 "$work/node.log" 'ROS master at .* is back \(pid [0-9]+\): registered again' || fail "no re-registration"
 nodes="$(timeout 15 rosnode list)" || fail "rosnode list"
 contains "$nodes" '^/particle_sim$' || fail "rosnode list does not show /particle_sim: $nodes"
 services="$(timeout 15 rosservice list)" || fail "rosservice list"
