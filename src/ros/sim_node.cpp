@@ -7,10 +7,13 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <sstream>
 #include <thread>
 
+#include "particle_sim/core/limits.h"
 #include "particle_sim/ros/mesh_builder.h"
+#include "particle_sim/ros/message_text.h"
 #include "particle_sim/ros/names.h"
 #include "particle_sim/scene/scene.h"
 
@@ -28,12 +31,13 @@ double secondsSince(SteadyClock::time_point start)
 }
 
 // Fills a Trigger-style response and returns true, so that the client sees our message rather
-// than a bare "service call failed".
+// than a bare "service call failed". The message is valid UTF-8 of bounded length whatever the
+// request held (names are echoed in it).
 template <typename Response>
 bool answer(Response& res, const core::Status& status)
 {
   res.success = status.ok;
-  res.message = status.message;
+  res.message = toMessageText(status.message);
   return true;
 }
 
@@ -41,8 +45,16 @@ bool answer(Response& res, const core::Status& status)
 core::Status parseIntegratorField(const std::string& name, core::IntegratorDef& integrator)
 {
   if (name.empty() || core::parseIntegratorType(name, integrator.type)) return core::Status::success();
-  return core::Status::failure("integrator = '" + name +
-                               "' is not an integrator; allowed: " + core::integratorTypeNames());
+  return core::Status::failure("integrator = " + quoteName(name) +
+                               " is not an integrator; allowed: " + core::integratorTypeNames());
+}
+
+// "field = value is out of range: must be in [min, max] unit" for a node parameter, the value as
+// received.
+std::string outOfRange(const std::string& field, double value, const core::limits::Range& range)
+{
+  return field + " = " + formatReceived(value) + " is out of range: must be in [" + formatReceived(range.min) + ", " +
+         formatReceived(range.max) + "] " + range.unit;
 }
 
 geometry_msgs::Vector3 toVector3(const Eigen::Vector3d& v)
@@ -54,9 +66,25 @@ geometry_msgs::Vector3 toVector3(const Eigen::Vector3d& v)
   return out;
 }
 
-int clampCount(std::uint32_t value)
+// The integrator the body's last step ran: its own, or what auto chose (the core records the
+// latter only for completed steps, so a body that froze in its first step would otherwise show
+// the default).
+core::IntegratorType integratorThatRan(const core::SpringNetworkBody& body)
 {
-  return static_cast<int>(std::min<std::uint32_t>(value, 2000000000u));
+  return body.integrator().type == core::IntegratorType::Auto ? body.lastIntegrator() : body.integrator().type;
+}
+
+// A count field of a request (uint32) as the core's int: a value beyond int is refused as
+// received instead of being clamped (which would show the clamped value in the core's message);
+// the core checks the rest of the range.
+core::Status readCount(const char* field, std::uint32_t value, int& count)
+{
+  constexpr auto kMax = static_cast<std::uint32_t>(std::numeric_limits<int>::max());
+  if (value > kMax)
+    return core::Status::failure(std::string(field) + " = " + std::to_string(value) +
+                                 " is out of range: must be at most " + std::to_string(kMax));
+  count = static_cast<int>(value);
+  return core::Status::success();
 }
 }  // namespace
 
@@ -67,6 +95,26 @@ SimNode::SimNode(ros::NodeHandle node, ros::NodeHandle private_node, const std::
   // serves it between two ticks, whichever thread runs us.
   node_.setCallbackQueue(&callback_queue_);
   private_node_.setCallbackQueue(&callback_queue_);
+}
+
+SimNode::~SimNode()
+{
+  master_link_.stop();
+  // A ~step client still waiting (the loop never ran) gets an answer, so that its thread ends.
+  {
+    std::lock_guard<std::mutex> lock(step_mutex_);
+    step_service_closing_ = true;
+    if (step_requested_)
+    {
+      step_answer_.success = false;
+      step_answer_.message = "the node is shutting down";
+      step_requested_ = false;
+      step_answer_ready_ = true;
+    }
+  }
+  step_answered_.notify_all();
+  step_thread_running_ = false;
+  if (step_thread_.joinable()) step_thread_.join();
 }
 
 bool SimNode::initialize()
@@ -94,28 +142,28 @@ bool SimNode::initialize()
     ROS_FATAL_NAMED("sim", "%s", message.c_str());
     return false;
   };
-  if (!(s.rate > 0.0 && s.rate <= 1000.0))
-    return refuse("~rate = " + std::to_string(s.rate) + " is out of range: must be in (0, 1000] Hz");
-  if (!(s.real_time_factor >= 0.0 && std::isfinite(s.real_time_factor)))
-    return refuse("~real_time_factor = " + std::to_string(s.real_time_factor) +
-                  " must be >= 0 (0 = as fast as possible)");
+  using core::limits::kPublishRate;
+  using core::limits::kRealTimeFactor;
+  if (!(s.rate >= kPublishRate.min && s.rate <= kPublishRate.max))
+    return refuse(outOfRange("~rate", s.rate, kPublishRate));
+  if (!(s.real_time_factor >= kRealTimeFactor.min && s.real_time_factor <= kRealTimeFactor.max))
+    return refuse(outOfRange("~real_time_factor", s.real_time_factor, kRealTimeFactor) +
+                  " (0 = as fast as possible; negative values have no meaning)");
   if (!(s.particle_size > 0.0 && std::isfinite(s.particle_size)))
-    return refuse("~particle_size = " + std::to_string(s.particle_size) + " must be > 0 m");
+    return refuse("~particle_size = " + formatReceived(s.particle_size) + " must be > 0 m");
   if (s.frame_id.empty()) return refuse("~frame_id is empty");
   if (s.parent_frame_id.empty() || s.parent_frame_id == s.frame_id)
-    return refuse("~parent_frame_id = '" + s.parent_frame_id + "' must be set and differ from ~frame_id");
+    return refuse("~parent_frame_id = " + quoteName(s.parent_frame_id) + " must be set and differ from ~frame_id");
   if (s.frame_offset.size() != 3 ||
       !std::all_of(s.frame_offset.begin(), s.frame_offset.end(), [](double v) { return std::isfinite(v); }))
     return refuse("~frame_offset must be a list of 3 finite numbers [x, y, z] in m");
 
   if (!(s.strain_color_max > 0.0 && std::isfinite(s.strain_color_max)))
-    return refuse("~strain_color_max = " + std::to_string(s.strain_color_max) + " must be > 0");
-  if (!(s.real_time_factor <= 1000.0))
-    return refuse("~real_time_factor = " + std::to_string(s.real_time_factor) + " is out of range: must be <= 1000");
+    return refuse("~strain_color_max = " + formatReceived(s.strain_color_max) + " must be > 0");
   if (!(s.diagnostic_period > 0.0 && std::isfinite(s.diagnostic_period)))
-    return refuse("~diagnostic_period = " + std::to_string(s.diagnostic_period) + " must be > 0 s");
+    return refuse("~diagnostic_period = " + formatReceived(s.diagnostic_period) + " must be > 0 s");
   if (!(s.diagnostic_max_strain > 0.0 && std::isfinite(s.diagnostic_max_strain)))
-    return refuse("~diagnostic_max_strain = " + std::to_string(s.diagnostic_max_strain) + " must be > 0");
+    return refuse("~diagnostic_max_strain = " + formatReceived(s.diagnostic_max_strain) + " must be > 0");
 
   scene::SceneDef& scene = scene_;
   if (!s.scene_path.empty())
@@ -128,7 +176,8 @@ bool SimNode::initialize()
   // Scene pins that follow frames other than the scene's scripted ones follow them through tf.
   for (const scene::FramePinDef& pin : scene.frame_pins)
   {
-    if (!scene::findFrame(scene, pin.frame)) frame_pins_.push_back({pin.body, pin.index, pin.frame, pin.offset});
+    if (!scene::findFrame(scene, pin.frame))
+      frame_pins_.push_back({pin.body, pin.index, pin.frame, pin.offset, ros::Time(), SteadyClock::now()});
   }
 
   updateSubsteps();
@@ -139,18 +188,36 @@ bool SimNode::initialize()
   style_.color_by_strain = s.color_by_strain;
   style_.strain_color_max = s.strain_color_max;
 
+  advertiseInterfaces();
+  status_window_.restart(world_->simTime(), paused_);
+  diagnostics_window_.restart(world_->simTime(), paused_);
+
+  ROS_INFO_NAMED(
+      "sim",
+      "particle_sim: scene '%s', %zu bodies, dt = %g s, %d substeps per tick at %g Hz, real-time factor %g%s, "
+      "frame '%s'",
+      s.scene_path.c_str(), world_->bodies().size(), world_->dt(), substeps_, s.rate, s.real_time_factor,
+      paused_ ? ", paused" : "", s.frame_id.c_str());
+  return true;
+}
+
+void SimNode::advertiseInterfaces()
+{
   markers_pub_ = private_node_.advertise<visualization_msgs::MarkerArray>(names::kMarkersTopic, 10);
   meshes_pub_ = private_node_.advertise<ClothMesh>(names::kMeshesTopic, 10);
   status_pub_ = private_node_.advertise<SimStatus>(names::kStatusTopic, 10);
-  if (s.publish_clock) clock_pub_ = node_.advertise<rosgraph_msgs::Clock>(names::kClockTopic, 10);
+  if (settings_.publish_clock) clock_pub_ = node_.advertise<rosgraph_msgs::Clock>(names::kClockTopic, 10);
   tf_broadcaster_ = std::make_unique<tf2_ros::TransformBroadcaster>();
+  // tf is listened to from the start (on the listener's own thread), so that a pin request can be
+  // answered at once from what tf already knows.
+  tf_buffer_ = std::make_unique<tf2_ros::Buffer>();
+  tf_listener_ = std::make_unique<tf2_ros::TransformListener>(*tf_buffer_);
 
   services_.push_back(private_node_.advertiseService(names::kSpawnEmitter, &SimNode::spawnEmitter, this));
   services_.push_back(private_node_.advertiseService(names::kRemoveBody, &SimNode::removeBody, this));
   services_.push_back(private_node_.advertiseService(names::kReset, &SimNode::reset, this));
   services_.push_back(private_node_.advertiseService(names::kPausePhysics, &SimNode::pausePhysics, this));
   services_.push_back(private_node_.advertiseService(names::kUnpausePhysics, &SimNode::unpausePhysics, this));
-  services_.push_back(private_node_.advertiseService(names::kStep, &SimNode::step, this));
   services_.push_back(private_node_.advertiseService(names::kSpawnRope, &SimNode::spawnRope, this));
   services_.push_back(private_node_.advertiseService(names::kPinParticle, &SimNode::pinParticle, this));
   services_.push_back(private_node_.advertiseService(names::kUnpinParticle, &SimNode::unpinParticle, this));
@@ -158,6 +225,19 @@ bool SimNode::initialize()
   services_.push_back(private_node_.advertiseService(names::kSpawnCloth, &SimNode::spawnCloth, this));
   services_.push_back(private_node_.advertiseService(names::kSpawnJelly, &SimNode::spawnJelly, this));
   services_.push_back(private_node_.advertiseService(names::kSetWind, &SimNode::setWind, this));
+
+  // ~step waits for the loop to run its steps in slices: its callback runs in a thread of its own.
+  ros::AdvertiseServiceOptions step_options;
+  step_options.init<Step::Request, Step::Response>(
+      private_node_.resolveName(names::kStep),
+      [this](Step::Request& req, Step::Response& res) { return step(req, res); });
+  step_options.callback_queue = &step_queue_;
+  step_service_ = private_node_.advertiseService(step_options);
+  step_thread_running_ = true;
+  step_thread_ = std::thread([this] {
+    while (step_thread_running_)
+      step_queue_.callAvailable(ros::WallDuration(0.05));
+  });
 
   // dynamic_reconfigure starts from the world as built (the scene's gravity, wind, ...) and the
   // parameters read above: the config is pushed before the callback is set, so that the
@@ -172,16 +252,51 @@ bool SimNode::initialize()
   diagnostics_ = std::make_unique<diagnostic_updater::Updater>(node_, private_node_, name_);
   diagnostics_->setHardwareID(name_);
   diagnostics_->add("simulation", this, &SimNode::produceDiagnostics);
-  status_window_.restart(world_->simTime(), paused_);
-  diagnostics_window_.restart(world_->simTime(), paused_);
 
-  ROS_INFO_NAMED(
-      "sim",
-      "particle_sim: scene '%s', %zu bodies, dt = %g s, %d substeps per tick at %g Hz, real-time factor %g%s, "
-      "frame '%s'",
-      s.scene_path.c_str(), world_->bodies().size(), world_->dt(), substeps_, s.rate, s.real_time_factor,
-      paused_ ? ", paused" : "", s.frame_id.c_str());
-  return true;
+  // When roscore restarts, register everything again with the new master (README "Topics").
+  std::vector<std::string> service_names;
+  for (const ros::ServiceServer& service : services_)
+    service_names.push_back(service.getService());
+  service_names.push_back(step_service_.getService());
+  for (const char* name : {"set_parameters", "get_loggers", "set_logger_level"})
+    service_names.push_back(private_node_.resolveName(name));
+  master_link_.start(service_names);
+}
+
+void SimNode::releaseInterfaces()
+{
+  master_link_.stop();
+  // A client waiting on ~step gets its answer before the service goes.
+  bool step_waiting = false;
+  {
+    std::lock_guard<std::mutex> lock(step_mutex_);
+    step_service_closing_ = true;
+    step_waiting = step_requested_;
+  }
+  if (step_job_.active || step_waiting)
+  {
+    Step::Response res;
+    res.success = false;
+    res.message = "the node is shutting down; " +
+                  std::to_string(step_job_.active ? step_job_.requested - step_job_.remaining : 0) + " steps were run";
+    res.sim_time = world_->simTime();
+    step_job_.active = false;
+    deliverStepAnswer(res);
+  }
+  step_thread_running_ = false;
+  if (step_thread_.joinable()) step_thread_.join();
+  step_service_.shutdown();
+  step_queue_.disable();
+  step_queue_.clear();
+
+  reconfigure_server_.reset();
+  diagnostics_.reset();
+  services_.clear();
+  tf_listener_.reset();
+  tf_buffer_.reset();
+  tf_broadcaster_.reset();
+  for (ros::Publisher* publisher : {&markers_pub_, &meshes_pub_, &clock_pub_, &status_pub_})
+    publisher->shutdown();
 }
 
 void SimNode::updateSubsteps()
@@ -200,6 +315,7 @@ void SimNode::run()
   while (ros::ok() && !stop_requested_)
   {
     callback_queue_.callAvailable();  // services and dynamic_reconfigure run here, between steps
+    acceptStepRequest();
     tick();
 
     if (settings_.status_period > 0.0 && secondsSince(status_window_.start) >= settings_.status_period) printStatus();
@@ -221,27 +337,26 @@ void SimNode::run()
     next_tick += std::chrono::duration_cast<SteadyClock::duration>(paused_ ? paused_period : wall_period);
     const auto now = SteadyClock::now();
     if (next_tick < now - std::chrono::duration_cast<SteadyClock::duration>(paused_period)) next_tick = now;
+    if (step_job_.active) next_tick = now;  // a ~step in slices: the next slice at once
     if (next_tick > now) std::this_thread::sleep_until(next_tick);
   }
 
   // Let go of every ROS handle here, in the loop's thread, while ROS still exists: in a nodelet
   // manager the simulator may otherwise be destroyed after ROS's own singletons, and its
   // publishers and servers would unregister from destroyed objects.
-  reconfigure_server_.reset();
-  diagnostics_.reset();
-  services_.clear();
-  tf_listener_.reset();
-  tf_buffer_.reset();
-  tf_broadcaster_.reset();
-  for (ros::Publisher* publisher : {&markers_pub_, &meshes_pub_, &clock_pub_, &status_pub_}) publisher->shutdown();
+  releaseInterfaces();
   callback_queue_.disable();
   callback_queue_.clear();
 }
 
 void SimNode::tick()
 {
-  if (!paused_) stepPhysics(substeps_);
+  if (step_job_.active)
+    runStepSlice();
+  else if (!paused_)
+    stepPhysics(substeps_);
   publish();
+  if (step_job_.active && step_job_.remaining == 0) finishStepJob();
 }
 
 void SimNode::stepPhysics(std::uint64_t steps)
@@ -276,8 +391,13 @@ void SimNode::stepPhysics(std::uint64_t steps)
   {
     if (body->kind() != core::BodyKind::SpringNetwork) continue;
     const auto& spring_body = static_cast<const core::SpringNetworkBody&>(*body);
-    if (spring_body.frozen() && reported_frozen_.insert(body->name()).second)
-      ROS_ERROR_NAMED("sim", "body '%s' is frozen: %s", body->name().c_str(), spring_body.frozenReason().c_str());
+    // Logged once per freeze: a body unfrozen by ~reset is reported again if it freezes again.
+    if (!spring_body.frozen())
+      reported_frozen_.erase(body->name());
+    else if (reported_frozen_.insert(body->name()).second)
+      ROS_ERROR_NAMED("sim", "body %s is frozen (integrator %s, last ran %s): %s", quoteName(body->name()).c_str(),
+                      core::toString(spring_body.integrator().type), core::toString(integratorThatRan(spring_body)),
+                      spring_body.frozenReason().c_str());
     long long& seen = reported_events_[body->name()];
     if (spring_body.stabilityEvents() > seen)
     {
@@ -295,25 +415,18 @@ void SimNode::stepPhysics(std::uint64_t steps)
   }
 }
 
-bool SimNode::lookupFrame(const std::string& frame, const Eigen::Vector3d& offset, double wait, Eigen::Vector3d& point,
-                          std::string& error)
+bool SimNode::lookupFrame(const std::string& frame, const Eigen::Vector3d& offset, Eigen::Vector3d& point,
+                          ros::Time& stamp, std::string& error)
 {
-  if (!tf_buffer_)
-  {
-    tf_buffer_ = std::make_unique<tf2_ros::Buffer>();
-    tf_listener_ = std::make_unique<tf2_ros::TransformListener>(*tf_buffer_);  // listens on its own thread
-  }
-  // Poll on wall time: waiting on ROS time could wait on our own /clock.
-  const auto deadline =
-      SteadyClock::now() + std::chrono::duration_cast<SteadyClock::duration>(std::chrono::duration<double>(wait));
-  while (!tf_buffer_->canTransform(settings_.frame_id, frame, ros::Time(0), &error) && SteadyClock::now() < deadline)
-    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  if (!tf_buffer_->canTransform(settings_.frame_id, frame, ros::Time(0), &error)) return false;
   try
   {
     const geometry_msgs::TransformStamped t = tf_buffer_->lookupTransform(settings_.frame_id, frame, ros::Time(0));
     const auto& q = t.transform.rotation;
     const auto& v = t.transform.translation;
     point = Eigen::Quaterniond(q.w, q.x, q.y, q.z).normalized() * offset + Eigen::Vector3d(v.x, v.y, v.z);
+    stamp = t.header.stamp;
+    if (!point.allFinite()) error = "its transform is not finite";
     return point.allFinite();
   }
   catch (const tf2::TransformException& exception)
@@ -334,16 +447,34 @@ void SimNode::updateFramePins()
                     frame_pins_.end());
   frame_pin_start_.resize(frame_pins_.size());
   frame_pin_goal_.resize(frame_pins_.size());
+  const auto now = SteadyClock::now();
   for (std::size_t k = 0; k < frame_pins_.size(); ++k)
   {
-    const FramePin& pin = frame_pins_[k];
+    FramePin& pin = frame_pins_[k];
     frame_pin_start_[k] = world_->findSpringBody(pin.body)->pinTarget(pin.index);
     std::string error;
-    if (!lookupFrame(pin.frame, pin.offset, 0.0, frame_pin_goal_[k], error))
+    ros::Time stamp;
+    bool available = lookupFrame(pin.frame, pin.offset, frame_pin_goal_[k], stamp, error);
+    // A frame whose transform stopped changing is gone (tf keeps its last transform for ever);
+    // a static frame (stamp 0) never goes.
+    if (available && stamp != pin.stamp)
+    {
+      pin.stamp = stamp;
+      pin.updated = now;
+    }
+    else if (available && !stamp.isZero() &&
+             std::chrono::duration<double>(now - pin.updated).count() > kFramePinTimeout)
+    {
+      available = false;
+      error = "no new transform for " +
+              formatReceived(std::round(std::chrono::duration<double>(now - pin.updated).count())) + " s";
+    }
+    if (!available)
     {
       frame_pin_goal_[k] = frame_pin_start_[k];  // hold still until the frame is back
-      ROS_WARN_THROTTLE_NAMED(5.0, "pins", "particle %d of '%s' follows frame '%s', which is not available: %s",
-                              pin.index, pin.body.c_str(), pin.frame.c_str(), error.c_str());
+      ROS_WARN_THROTTLE_NAMED(5.0, "pins",
+                              "particle %d of %s follows frame %s, which is not available: %s; it holds still",
+                              pin.index, quoteName(pin.body).c_str(), quoteName(pin.frame).c_str(), error.c_str());
     }
   }
 }
@@ -355,7 +486,8 @@ void SimNode::updateFrameSpheres()
     if (scene::findFrame(scene_, follower.frame)) continue;  // scripted: applied every step
     Eigen::Vector3d center;
     std::string error;
-    if (lookupFrame(follower.frame, Eigen::Vector3d::Zero(), 0.0, center, error))
+    ros::Time stamp;
+    if (lookupFrame(follower.frame, Eigen::Vector3d::Zero(), center, stamp, error))
       world_->setSphereCenter(follower.sphere, center);
     else
       ROS_WARN_THROTTLE_NAMED(5.0, "colliders", "sphere '%s' follows frame '%s', which is not available: %s",
@@ -450,7 +582,7 @@ void SimNode::printStatus()
   {
     if (body->kind() != core::BodyKind::SpringNetwork) continue;
     const auto& spring_body = static_cast<const core::SpringNetworkBody&>(*body);
-    if (spring_body.lastIntegrator() != core::IntegratorType::ImplicitEuler) continue;
+    if (integratorThatRan(spring_body) != core::IntegratorType::ImplicitEuler) continue;
     any_implicit = true;
     cg_iterations = std::max(cg_iterations, spring_body.lastSolve().iterations);
     cg_residual = std::max(cg_residual, spring_body.lastSolve().relative_residual);
@@ -469,24 +601,26 @@ bool SimNode::spawnEmitter(SpawnEmitter::Request& req, SpawnEmitter::Response& r
   core::EmitterDef def;
   def.name = req.name;
   if (!core::parseEmitterType(req.type, def.type))
-    return answer(res, core::Status::failure("type = '" + req.type +
-                                             "' is not an emitter type; allowed: " + core::emitterTypeNames()));
+    return answer(res, core::Status::failure("type = " + quoteName(req.type) +
+                                             " is not an emitter type; allowed: " + core::emitterTypeNames()));
   def.origin = {req.origin.x, req.origin.y, req.origin.z};
   def.rate = req.rate;
-  def.burst_count = static_cast<int>(std::min<std::uint32_t>(req.burst_count, 2000000000u));
+  if (core::Status s = readCount("burst_count", req.burst_count, def.burst_count); !s) return answer(res, s);
   def.speed = req.speed;
   def.spread = req.spread;
   if (req.lifetime != 0.0) def.lifetime = req.lifetime;
   if (req.mass != 0.0) def.particle_mass = req.mass;
   if (req.max_particles != 0)
-    def.max_particles = static_cast<int>(std::min<std::uint32_t>(req.max_particles, 2000000000u));
+  {
+    if (core::Status s = readCount("max_particles", req.max_particles, def.max_particles); !s) return answer(res, s);
+  }
   def.seed = req.seed != 0 ? req.seed : core::deriveSeed(world_->definition().seed, def.name);
 
   core::Status status = world_->addEmitter(def);
   if (status)
-    status.message = "spawned " + std::string(core::toString(def.type)) + " emitter '" + def.name + "'";
+    status.message = "spawned " + std::string(core::toString(def.type)) + " emitter " + quoteName(def.name);
   else
-    ROS_WARN_NAMED("services", "spawn_emitter refused: %s", status.message.c_str());
+    ROS_WARN_NAMED("services", "spawn_emitter refused: %s", toMessageText(status.message).c_str());
   return answer(res, status);
 }
 
@@ -495,7 +629,10 @@ bool SimNode::spawnRope(SpawnRope::Request& req, SpawnRope::Response& res)
   // The request becomes the same RopeDef a scene file builds, checked by the same validate().
   core::RopeDef def;
   def.name = req.name;
-  if (req.particles != 0) def.particles = static_cast<int>(std::min<std::uint32_t>(req.particles, 2000000000u));
+  if (req.particles != 0)
+  {
+    if (core::Status s = readCount("particles", req.particles, def.particles); !s) return answer(res, s);
+  }
   def.start = {req.start.x, req.start.y, req.start.z};
   def.end = {req.end.x, req.end.y, req.end.z};
   if (req.mass != 0.0) def.mass = req.mass;
@@ -509,10 +646,10 @@ bool SimNode::spawnRope(SpawnRope::Request& req, SpawnRope::Response& res)
   if (core::Status s = parseIntegratorField(req.integrator, def.integrator); !s) return answer(res, s);
   core::Status status = world_->addRope(def);
   if (status)
-    status.message = "spawned rope '" + def.name + "' with " + std::to_string(def.particles) + " particles, " +
+    status.message = "spawned rope " + quoteName(def.name) + " with " + std::to_string(def.particles) + " particles, " +
                      core::toString(def.integrator.type);
   else
-    ROS_WARN_NAMED("services", "spawn_rope refused: %s", status.message.c_str());
+    ROS_WARN_NAMED("services", "spawn_rope refused: %s", toMessageText(status.message).c_str());
   return answer(res, status);
 }
 
@@ -521,12 +658,16 @@ bool SimNode::pinParticle(PinParticle::Request& req, PinParticle::Response& res)
   res.index = -1;
   core::SpringNetworkBody* body = world_->findSpringBody(req.body);
   if (!body)
-    return answer(res, core::Status::failure("body = '" + req.body + "': no rope or spring network has that name"));
+    return answer(res,
+                  core::Status::failure("body = " + quoteName(req.body) + ": no rope or spring network has that name"));
   const Eigen::Vector3d point(req.point.x, req.point.y, req.point.z);
   int index = req.index;
   if (index == -1)
   {
-    if (!point.allFinite()) return answer(res, core::Status::failure("point is not finite"));
+    if (!point.allFinite())
+      return answer(
+          res, core::Status::failure("point = [" + formatReceived(point.x()) + ", " + formatReceived(point.y()) + ", " +
+                                     formatReceived(point.z()) + "] m is not finite"));
     index = body->nearestParticle(point);
   }
   else if (index < 0 || index >= body->particles().size())
@@ -551,12 +692,19 @@ bool SimNode::pinParticle(PinParticle::Request& req, PinParticle::Response& res)
     case PinParticle::Request::TARGET_FRAME: {
       const Eigen::Vector3d offset(req.offset.x, req.offset.y, req.offset.z);
       if (req.frame.empty()) return answer(res, core::Status::failure("frame is empty: name the tf frame to follow"));
-      if (!offset.allFinite()) return answer(res, core::Status::failure("offset is not finite"));
+      if (!offset.allFinite())
+        return answer(
+            res, core::Status::failure("offset = [" + formatReceived(offset.x()) + ", " + formatReceived(offset.y()) +
+                                       ", " + formatReceived(offset.z()) + "] m is not finite"));
+      // Answered at once from what tf knows (it has listened since the start): never wait here,
+      // the loop would stall.
       std::string error;
-      if (!lookupFrame(req.frame, offset, 2.0, target, error))
-        return answer(res, core::Status::failure("frame = '" + req.frame + "': no transform to '" + settings_.frame_id +
-                                                 "' within 2 s: " + error));
-      what = "to frame '" + req.frame + "'";
+      ros::Time stamp;
+      if (!lookupFrame(req.frame, offset, target, stamp, error))
+        return answer(res,
+                      core::Status::failure("frame = " + quoteName(req.frame) + " is unknown to tf: no transform to " +
+                                            quoteName(settings_.frame_id) + " (" + error + ")"));
+      what = "to frame " + quoteName(req.frame);
       break;
     }
     default:
@@ -571,19 +719,21 @@ bool SimNode::pinParticle(PinParticle::Request& req, PinParticle::Response& res)
                                    [&](const FramePin& p) { return p.body == req.body && p.index == index; }),
                     frame_pins_.end());
   if (req.target == PinParticle::Request::TARGET_FRAME)
-    frame_pins_.push_back({req.body, index, req.frame, Eigen::Vector3d(req.offset.x, req.offset.y, req.offset.z)});
+    frame_pins_.push_back({req.body, index, req.frame, Eigen::Vector3d(req.offset.x, req.offset.y, req.offset.z),
+                           ros::Time(), SteadyClock::now()});
   res.index = index;
-  return answer(res,
-                core::Status::success("pinned particle " + std::to_string(index) + " of '" + req.body + "' " + what));
+  return answer(res, core::Status::success("pinned particle " + std::to_string(index) + " of " + quoteName(req.body) +
+                                           " " + what));
 }
 
 bool SimNode::unpinParticle(UnpinParticle::Request& req, UnpinParticle::Response& res)
 {
   core::SpringNetworkBody* body = world_->findSpringBody(req.body);
   if (!body)
-    return answer(res, core::Status::failure("body = '" + req.body + "': no rope or spring network has that name"));
+    return answer(res,
+                  core::Status::failure("body = " + quoteName(req.body) + ": no rope or spring network has that name"));
   core::Status status = body->unpin(req.index);
-  if (status) status.message = "released particle " + std::to_string(req.index) + " of '" + req.body + "'";
+  if (status) status.message = "released particle " + std::to_string(req.index) + " of " + quoteName(req.body);
   return answer(res, status);
 }
 
@@ -591,14 +741,15 @@ core::Status SimNode::applySpringConstants(const std::string& body_name, const s
                                            double stiffness, double damping)
 {
   core::SpringNetworkBody* body = world_->findSpringBody(body_name);
-  if (!body) return core::Status::failure("body = '" + body_name + "': no rope or spring network has that name");
+  if (!body)
+    return core::Status::failure("body = " + quoteName(body_name) + ": no rope or spring network has that name");
   std::optional<core::SpringClass> spring_class;
   if (class_name != "all")
   {
     core::SpringClass parsed;
     if (!core::parseSpringClass(class_name, parsed))
-      return core::Status::failure("spring_class = '" + class_name +
-                                   "' is not a spring class; allowed: stretch, shear, bend, all");
+      return core::Status::failure("spring_class = " + quoteName(class_name) +
+                                   " is not a spring class; allowed: stretch, shear, bend, all");
     spring_class = parsed;
   }
   core::Status status = body->setSpringConstants(spring_class, stiffness, damping);
@@ -710,7 +861,7 @@ void SimNode::reconfigure(SimConfig& config, std::uint32_t level)
   // Runs in run()'s callAvailable(), between two steps. A value the world refuses is put back, so
   // rqt always shows what the simulation uses.
   auto refuse = [](const std::string& what, const core::Status& status) {
-    ROS_WARN_NAMED("reconfigure", "%s refused: %s", what.c_str(), status.message.c_str());
+    ROS_WARN_NAMED("reconfigure", "%s refused: %s", what.c_str(), toMessageText(status.message).c_str());
   };
   if (level & 1u)
   {
@@ -746,8 +897,8 @@ void SimNode::reconfigure(SimConfig& config, std::uint32_t level)
       default_integrator_.type = type;
     else
     {
-      refuse("integrator", core::Status::failure("integrator = '" + config.integrator +
-                                                 "' is not an integrator; allowed: " + core::integratorTypeNames()));
+      refuse("integrator", core::Status::failure("integrator = " + quoteName(config.integrator) +
+                                                 " is not an integrator; allowed: " + core::integratorTypeNames()));
       config.integrator = config_.integrator;
     }
   }
@@ -773,7 +924,7 @@ void SimNode::reconfigure(SimConfig& config, std::uint32_t level)
     {
       if (!readSpringConstants(config.body, config.spring_class, config.stiffness, config.damping))
       {
-        refuse("body", core::Status::failure("body = '" + config.body + "' has no " + config.spring_class +
+        refuse("body", core::Status::failure("body = " + quoteName(config.body) + " has no " + config.spring_class +
                                              " springs (or is not a rope, cloth, jelly or spring network)"));
         config.body = config_.body, config.spring_class = config_.spring_class;
       }
@@ -787,15 +938,21 @@ bool SimNode::spawnCloth(SpawnCloth::Request& req, SpawnCloth::Response& res)
   core::ClothGridDef def;
   def.name = req.name;
   if (!req.model.empty() && !core::parseClothModel(req.model, def.model))
-    return answer(res, core::Status::failure("model = '" + req.model +
-                                             "' is not a cloth model; allowed: springs, baraff_witkin"));
+    return answer(res, core::Status::failure("model = " + quoteName(req.model) +
+                                             " is not a cloth model; allowed: springs, baraff_witkin"));
   if (req.b_u != 0.0) def.b_u = req.b_u;
   if (req.b_v != 0.0) def.b_v = req.b_v;
   def.origin = {req.origin.x, req.origin.y, req.origin.z};
   def.edge_u = {req.edge_u.x, req.edge_u.y, req.edge_u.z};
   def.edge_v = {req.edge_v.x, req.edge_v.y, req.edge_v.z};
-  if (req.nu != 0) def.nu = clampCount(req.nu);
-  if (req.nv != 0) def.nv = clampCount(req.nv);
+  if (req.nu != 0)
+  {
+    if (core::Status s = readCount("nu", req.nu, def.nu); !s) return answer(res, s);
+  }
+  if (req.nv != 0)
+  {
+    if (core::Status s = readCount("nv", req.nv, def.nv); !s) return answer(res, s);
+  }
   if (req.mass != 0.0) def.mass = req.mass;
   def.stretch = {req.stretch_stiffness, req.stretch_damping};
   def.shear = {req.shear_stiffness, req.shear_damping};
@@ -807,10 +964,10 @@ bool SimNode::spawnCloth(SpawnCloth::Request& req, SpawnCloth::Response& res)
   if (core::Status s = parseIntegratorField(req.integrator, def.integrator); !s) return answer(res, s);
   core::Status status = world_->addClothGrid(def);
   if (status)
-    status.message = "spawned " + std::string(core::toString(def.model)) + " cloth '" + def.name + "' of " +
+    status.message = "spawned " + std::string(core::toString(def.model)) + " cloth " + quoteName(def.name) + " of " +
                      std::to_string(def.nu) + " x " + std::to_string(def.nv) + " particles";
   else
-    ROS_WARN_NAMED("services", "spawn_cloth refused: %s", status.message.c_str());
+    ROS_WARN_NAMED("services", "spawn_cloth refused: %s", toMessageText(status.message).c_str());
   return answer(res, status);
 }
 
@@ -820,9 +977,18 @@ bool SimNode::spawnJelly(SpawnJelly::Request& req, SpawnJelly::Response& res)
   def.name = req.name;
   def.origin = {req.origin.x, req.origin.y, req.origin.z};
   def.size = {req.size.x, req.size.y, req.size.z};
-  if (req.nx != 0) def.nx = clampCount(req.nx);
-  if (req.ny != 0) def.ny = clampCount(req.ny);
-  if (req.nz != 0) def.nz = clampCount(req.nz);
+  if (req.nx != 0)
+  {
+    if (core::Status s = readCount("nx", req.nx, def.nx); !s) return answer(res, s);
+  }
+  if (req.ny != 0)
+  {
+    if (core::Status s = readCount("ny", req.ny, def.ny); !s) return answer(res, s);
+  }
+  if (req.nz != 0)
+  {
+    if (core::Status s = readCount("nz", req.nz, def.nz); !s) return answer(res, s);
+  }
   if (req.mass != 0.0) def.mass = req.mass;
   def.stretch = {req.stretch_stiffness, req.stretch_damping};
   def.shear = {req.shear_stiffness, req.shear_damping};
@@ -834,9 +1000,10 @@ bool SimNode::spawnJelly(SpawnJelly::Request& req, SpawnJelly::Response& res)
   if (core::Status s = parseIntegratorField(req.integrator, def.integrator); !s) return answer(res, s);
   core::Status status = world_->addJelly(def);
   if (status)
-    status.message = "spawned jelly '" + def.name + "' of " + std::to_string(def.nx * def.ny * def.nz) + " particles";
+    status.message =
+        "spawned jelly " + quoteName(def.name) + " of " + std::to_string(def.nx * def.ny * def.nz) + " particles";
   else
-    ROS_WARN_NAMED("services", "spawn_jelly refused: %s", status.message.c_str());
+    ROS_WARN_NAMED("services", "spawn_jelly refused: %s", toMessageText(status.message).c_str());
   return answer(res, status);
 }
 
@@ -859,10 +1026,40 @@ bool SimNode::removeBody(RemoveBody::Request& req, RemoveBody::Response& res)
   core::Status status = world_->removeBody(req.name);
   if (status)
   {
-    removed_bodies_.push_back(req.name);
-    status.message = "removed '" + req.name + "'";
+    forgetBody(req.name);
+    status.message = "removed " + quoteName(req.name);
   }
   return answer(res, status);
+}
+
+void SimNode::forgetBody(const std::string& name)
+{
+  // Markers: a listening rviz gets a DELETE for the body's ids. With nobody listening, or many
+  // removals between two arrays, the next array starts with a DELETEALL instead, so that nothing
+  // piles up here.
+  if (!delete_all_pending_ && markers_pub_.getNumSubscribers() > 0 && removed_bodies_.size() < kMaxRemovedBodiesTracked)
+    removed_bodies_.push_back(name);
+  else
+  {
+    delete_all_pending_ = true;
+    removed_bodies_.clear();
+    removed_bodies_.shrink_to_fit();
+  }
+  // Everything else the node kept about it.
+  reported_frozen_.erase(name);
+  reported_events_.erase(name);
+  reported_auto_.erase(name);
+  for (std::size_t k = frame_pins_.size(); k-- > 0;)
+  {
+    if (frame_pins_[k].body == name) frame_pins_.erase(frame_pins_.begin() + static_cast<std::ptrdiff_t>(k));
+  }
+  // dynamic_reconfigure shows another body (or none) instead of the removed one.
+  if (config_.body == name)
+  {
+    config_.body.clear();
+    config_ = currentConfig();
+    reconfigure_server_->updateConfig(config_);
+  }
 }
 
 bool SimNode::reset(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res)
@@ -885,46 +1082,133 @@ bool SimNode::pausePhysics(std_srvs::Trigger::Request&, std_srvs::Trigger::Respo
 
 bool SimNode::unpausePhysics(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res)
 {
+  if (step_job_.active)
+    return answer(res,
+                  core::Status::failure("a ~step of " + std::to_string(step_job_.requested) + " steps is running (" +
+                                        std::to_string(step_job_.remaining) + " left): unpause after its answer"));
   paused_ = false;
   return answer(res, core::Status::success("running from sim time " + std::to_string(world_->simTime()) + " s"));
 }
 
 bool SimNode::step(Step::Request& req, Step::Response& res)
 {
-  constexpr std::uint32_t kMaxSteps = 1000000;
+  // Runs in step_thread_: hand the request to the loop and wait for its answer, which comes when
+  // every step has run (the loop serves everything else between slices meanwhile).
+  std::unique_lock<std::mutex> lock(step_mutex_);
+  if (step_service_closing_)
+  {
+    res.success = false;
+    res.message = "the node is shutting down";
+    return true;
+  }
+  step_request_steps_ = req.steps;
+  step_requested_ = true;
+  step_answer_ready_ = false;
+  step_answered_.wait(lock, [this] { return step_answer_ready_; });
+  step_answer_ready_ = false;
+  res = step_answer_;
+  return true;
+}
+
+void SimNode::deliverStepAnswer(const Step::Response& answer)
+{
+  {
+    std::lock_guard<std::mutex> lock(step_mutex_);
+    step_answer_ = answer;
+    step_answer_.message = toMessageText(answer.message);
+    step_requested_ = false;
+    step_answer_ready_ = true;
+  }
+  step_answered_.notify_all();
+}
+
+long long SimNode::stabilityEventCount() const
+{
+  long long events = 0;
+  for (const auto& body : world_->bodies())
+  {
+    if (const auto* spring_body = world_->findSpringBody(body->name())) events += spring_body->stabilityEvents();
+  }
+  return events;
+}
+
+void SimNode::acceptStepRequest()
+{
+  std::uint32_t steps = 0;
+  {
+    std::lock_guard<std::mutex> lock(step_mutex_);
+    if (!step_requested_ || step_answer_ready_ || step_job_.active) return;
+    steps = step_request_steps_;
+  }
+  Step::Response res;
+  res.success = false;
   if (!paused_)
-    answer(res, core::Status::failure("the simulation is running: call ~pause_physics before ~step"));
-  else if (req.steps < 1 || req.steps > kMaxSteps)
-    answer(res, core::Status::failure("steps = " + std::to_string(req.steps) + " is out of range: must be in [1, " +
-                                      std::to_string(kMaxSteps) + "]"));
+    res.message = "the simulation is running: call ~pause_physics before ~step";
+  else if (steps < 1 || steps > kMaxStepsPerCall)
+    res.message = "steps = " + std::to_string(steps) + " is out of range: must be in [1, " +
+                  std::to_string(kMaxStepsPerCall) + "] per call (call ~step again for more)";
   else
   {
-    // Stability events during these steps are part of the answer.
-    long long events_before = 0;
-    for (const auto& body : world_->bodies())
-    {
-      if (const auto* spring_body = world_->findSpringBody(body->name()))
-        events_before += spring_body->stabilityEvents();
-    }
-    stepPhysics(req.steps);
-    publish();
-    std::string message = "advanced " + std::to_string(req.steps) + " steps";
-    long long events_after = 0;
-    std::string last_event;
-    for (const auto& body : world_->bodies())
-    {
-      const auto* spring_body = world_->findSpringBody(body->name());
-      if (!spring_body) continue;
-      events_after += spring_body->stabilityEvents();
-      if (!spring_body->lastStabilityEvent().empty())
-        last_event = "'" + body->name() + "': " + spring_body->lastStabilityEvent();
-    }
-    if (events_after > events_before)
-      message += "; " + std::to_string(events_after - events_before) + " stability events, last " + last_event;
-    answer(res, core::Status::success(message));
+    // Accepted: the loop runs it in slices from this tick on.
+    step_job_.active = true;
+    step_job_.requested = step_job_.remaining = steps;
+    step_job_.events_before = stabilityEventCount();
+    return;
   }
   res.sim_time = world_->simTime();
-  return true;
+  deliverStepAnswer(res);
+}
+
+void SimNode::runStepSlice()
+{
+  // About one tick's worth of wall time (1/~rate) of steps, so that callbacks, ~status and markers
+  // keep their rate while a long ~step runs. The slice is cut into chunks sized from the measured
+  // cost of a step, the first chunk one tick's worth of substeps.
+  const double budget = 1.0 / settings_.rate;
+  const auto start = SteadyClock::now();
+  while (step_job_.remaining > 0)
+  {
+    const double left = budget - secondsSince(start);
+    if (left <= 0.0) break;
+    std::uint64_t chunk = static_cast<std::uint64_t>(substeps_);
+    if (seconds_per_step_ > 0.0)
+      chunk = static_cast<std::uint64_t>(std::max(1.0, std::floor(left / seconds_per_step_)));
+    chunk = std::min(chunk, step_job_.remaining);
+    const auto chunk_start = SteadyClock::now();
+    stepPhysics(chunk);
+    seconds_per_step_ = secondsSince(chunk_start) / static_cast<double>(chunk);
+    step_job_.remaining -= chunk;
+  }
+}
+
+void SimNode::finishStepJob()
+{
+  // Stability events and freezes during these steps are part of the answer.
+  Step::Response res;
+  std::string message = "advanced " + std::to_string(step_job_.requested) + " steps";
+  const long long events = stabilityEventCount() - step_job_.events_before;
+  std::string last_event;
+  std::vector<std::string> frozen;
+  for (const auto& body : world_->bodies())
+  {
+    const auto* spring_body = world_->findSpringBody(body->name());
+    if (!spring_body) continue;
+    if (!spring_body->lastStabilityEvent().empty())
+      last_event = quoteName(body->name()) + ": " + spring_body->lastStabilityEvent();
+    if (spring_body->frozen()) frozen.push_back(quoteName(body->name()) + " (" + spring_body->frozenReason() + ")");
+  }
+  if (events > 0) message += "; " + std::to_string(events) + " stability events, last " + last_event;
+  if (!frozen.empty())
+  {
+    message += "; frozen: ";
+    for (std::size_t k = 0; k < frozen.size(); ++k)
+      message += (k ? ", " : "") + frozen[k];
+  }
+  step_job_.active = false;
+  res.success = true;
+  res.message = message;
+  res.sim_time = world_->simTime();
+  deliverStepAnswer(res);
 }
 
 SimStatus::Ptr SimNode::buildStatus(const ros::Time& stamp) const
@@ -967,7 +1251,7 @@ SimStatus::Ptr SimNode::buildStatus(const ros::Time& stamp) const
       b.model = spring_body.definition().baraff_witkin.empty() ? core::toString(core::ClothModel::Springs)
                                                                : core::toString(core::ClothModel::BaraffWitkin);
       b.integrator = core::toString(spring_body.integrator().type);
-      b.last_integrator = core::toString(spring_body.lastIntegrator());
+      b.last_integrator = core::toString(integratorThatRan(spring_body));
       b.auto_choice = spring_body.autoChoice();
       b.substeps = static_cast<std::uint32_t>(spring_body.lastSubsteps());
       b.stability_events = static_cast<std::uint64_t>(spring_body.stabilityEvents());
@@ -1005,10 +1289,11 @@ void SimNode::produceDiagnostics(diagnostic_updater::DiagnosticStatusWrapper& st
     const auto& spring_body = static_cast<const core::SpringNetworkBody&>(*body);
     if (spring_body.frozen())
     {
-      frozen.push_back(body->name() + " (" + spring_body.frozenReason() + ")");
+      frozen.push_back(toMessageText(body->name(), kMaxQuotedBytes) + " (" +
+                       core::toString(integratorThatRan(spring_body)) + ": " + spring_body.frozenReason() + ")");
       continue;
     }
-    if (spring_body.lastIntegrator() == core::IntegratorType::ImplicitEuler)
+    if (integratorThatRan(spring_body) == core::IntegratorType::ImplicitEuler)
     {
       iterations = std::max(iterations, spring_body.lastSolve().iterations);
       residual = std::max(residual, spring_body.lastSolve().relative_residual);

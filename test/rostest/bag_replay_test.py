@@ -126,6 +126,9 @@ class BagReplayTest(unittest.TestCase):
         finally:
             recorder.send_signal(signal.SIGINT)
             recorder.wait(timeout=30)
+        # The rosbag wrapper forwards SIGINT to its recorder and exits at once (KeyboardInterrupt),
+        # while the recorder is still closing the bag (sim.bag.active -> sim.bag): wait for it.
+        wait_for(lambda: os.path.exists(bag_path), 30)
         self.assertTrue(os.path.exists(bag_path), "no bag written: " + str(os.listdir(directory)))
 
         # Stop the simulator: the replay must be the only source of these topics and of /clock.

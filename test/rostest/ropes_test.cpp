@@ -185,7 +185,13 @@ TEST_F(RopesTest, PinToAMovingTfFrameFollowsItAndUnpinReleasesIt)
   PinParticle::Request req = pinRequest("carried", 6, PinParticle::Request::TARGET_FRAME);
   req.frame = "gripper";
   req.offset.z = -0.25;  // held 25 cm below the frame's origin
-  const auto res = call<PinParticle>("pin_particle", req);
+  // The node answers at once from what tf has heard (a frame it has not heard of yet is refused):
+  // ask again until the gripper's first transforms have reached it.
+  PinParticle::Response res;
+  listener_.waitFor([&] {
+    res = call<PinParticle>("pin_particle", req);
+    return res.success;
+  });
   ASSERT_TRUE(res.success) << res.message;
 
   // The particle stays on the circle the offset point draws, and goes round it.

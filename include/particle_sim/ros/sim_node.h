@@ -12,10 +12,13 @@
 #include <atomic>
 #include <boost/thread/recursive_mutex.hpp>
 #include <chrono>
+#include <condition_variable>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <set>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "particle_sim/PinParticle.h"
@@ -32,6 +35,7 @@
 #include "particle_sim/UnpinParticle.h"
 #include "particle_sim/core/world.h"
 #include "particle_sim/ros/marker_builder.h"
+#include "particle_sim/ros/master_link.h"
 #include "particle_sim/scene/scene.h"
 
 namespace particle_sim
@@ -59,6 +63,15 @@ struct NodeSettings
   double diagnostic_max_strain = 0.5;  ///< ~diagnostic_max_strain [-]: a larger max strain is a WARN
 };
 
+/// Most steps one ~step call may ask for (README "Services"): a longer run is several calls.
+constexpr std::uint32_t kMaxStepsPerCall = 100000;
+/// A tf frame followed by a pin whose latest transform has not changed for this long [s of wall
+/// time] is taken as gone: the pin holds still and the node warns. Static frames never age.
+constexpr double kFramePinTimeout = 1.0;
+/// Removed bodies remembered for DELETE markers; beyond this (or with no marker subscriber) the
+/// next array starts with a DELETEALL instead.
+constexpr std::size_t kMaxRemovedBodiesTracked = 64;
+
 /// Diagnostic thresholds (README "Diagnostics").
 constexpr double kRealTimeFactorWarnRatio =
     0.9;  ///< WARN when the measured real-time factor is below 90 % of the target
@@ -77,6 +90,10 @@ public:
   /// `node` for /clock, `private_node` for every other name; `name` is the node's (or nodelet's)
   /// name, used as the diagnostics' hardware id and in their name.
   SimNode(ros::NodeHandle node, ros::NodeHandle private_node, const std::string& name);
+  /// Stops the helper threads if run() did not (initialized but never run).
+  ~SimNode();
+  SimNode(const SimNode&) = delete;
+  SimNode& operator=(const SimNode&) = delete;
 
   /// Reads parameters and loads the scene; false (after logging why) when they are unusable.
   bool initialize();
@@ -88,8 +105,19 @@ public:
   void stop() { stop_requested_ = true; }
 
 private:
-  // One tick: `substeps_` physics steps unless paused, then publish.
+  // One tick: `substeps_` physics steps unless paused (or a slice of a running ~step), then publish.
   void tick();
+  // Publishers, services, dynamic_reconfigure, diagnostics and the tf listener: created once by
+  // initialize() and released at the end of run(), in the loop's thread.
+  void advertiseInterfaces();
+  void releaseInterfaces();
+  // ~step runs in slices on the loop: the service waits in a thread of its own (step_thread_)
+  // for the loop's answer, while the loop keeps serving callbacks and publishing between slices.
+  void acceptStepRequest();
+  void runStepSlice();
+  void finishStepJob();
+  void deliverStepAnswer(const Step::Response& answer);
+  long long stabilityEventCount() const;
   void stepPhysics(std::uint64_t steps);
   void publish();
   void printStatus();
@@ -102,10 +130,15 @@ private:
     int index = 0;
     std::string frame;
     Eigen::Vector3d offset = Eigen::Vector3d::Zero();
+    ros::Time stamp;                                                                   // of the latest transform seen
+    std::chrono::steady_clock::time_point updated = std::chrono::steady_clock::now();  // when it changed
   };
-  // Looks `frame` up in the sim frame (latest transform), waiting up to `wait` wall seconds.
-  bool lookupFrame(const std::string& frame, const Eigen::Vector3d& offset, double wait, Eigen::Vector3d& point,
+  // Looks `frame` up in the sim frame (its latest transform, `stamp`) without waiting: tf is filled
+  // by the listener's own thread, so the loop never blocks on it.
+  bool lookupFrame(const std::string& frame, const Eigen::Vector3d& offset, Eigen::Vector3d& point, ros::Time& stamp,
                    std::string& error);
+  // Forgets everything the node keeps about a body that is gone.
+  void forgetBody(const std::string& name);
   // Drops frame pins whose body or pin is gone, and sets each remaining pin's start and goal for
   // this tick (the goal from tf; the start where its target is now).
   void updateFramePins();
@@ -188,7 +221,7 @@ private:
   std::unique_ptr<tf2_ros::TransformBroadcaster> tf_broadcaster_;
   std::vector<ros::ServiceServer> services_;
 
-  std::unique_ptr<tf2_ros::Buffer> tf_buffer_;  // created at the first frame pin
+  std::unique_ptr<tf2_ros::Buffer> tf_buffer_;  // listening from the start: a frame known to tf is known here
   std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
   std::vector<FramePin> frame_pins_;
   std::vector<Eigen::Vector3d> frame_pin_start_, frame_pin_goal_;  // per frame pin, this tick
@@ -206,6 +239,30 @@ private:
   // Measurements for the status line and for diagnostics.
   Window status_window_;
   Window diagnostics_window_;
+
+  // ~step: its service has a queue and a thread of their own; the request and the answer pass
+  // through step_mutex_. The job itself (step_job_) is only touched by the loop.
+  ros::CallbackQueue step_queue_;
+  ros::ServiceServer step_service_;
+  std::thread step_thread_;
+  std::atomic<bool> step_thread_running_{false};
+  std::mutex step_mutex_;
+  std::condition_variable step_answered_;
+  bool step_requested_ = false;  // a request waits for the loop
+  std::uint32_t step_request_steps_ = 0;
+  bool step_answer_ready_ = false;
+  bool step_service_closing_ = false;  // answer at once: the node is stopping
+  Step::Response step_answer_;
+  struct StepJob
+  {
+    bool active = false;
+    std::uint64_t requested = 0;
+    std::uint64_t remaining = 0;
+    long long events_before = 0;
+  } step_job_;
+  double seconds_per_step_ = 0.0;  // measured by the last slice, to size the next
+
+  MasterLink master_link_;  // re-registers with a restarted master
 };
 
 }  // namespace ros_interface
