@@ -1161,24 +1161,12 @@ void SimNode::acceptStepRequest()
 
 void SimNode::runStepSlice()
 {
-  // About one tick's worth of wall time (1/~rate) of steps, so that callbacks, ~status and markers
-  // keep their rate while a long ~step runs. The slice is cut into chunks sized from the measured
-  // cost of a step, the first chunk one tick's worth of substeps.
-  const double budget = 1.0 / settings_.rate;
-  const auto start = SteadyClock::now();
-  while (step_job_.remaining > 0)
-  {
-    const double left = budget - secondsSince(start);
-    if (left <= 0.0) break;
-    std::uint64_t chunk = static_cast<std::uint64_t>(substeps_);
-    if (seconds_per_step_ > 0.0)
-      chunk = static_cast<std::uint64_t>(std::max(1.0, std::floor(left / seconds_per_step_)));
-    chunk = std::min(chunk, step_job_.remaining);
-    const auto chunk_start = SteadyClock::now();
-    stepPhysics(chunk);
-    seconds_per_step_ = secondsSince(chunk_start) / static_cast<double>(chunk);
-    step_job_.remaining -= chunk;
-  }
+  // One tick's worth of substeps per slice, whatever their cost: callbacks, ~status and markers
+  // come between every two slices, so a long ~step is seen tick by tick as if running unpaused
+  // as fast as possible (and how many ticks it takes does not depend on the machine's speed).
+  const std::uint64_t chunk = std::min(static_cast<std::uint64_t>(substeps_), step_job_.remaining);
+  stepPhysics(chunk);
+  step_job_.remaining -= chunk;
 }
 
 void SimNode::finishStepJob()

@@ -260,7 +260,6 @@ private:
     std::uint64_t remaining = 0;
     long long events_before = 0;
   } step_job_;
-  double seconds_per_step_ = 0.0;  // measured by the last slice, to size the next
 
   MasterLink master_link_;  // re-registers with a restarted master
 };
