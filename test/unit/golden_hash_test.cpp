@@ -192,6 +192,25 @@ TEST(GoldenHash, Fnv1a64MatchesTheReferenceVectors)
   EXPECT_EQ(hashOf("foobar"), 0x85944171f73967e8ULL);
 }
 
+// The state hash sees what positions and velocities alone do not: the step count of an empty
+// world, and the target of a pinned particle that has not moved yet.
+TEST(GoldenHash, StateHashSeesStepCountAndPinTargets)
+{
+  core::World empty(core::WorldDef{});
+  const std::uint64_t before = worldStateHash(empty);
+  empty.step();
+  EXPECT_NE(worldStateHash(empty), before);
+
+  core::World world(core::WorldDef{});
+  core::RopeDef rope;
+  rope.name = "rope";
+  rope.pins = {0};
+  ASSERT_TRUE(world.addRope(rope).ok);
+  const std::uint64_t held = worldStateHash(world);
+  ASSERT_TRUE(world.findSpringBody("rope")->setPinTarget(0, rope.start + Eigen::Vector3d(0, 0, 0.1)).ok);
+  EXPECT_NE(worldStateHash(world), held);
+}
+
 // The integrator list the golden test walks is the core's, and every name in it parses back.
 TEST(GoldenHash, IntegratorNamesComeFromTheCore)
 {
