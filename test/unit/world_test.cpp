@@ -8,6 +8,8 @@
 #include <cmath>
 #include <cstring>
 
+#include "test_helpers.h"
+
 using namespace particle_sim::core;
 
 namespace
@@ -27,24 +29,6 @@ EmitterDef oneParticle(const Eigen::Vector3d& origin, double speed, std::uint64_
   def.lifetime = 100.0;
   def.seed = seed;
   return def;
-}
-
-// FNV-1a over the raw bytes of every live particle's position and velocity.
-std::uint64_t stateHash(const World& world)
-{
-  std::uint64_t hash = 1469598103934665603ULL;
-  auto mix = [&](const double* data, int count) {
-    const auto* bytes = reinterpret_cast<const unsigned char*>(data);
-    for (std::size_t i = 0; i < count * sizeof(double); ++i)
-      hash = (hash ^ bytes[i]) * 1099511628211ULL;
-  };
-  for (const auto& body : world.bodies())
-  {
-    const ParticlePool& p = body->particles();
-    mix(p.position.data(), 3 * p.size());
-    mix(p.velocity.data(), 3 * p.size());
-  }
-  return hash;
 }
 }  // namespace
 
@@ -189,7 +173,7 @@ TEST(World, SameSceneAndSeedGiveBitIdenticalStates)
     }
     for (int k = 0; k < 2000; ++k)
       world.step();
-    return stateHash(world);
+    return particle_sim_test::worldStateHash(world);
   };
   EXPECT_EQ(run(3), run(3));
   EXPECT_NE(run(3), run(4));
