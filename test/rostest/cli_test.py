@@ -68,7 +68,7 @@ class Cli(unittest.TestCase):
 
     def call(self, service, request):
         """rosservice call; returns the answer parsed from its YAML output."""
-        code, out = run(["rosservice", "call", NS + "/" + service, request])
+        code, out = run(["rosservice", "call", NS + "/" + service] + ([request] if request else []))
         self.assertEqual(code, 0, f"rosservice call {service} '{request}' failed: {out}")
         return yaml.safe_load(out)
 
@@ -103,7 +103,9 @@ class Cli(unittest.TestCase):
         self.bad("spawn_rope", "{name: bad_rope, particles: 1, end: {x: 1}}", "particles")
         self.good("spawn_cloth", "{name: cli_cloth, origin: {x: 0, y: -2, z: 2}, edge_u: {x: 0.5}, edge_v: {y: 0.5}, "
                   "nu: 4, nv: 4, mass: 0.1, stretch_stiffness: 300, named_pins: [corner_00]}")
-        self.bad("spawn_cloth", "{name: bad_cloth, edge_u: {x: 0.5}, edge_v: {y: 0.5}, nu: 1, nv: 4}", "nu")
+        # (the answer names the scene key, resolution[0], for the service's nu)
+        self.bad("spawn_cloth", "{name: bad_cloth, edge_u: {x: 0.5}, edge_v: {y: 0.5}, nu: 1, nv: 4}",
+                 "= 1 is out of range")
         self.good("spawn_jelly", "{name: cli_jelly, origin: {x: -2, y: -2, z: 0.5}, size: {x: 0.2, y: 0.2, z: 0.2}, "
                   "nx: 2, ny: 2, nz: 2, mass: 0.1, stretch_stiffness: 200}")
         self.bad("spawn_jelly", "{name: bad_jelly, size: {x: 0, y: 0.2, z: 0.2}, nx: 2, ny: 2, nz: 2}", "size")
@@ -123,7 +125,7 @@ class Cli(unittest.TestCase):
         self.bad("remove_body", "{name: nobody}", "nobody")
 
         # step is refused while running, answers the new sim time while paused.
-        self.bad("step", "{steps: 10}", "paused")
+        self.bad("step", "{steps: 10}", "pause_physics")
         self.good("pause_physics")
         before = self.good("step", "{steps: 10}")["sim_time"]
         after = self.good("step", "{steps: 10}")["sim_time"]
@@ -145,7 +147,7 @@ class Cli(unittest.TestCase):
         code, out = run(["rostopic", "echo", "-n", "1", NS + "/parameter_descriptions"], timeout=60.0)
         descriptions = yaml.safe_load(out.split("\n---")[0])
         highest = {d["name"]: d["value"] for d in descriptions["max"]["doubles"]}["wind_y"]
-        answer = self.call("set_parameters", "{config: {doubles: [{name: wind_y, value: 1.0e6}]}}")
+        answer = self.call("set_parameters", "{config: {doubles: [{name: wind_y, value: 1000000.0}]}}")
         doubles = {d["name"]: d["value"] for d in answer["config"]["doubles"]}
         self.assertTrue(math.isfinite(doubles["wind_y"]) and doubles["wind_y"] == highest,
                         f"wind_y 1e6 gave {doubles['wind_y']}, expected the range's maximum {highest}")
