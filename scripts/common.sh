@@ -7,7 +7,7 @@
 # It lies outside the package because rosrun never looks below a package's own build/ folder.
 
 PARTICLE_SIM_ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-PARTICLE_SIM_BUILD="${PARTICLE_SIM_BUILD:-$(dirname "$PARTICLE_SIM_ROOT")/$(basename "$PARTICLE_SIM_ROOT")_ws}"
+PARTICLE_SIM_BUILD="$(realpath -m "${PARTICLE_SIM_BUILD:-$(dirname "$PARTICLE_SIM_ROOT")/$(basename "$PARTICLE_SIM_ROOT")_ws}")"
 PARTICLE_SIM_CMAKE_BUILD="$PARTICLE_SIM_BUILD/build"
 PARTICLE_SIM_DEVEL="$PARTICLE_SIM_BUILD/devel"
 PARTICLE_SIM_INSTALL="$PARTICLE_SIM_BUILD/install"

@@ -4,7 +4,7 @@
 # It sources the devel space of the package's catkin workspace (PARTICLE_SIM_BUILD, default
 # ../particle_sim_ws beside the checkout; see scripts/common.sh) and prints the workspace's path.
 _particle_sim_root="$(cd "$(dirname "${BASH_SOURCE[0]:-$0}")/.." && pwd)"
-_particle_sim_ws="${PARTICLE_SIM_BUILD:-$(dirname "$_particle_sim_root")/$(basename "$_particle_sim_root")_ws}"
+_particle_sim_ws="$(realpath -m "${PARTICLE_SIM_BUILD:-$(dirname "$_particle_sim_root")/$(basename "$_particle_sim_root")_ws}")"
 export PATH="/usr/bin:$PATH"
 if [ -f "$_particle_sim_ws/devel/setup.bash" ]; then
   # shellcheck disable=SC1091
