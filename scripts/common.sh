@@ -1,8 +1,16 @@
-# Shared by scripts/demo and scripts/test: installs what is missing and builds into build/.
-# Sourced, not run.
+# Shared by scripts/demo, test, bench, screenshots: installs what is missing and builds the package
+# into a catkin workspace outside its source folder. Sourced, not run.
+#
+# The workspace is PARTICLE_SIM_BUILD (default: ../particle_sim_ws beside this checkout, i.e.
+# "$(dirname ROOT)/$(basename ROOT)_ws"): <ws>/build is the CMake build folder, <ws>/devel the
+# devel space (source <ws>/devel/setup.bash, or scripts/env.sh), <ws>/install the install space.
+# It lies outside the package because rosrun never looks below a package's own build/ folder.
 
 PARTICLE_SIM_ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-PARTICLE_SIM_BUILD="${PARTICLE_SIM_BUILD:-$PARTICLE_SIM_ROOT/build}"  # another build directory: set it before
+PARTICLE_SIM_BUILD="$(realpath -m "${PARTICLE_SIM_BUILD:-$(dirname "$PARTICLE_SIM_ROOT")/$(basename "$PARTICLE_SIM_ROOT")_ws}")"
+PARTICLE_SIM_CMAKE_BUILD="$PARTICLE_SIM_BUILD/build"
+PARTICLE_SIM_DEVEL="$PARTICLE_SIM_BUILD/devel"
+PARTICLE_SIM_INSTALL="$PARTICLE_SIM_BUILD/install"
 
 # Debian packages the package needs to build, run and test (ROS 1 from Debian's own archive).
 PARTICLE_SIM_PACKAGES=(
@@ -13,6 +21,8 @@ PARTICLE_SIM_PACKAGES=(
   libdynamic-reconfigure-config-init-mutex-dev python3-dynamic-reconfigure libdiagnostic-updater-dev
   ros-diagnostic-msgs libnodelet-dev libnodeletlib-dev libnodeletlib-tools libbondcpp-dev pluginlib-dev
   librosbag-dev python3-rosbag python3-rosnode python3-tf2-msgs rviz
+  python3-std-msgs python3-std-srvs python3-geometry-msgs python3-shape-msgs python3-visualization-msgs
+  python3-rosgraph-msgs python3-diagnostic-msgs
 )
 
 # ROS tools are Python programs that need Debian's python3, not a pyenv one found first on PATH.
@@ -36,15 +46,16 @@ ensure_packages() {
   as_root env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
 }
 
-# Configures (once) and builds the package into build/ with catkin's CMake, devel space in
-# build/devel. Extra arguments go to make.
+# Configures (once) and builds the package with catkin's CMake into the workspace: CMake build
+# folder <ws>/build, devel space <ws>/devel, install prefix <ws>/install. Extra arguments go to make.
 build_package() {
-  mkdir -p "$PARTICLE_SIM_BUILD"
-  if [ ! -f "$PARTICLE_SIM_BUILD/CMakeCache.txt" ]; then
-    log "configuring into build/"
-    cmake -S "$PARTICLE_SIM_ROOT" -B "$PARTICLE_SIM_BUILD" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-      -DPYTHON_EXECUTABLE=/usr/bin/python3 -DPython3_EXECUTABLE=/usr/bin/python3 -DCATKIN_DEVEL_PREFIX="$PARTICLE_SIM_BUILD/devel" >/dev/null
+  mkdir -p "$PARTICLE_SIM_CMAKE_BUILD"
+  if [ ! -f "$PARTICLE_SIM_CMAKE_BUILD/CMakeCache.txt" ]; then
+    log "configuring into $PARTICLE_SIM_BUILD"
+    cmake -S "$PARTICLE_SIM_ROOT" -B "$PARTICLE_SIM_CMAKE_BUILD" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+      -DPYTHON_EXECUTABLE=/usr/bin/python3 -DPython3_EXECUTABLE=/usr/bin/python3 \
+      -DCATKIN_DEVEL_PREFIX="$PARTICLE_SIM_DEVEL" -DCMAKE_INSTALL_PREFIX="$PARTICLE_SIM_INSTALL" >/dev/null
   fi
-  log "building"
-  cmake --build "$PARTICLE_SIM_BUILD" -- -j"$(nproc)" "$@"
+  log "building in $PARTICLE_SIM_BUILD"
+  cmake --build "$PARTICLE_SIM_CMAKE_BUILD" -- -j"$(nproc)" "$@"
 }

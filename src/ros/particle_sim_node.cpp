@@ -1,9 +1,34 @@
 #include <ros/ros.h>
 
+#include <cstdio>
+#include <cstring>
+
 #include "particle_sim/ros/sim_node.h"
+
+namespace
+{
+/// What `particle_sim_node --help` prints: how to run it and where its interface is described.
+constexpr const char* kUsage =
+    "usage: rosrun particle_sim particle_sim_node [_scene:=FILE] [_rate:=HZ] [_dt:=S] [_real_time_factor:=F]\n"
+    "                                             [_paused:=true] [_frame_id:=NAME] [ROS remappings ...]\n"
+    "The particle_sim simulator node: steps the scene and publishes ~markers, ~meshes, ~status, /tf,\n"
+    "/clock and /diagnostics; services ~spawn_emitter, ~spawn_rope, ~spawn_cloth, ~spawn_jelly,\n"
+    "~remove_body, ~reset, ~pause_physics, ~unpause_physics, ~step, ~pin_particle, ~unpin_particle,\n"
+    "~set_wind, ~set_spring_constants; live parameters through dynamic_reconfigure.\n"
+    "Needs a ROS master. Usually started by: roslaunch particle_sim particle_sim.launch scene:=NAME\n"
+    "Every parameter, topic and service: README.md, section \"The node: particle_sim_node\".\n";
+}  // namespace
 
 int main(int argc, char** argv)
 {
+  for (int i = 1; i < argc; ++i)
+  {
+    if (std::strcmp(argv[i], "--help") == 0 || std::strcmp(argv[i], "-h") == 0)
+    {
+      std::fputs(kUsage, stdout);
+      return 0;
+    }
+  }
   ros::init(argc, argv, "particle_sim");
   particle_sim::ros_interface::SimNode node(ros::NodeHandle(), ros::NodeHandle("~"), ros::this_node::getName());
   if (!node.initialize()) return 1;

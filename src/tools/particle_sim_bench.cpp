@@ -7,6 +7,10 @@
 //
 //   particle_sim_bench [--scenes DIR] [--out DIR] [--tables FILE] [--only NAME,...] [--no-stability] [--quick]
 //
+// It needs no ROS and no source tree: the default scenes are found through the package (see
+// findBenchScenes), and the output folder is created; so `rosrun particle_sim particle_sim_bench`
+// works from any folder.
+//
 // Error: the RMS over the free (not pinned) particles of |x − x_ref| at the final time. The
 // reference is the analytic answer where there is one (oscillator, hanging rope's equilibrium,
 // ballistic emitters), else the same scene under RK4 at a much smaller step, checked against RK4
@@ -22,6 +26,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <ctime>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <limits>
@@ -46,8 +51,11 @@ using Clock = std::chrono::steady_clock;
 constexpr const char* kUsage =
     "usage: particle_sim_bench [--scenes DIR] [--out DIR] [--tables FILE] [--only NAME,...] [--no-stability] "
     "[--quick]\n"
-    "  --scenes DIR     the bench scenes (default config/scenes/bench)\n"
-    "  --out DIR        where the CSV files go (default docs/bench)\n"
+    "  --scenes DIR     the bench scenes (default: config/scenes/bench of the particle_sim package,\n"
+    "                   found beside this executable's install space, in the source folder it was\n"
+    "                   built from, or on ROS_PACKAGE_PATH)\n"
+    "  --out DIR        where the CSV files go, created if missing (default bench_results in the\n"
+    "                   current folder; scripts/bench writes docs/bench)\n"
     "  --tables FILE    also write the markdown tables of docs/accuracy.md to FILE\n"
     "  --only NAMES     run only these scenes (comma-separated file stems)\n"
     "  --no-stability   skip the stability map\n"
@@ -930,6 +938,42 @@ std::string markdownTables(const std::vector<Case>& cases, const std::vector<std
   return md.str();
 }
 
+namespace fs = std::filesystem;
+
+/// The package's config/scenes/bench, looked for in this order: the install space this executable
+/// lies in (<prefix>/lib/particle_sim/ -> <prefix>/share/particle_sim/), the source folder it was
+/// built from, then every particle_sim package on ROS_PACKAGE_PATH. Empty when none has it; `tried`
+/// lists the folders looked at.
+std::string findBenchScenes(std::vector<std::string>& tried)
+{
+  const fs::path relative = fs::path("config") / "scenes" / "bench";
+  std::vector<fs::path> candidates;
+  std::error_code error;
+  const fs::path executable = fs::read_symlink("/proc/self/exe", error);
+  if (!error) candidates.push_back(executable.parent_path() / ".." / ".." / "share" / "particle_sim" / relative);
+#ifdef PARTICLE_SIM_SOURCE_DIR
+  candidates.push_back(fs::path(PARTICLE_SIM_SOURCE_DIR) / relative);
+#endif
+  if (const char* package_path = std::getenv("ROS_PACKAGE_PATH"))
+  {
+    std::stringstream entries(package_path);
+    for (std::string entry; std::getline(entries, entry, ':');)
+    {
+      if (entry.empty()) continue;
+      // An entry is a package folder itself, or a folder holding packages.
+      if (fs::path(entry).filename() == "particle_sim" || fs::exists(fs::path(entry) / "package.xml", error))
+        candidates.push_back(fs::path(entry) / relative);
+      candidates.push_back(fs::path(entry) / "particle_sim" / relative);
+    }
+  }
+  for (const fs::path& candidate : candidates)
+  {
+    tried.push_back(candidate.lexically_normal().string());
+    if (fs::is_regular_file(candidate / "oscillator.yaml", error)) return candidate.lexically_normal().string();
+  }
+  return {};
+}
+
 bool splitList(const std::string& text, std::vector<std::string>& out)
 {
   std::stringstream in(text);
@@ -944,7 +988,7 @@ bool splitList(const std::string& text, std::vector<std::string>& out)
 
 int main(int argc, char** argv)
 {
-  std::string scenes_dir = "config/scenes/bench", out_dir = "docs/bench", tables_path;
+  std::string scenes_dir, out_dir = "bench_results", tables_path;
   std::vector<std::string> only;
   bool with_stability = true, quick = false;
   for (int i = 1; i < argc; ++i)
@@ -979,6 +1023,40 @@ int main(int argc, char** argv)
       return 2;
     }
   }
+
+  if (scenes_dir.empty())
+  {
+    std::vector<std::string> tried;
+    scenes_dir = findBenchScenes(tried);
+    if (scenes_dir.empty())
+    {
+      std::cerr
+          << "particle_sim_bench: cannot find the bench scenes (config/scenes/bench of particle_sim); looked in\n";
+      for (const std::string& folder : tried)
+        std::cerr << "  " << folder << "\n";
+      std::cerr << "give them with --scenes DIR\n";
+      return 1;
+    }
+  }
+  // The output folder (and the tables file's folder) exist before hours of work, not after.
+  std::error_code error;
+  fs::create_directories(out_dir, error);
+  if (error || !fs::is_directory(out_dir))
+  {
+    std::cerr << "particle_sim_bench: cannot create the output folder '" << out_dir << "'"
+              << (error ? ": " + error.message() : std::string()) << "\n";
+    return 1;
+  }
+  if (const fs::path tables_folder = fs::path(tables_path).parent_path(); !tables_folder.empty())
+  {
+    fs::create_directories(tables_folder, error);
+    if (error)
+    {
+      std::cerr << "particle_sim_bench: cannot create '" << tables_folder.string() << "': " << error.message() << "\n";
+      return 1;
+    }
+  }
+  std::fprintf(stderr, "[bench] scenes from %s, CSV into %s\n", scenes_dir.c_str(), out_dir.c_str());
 
   const auto bench_start = Clock::now();
   const std::vector<std::string> integrators = integratorNames();
