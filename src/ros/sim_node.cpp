@@ -12,6 +12,7 @@
 #include "particle_sim/ros/message_text.h"
 #include "particle_sim/ros/names.h"
 #include "particle_sim/ros/request_conversions.h"
+#include "particle_sim/ros/spring_constants.h"
 #include "particle_sim/ros/status_report.h"
 #include "particle_sim/scene/scene.h"
 
