@@ -1,16 +1,12 @@
 #pragma once
 
 #include <diagnostic_updater/diagnostic_updater.h>
-#include <dynamic_reconfigure/server.h>
 #include <ros/callback_queue.h>
 #include <ros/ros.h>
 #include <std_srvs/Trigger.h>
-#include <tf2_ros/buffer.h>
 #include <tf2_ros/transform_broadcaster.h>
-#include <tf2_ros/transform_listener.h>
 
 #include <atomic>
-#include <boost/thread/recursive_mutex.hpp>
 #include <chrono>
 #include <condition_variable>
 #include <map>
@@ -25,7 +21,6 @@
 #include "particle_sim/RemoveBody.h"
 #include "particle_sim/SetSpringConstants.h"
 #include "particle_sim/SetWind.h"
-#include "particle_sim/SimConfig.h"
 #include "particle_sim/SimStatus.h"
 #include "particle_sim/SpawnCloth.h"
 #include "particle_sim/SpawnEmitter.h"
@@ -34,52 +29,33 @@
 #include "particle_sim/Step.h"
 #include "particle_sim/UnpinParticle.h"
 #include "particle_sim/core/world.h"
+#include "particle_sim/ros/frame_followers.h"
 #include "particle_sim/ros/marker_builder.h"
 #include "particle_sim/ros/master_link.h"
+#include "particle_sim/ros/parameters.h"
+#include "particle_sim/ros/reconfigure.h"
 #include "particle_sim/scene/scene.h"
 
 namespace particle_sim
 {
 namespace ros_interface
 {
-/// The node's settings, read once from private parameters (README "Parameters").
-struct NodeSettings
-{
-  std::string scene_path;                              ///< ~scene, YAML scene file; empty = an empty world
-  double rate = 50.0;                                  ///< ~rate [Hz] publish rate (and physics ticks)
-  double dt = 0.0;                                     ///< ~dt [s] physics step; 0 = the scene's world.dt
-  double real_time_factor = 1.0;                       ///< ~real_time_factor [-]; 0 = as fast as possible
-  bool paused = false;                                 ///< ~paused: start paused
-  std::string frame_id = "world";                      ///< ~frame_id: frame of every marker
-  std::string parent_frame_id = "map";                 ///< ~parent_frame_id: tf parent of frame_id
-  std::vector<double> frame_offset = {0.0, 0.0, 0.0};  ///< ~frame_offset [m]: frame_id's origin in parent_frame_id
-  bool publish_clock = true;                           ///< ~publish_clock: publish /clock from sim time
-  double particle_size = 0.05;                         ///< ~particle_size [m]
-  int max_particles_per_body = 0;                      ///< ~max_particles_per_body; 0 = the scene's value
-  double status_period = 1.0;          ///< ~status_period [s] of wall time between status lines; 0 = none
-  bool color_by_strain = false;        ///< ~color_by_strain: colour cloth and jelly by strain
-  double strain_color_max = 0.1;       ///< ~strain_color_max [-]: strain drawn fully red
-  double diagnostic_period = 1.0;      ///< ~diagnostic_period [s] of wall time between /diagnostics updates
-  double diagnostic_max_strain = 0.5;  ///< ~diagnostic_max_strain [-]: a larger max strain is a WARN
-};
-
 /// Most steps one ~step call may ask for (README "Services"): a longer run is several calls.
 constexpr std::uint32_t kMaxStepsPerCall = 100000;
-/// A tf frame followed by a pin whose latest transform has not changed for this long [s of wall
-/// time] is taken as gone: the pin holds still and the node warns. Static frames never age.
-constexpr double kFramePinTimeout = 1.0;
 /// Removed bodies remembered for DELETE markers; beyond this (or with no marker subscriber) the
 /// next array starts with a DELETEALL instead.
 constexpr std::size_t kMaxRemovedBodiesTracked = 64;
-
-/// Diagnostic thresholds (README "Diagnostics").
-constexpr double kRealTimeFactorWarnRatio =
-    0.9;  ///< WARN when the measured real-time factor is below 90 % of the target
 
 /// The simulator: owns a core::World, steps it at a fixed rate on steady (wall) time, serves its
 /// services, dynamic_reconfigure and diagnostics between steps and publishes markers, meshes,
 /// status, tf and /clock. Used by the node's main() and by the nodelet (SimNodelet), which runs
 /// run() in a thread of its own.
+///
+/// This class is the loop and the wiring; each concern lives in its own unit: parameters
+/// (parameters.h), service requests to core definitions (request_conversions.h), ~status,
+/// /diagnostics and answers built from a const world (status_report.h), dynamic_reconfigure
+/// (reconfigure.h), what follows tf frames (frame_followers.h), markers and meshes
+/// (marker_builder.h, mesh_builder.h).
 ///
 /// Every callback of the simulator (services, dynamic_reconfigure) goes to the simulator's own
 /// callback queue, served by run() between ticks: the world is only ever touched by one thread,
@@ -117,31 +93,12 @@ private:
   void runStepSlice();
   void finishStepJob();
   void deliverStepAnswer(const Step::Response& answer);
-  long long stabilityEventCount() const;
   void stepPhysics(std::uint64_t steps);
   void publish();
   void printStatus();
 
-  // A particle pinned to a tf frame: its target is the frame's pose applied to `offset`, looked
-  // up once per tick and approached linearly over the tick's substeps.
-  struct FramePin
-  {
-    std::string body;
-    int index = 0;
-    std::string frame;
-    Eigen::Vector3d offset = Eigen::Vector3d::Zero();
-    ros::Time stamp;                                                                   // of the latest transform seen
-    std::chrono::steady_clock::time_point updated = std::chrono::steady_clock::now();  // when it changed
-  };
-  // Looks `frame` up in the sim frame (its latest transform, `stamp`) without waiting: tf is filled
-  // by the listener's own thread, so the loop never blocks on it.
-  bool lookupFrame(const std::string& frame, const Eigen::Vector3d& offset, Eigen::Vector3d& point, ros::Time& stamp,
-                   std::string& error);
   // Forgets everything the node keeps about a body that is gone.
   void forgetBody(const std::string& name);
-  // Drops frame pins whose body or pin is gone, and sets each remaining pin's start and goal for
-  // this tick (the goal from tf; the start where its target is now).
-  void updateFramePins();
 
   bool spawnEmitter(SpawnEmitter::Request& req, SpawnEmitter::Response& res);
   bool spawnRope(SpawnRope::Request& req, SpawnRope::Response& res);
@@ -151,31 +108,16 @@ private:
   bool spawnCloth(SpawnCloth::Request& req, SpawnCloth::Response& res);
   bool spawnJelly(SpawnJelly::Request& req, SpawnJelly::Response& res);
   bool setWind(SetWind::Request& req, SetWind::Response& res);
-  // Moves spheres that follow tf frames (scripted frames are applied every step).
-  void updateFrameSpheres();
-  // Broadcasts the scene's scripted frames at the current sim time.
-  void broadcastScriptedFrames(const ros::Time& stamp);
   bool removeBody(RemoveBody::Request& req, RemoveBody::Response& res);
   bool reset(std_srvs::Trigger::Request& req, std_srvs::Trigger::Response& res);
   bool pausePhysics(std_srvs::Trigger::Request& req, std_srvs::Trigger::Response& res);
   bool unpausePhysics(std_srvs::Trigger::Request& req, std_srvs::Trigger::Response& res);
   bool step(Step::Request& req, Step::Response& res);
 
-  // Spring constants, shared by ~set_spring_constants and dynamic_reconfigure.
-  core::Status applySpringConstants(const std::string& body, const std::string& spring_class, double stiffness,
-                                    double damping);
-  // The constants of the first spring of `spring_class` ("all": of any class) of `body`.
-  bool readSpringConstants(const std::string& body, const std::string& spring_class, double& stiffness,
-                           double& damping) const;
-
-  // dynamic_reconfigure: the current state as a config, and a change from rqt or dynparam.
-  SimConfig currentConfig() const;
-  void reconfigure(SimConfig& config, std::uint32_t level);
   // The loop's timing after a change of ~rate or ~real_time_factor.
   void updateSubsteps();
 
-  // ~status and /diagnostics.
-  SimStatus::Ptr buildStatus(const ros::Time& stamp) const;
+  // /diagnostics.
   void produceDiagnostics(diagnostic_updater::DiagnosticStatusWrapper& stat);
 
   // Wall time and physics time over a window (status line, diagnostics).
@@ -214,17 +156,12 @@ private:
   ros::Publisher status_pub_;
   core::IntegratorDef default_integrator_;  // of bodies spawned by services (dynamic_reconfigure "integrator")
 
-  boost::recursive_mutex reconfigure_mutex_;
-  std::unique_ptr<dynamic_reconfigure::Server<SimConfig>> reconfigure_server_;
-  SimConfig config_;  // as last applied
+  std::unique_ptr<ReconfigureHandler> reconfigure_;
   std::unique_ptr<diagnostic_updater::Updater> diagnostics_;
   std::unique_ptr<tf2_ros::TransformBroadcaster> tf_broadcaster_;
   std::vector<ros::ServiceServer> services_;
 
-  std::unique_ptr<tf2_ros::Buffer> tf_buffer_;  // listening from the start: a frame known to tf is known here
-  std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
-  std::vector<FramePin> frame_pins_;
-  std::vector<Eigen::Vector3d> frame_pin_start_, frame_pin_goal_;  // per frame pin, this tick
+  FrameFollowers frame_followers_;  // tf pins and spheres that follow tf frames
 
   std::set<std::string> reported_frozen_;             // frozen bodies already logged
   std::map<std::string, long long> reported_events_;  // per body, stability events already logged

@@ -1,0 +1,86 @@
+#pragma once
+
+#include <geometry_msgs/TransformStamped.h>
+#include <ros/time.h>
+#include <tf2_ros/buffer.h>
+#include <tf2_ros/transform_listener.h>
+
+#include <Eigen/Core>
+#include <chrono>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "particle_sim/core/world.h"
+#include "particle_sim/scene/scene.h"
+
+namespace particle_sim
+{
+namespace ros_interface
+{
+/// A tf frame followed by a pin whose latest transform has not changed for this long [s of wall
+/// time] is taken as gone: the pin holds still and the node warns. Static frames never age.
+constexpr double kFramePinTimeout = 1.0;
+
+/// What follows tf frames: particles pinned to a frame (from ~pin_particle or the scene) and
+/// sphere colliders that follow a frame the scene does not script. Frames are looked up without
+/// waiting, from what tf's listener (on its own thread) already knows, in `sim_frame`.
+class FrameFollowers
+{
+public:
+  /// Starts listening to tf: a frame known to tf from then on is known here, and looked up in
+  /// `sim_frame`.
+  void startListening(const std::string& sim_frame);
+  /// Stops listening and lets go of tf (in the thread that runs ROS).
+  void stopListening();
+
+  /// `offset` [m] in `frame` as a point [m] of the sim frame, from the frame's latest transform
+  /// (its `stamp`); false with the reason in `error` when tf does not know it (or it is not
+  /// finite). Never waits.
+  bool lookup(const std::string& frame, const Eigen::Vector3d& offset, Eigen::Vector3d& point, ros::Time& stamp,
+              std::string& error) const;
+
+  /// Particle `index` of `body`, pinned, follows `frame` at `offset` [m] from the next tick on,
+  /// instead of any frame it followed before.
+  void follow(const std::string& body, int index, const std::string& frame, const Eigen::Vector3d& offset);
+  /// Particle `index` of `body` follows no frame any more.
+  void unfollow(const std::string& body, int index);
+  /// No particle of `body` follows a frame any more.
+  void forgetBody(const std::string& body);
+
+  /// Before a tick's steps: drops pins whose body or pin is gone, looks every followed frame up
+  /// (a frame not available holds its particles still, with a warning) and moves the spheres that
+  /// follow frames the scene does not script.
+  void beginTick(core::World& world, const scene::SceneDef& scene);
+  /// Before step `step` (0-based) of the tick's `steps`: particles pinned to frames move in
+  /// equal parts from where their targets were towards this tick's frame pose.
+  void moveTargets(core::World& world, std::uint64_t step, std::uint64_t steps) const;
+
+private:
+  struct FramePin
+  {
+    std::string body;
+    int index = 0;
+    std::string frame;
+    Eigen::Vector3d offset = Eigen::Vector3d::Zero();
+    ros::Time stamp;                                                                   // of the latest transform seen
+    std::chrono::steady_clock::time_point updated = std::chrono::steady_clock::now();  // when it changed
+  };
+  void updateFramePins(core::World& world);
+  void updateFrameSpheres(core::World& world, const scene::SceneDef& scene);
+
+  std::string sim_frame_;
+  std::unique_ptr<tf2_ros::Buffer> tf_buffer_;
+  std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
+  std::vector<FramePin> pins_;
+  std::vector<Eigen::Vector3d> start_, goal_;  // per pin, this tick
+};
+
+/// The scene's scripted frames at `stamp` (sim time) as transforms under `sim_frame`, for tf.
+std::vector<geometry_msgs::TransformStamped> scriptedFrameTransforms(const scene::SceneDef& scene,
+                                                                     const std::string& sim_frame,
+                                                                     const ros::Time& stamp);
+
+}  // namespace ros_interface
+}  // namespace particle_sim

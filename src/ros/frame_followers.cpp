@@ -1,0 +1,169 @@
+#include "particle_sim/ros/frame_followers.h"
+
+#include <ros/console.h>
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+
+#include "particle_sim/ros/message_text.h"
+
+namespace particle_sim
+{
+namespace ros_interface
+{
+void FrameFollowers::startListening(const std::string& sim_frame)
+{
+  sim_frame_ = sim_frame;
+  tf_buffer_ = std::make_unique<tf2_ros::Buffer>();
+  tf_listener_ = std::make_unique<tf2_ros::TransformListener>(*tf_buffer_);
+}
+
+void FrameFollowers::stopListening()
+{
+  tf_listener_.reset();
+  tf_buffer_.reset();
+}
+
+bool FrameFollowers::lookup(const std::string& frame, const Eigen::Vector3d& offset, Eigen::Vector3d& point,
+                            ros::Time& stamp, std::string& error) const
+{
+  if (!tf_buffer_->canTransform(sim_frame_, frame, ros::Time(0), &error)) return false;
+  try
+  {
+    const geometry_msgs::TransformStamped t = tf_buffer_->lookupTransform(sim_frame_, frame, ros::Time(0));
+    const auto& q = t.transform.rotation;
+    const auto& v = t.transform.translation;
+    point = Eigen::Quaterniond(q.w, q.x, q.y, q.z).normalized() * offset + Eigen::Vector3d(v.x, v.y, v.z);
+    stamp = t.header.stamp;
+    if (!point.allFinite()) error = "its transform is not finite";
+    return point.allFinite();
+  }
+  catch (const tf2::TransformException& exception)
+  {
+    error = exception.what();
+    return false;
+  }
+}
+
+void FrameFollowers::follow(const std::string& body, int index, const std::string& frame, const Eigen::Vector3d& offset)
+{
+  unfollow(body, index);
+  pins_.push_back({body, index, frame, offset, ros::Time(), std::chrono::steady_clock::now()});
+}
+
+void FrameFollowers::unfollow(const std::string& body, int index)
+{
+  // A particle follows at most one frame.
+  pins_.erase(
+      std::remove_if(pins_.begin(), pins_.end(), [&](const FramePin& p) { return p.body == body && p.index == index; }),
+      pins_.end());
+}
+
+void FrameFollowers::forgetBody(const std::string& body)
+{
+  for (std::size_t k = pins_.size(); k-- > 0;)
+  {
+    if (pins_[k].body == body) pins_.erase(pins_.begin() + static_cast<std::ptrdiff_t>(k));
+  }
+}
+
+void FrameFollowers::beginTick(core::World& world, const scene::SceneDef& scene)
+{
+  updateFramePins(world);
+  updateFrameSpheres(world, scene);
+}
+
+void FrameFollowers::moveTargets(core::World& world, std::uint64_t step, std::uint64_t steps) const
+{
+  // Particles pinned to tf frames move in equal parts towards this tick's frame pose.
+  for (std::size_t k = 0; k < pins_.size(); ++k)
+  {
+    const double s = static_cast<double>(step + 1) / static_cast<double>(steps);
+    world.findSpringBody(pins_[k].body)->setPinTarget(pins_[k].index, start_[k] + s * (goal_[k] - start_[k]));
+  }
+}
+
+void FrameFollowers::updateFramePins(core::World& world)
+{
+  // Forget pins whose body was removed or whose particle was unpinned or reset.
+  pins_.erase(std::remove_if(pins_.begin(), pins_.end(),
+                             [&](const FramePin& pin) {
+                               const core::SpringNetworkBody* body = world.findSpringBody(pin.body);
+                               return !body || !body->isPinned(pin.index);
+                             }),
+              pins_.end());
+  start_.resize(pins_.size());
+  goal_.resize(pins_.size());
+  const auto now = std::chrono::steady_clock::now();
+  for (std::size_t k = 0; k < pins_.size(); ++k)
+  {
+    FramePin& pin = pins_[k];
+    start_[k] = world.findSpringBody(pin.body)->pinTarget(pin.index);
+    std::string error;
+    ros::Time stamp;
+    bool available = lookup(pin.frame, pin.offset, goal_[k], stamp, error);
+    // A frame whose transform stopped changing is gone (tf keeps its last transform for ever);
+    // a static frame (stamp 0) never goes.
+    if (available && stamp != pin.stamp)
+    {
+      pin.stamp = stamp;
+      pin.updated = now;
+    }
+    else if (available && !stamp.isZero() &&
+             std::chrono::duration<double>(now - pin.updated).count() > kFramePinTimeout)
+    {
+      available = false;
+      error = "no new transform for " +
+              formatReceived(std::round(std::chrono::duration<double>(now - pin.updated).count())) + " s";
+    }
+    if (!available)
+    {
+      goal_[k] = start_[k];  // hold still until the frame is back
+      ROS_WARN_THROTTLE_NAMED(5.0, "pins",
+                              "particle %d of %s follows frame %s, which is not available: %s; it holds still",
+                              pin.index, quoteName(pin.body).c_str(), quoteName(pin.frame).c_str(), error.c_str());
+    }
+  }
+}
+
+void FrameFollowers::updateFrameSpheres(core::World& world, const scene::SceneDef& scene)
+{
+  for (const scene::FrameSphereDef& follower : scene.frame_spheres)
+  {
+    if (scene::findFrame(scene, follower.frame)) continue;  // scripted: applied every step
+    Eigen::Vector3d center;
+    std::string error;
+    ros::Time stamp;
+    if (lookup(follower.frame, Eigen::Vector3d::Zero(), center, stamp, error))
+      world.setSphereCenter(follower.sphere, center);
+    else
+      ROS_WARN_THROTTLE_NAMED(5.0, "colliders", "sphere '%s' follows frame '%s', which is not available: %s",
+                              follower.sphere.c_str(), follower.frame.c_str(), error.c_str());
+  }
+}
+
+std::vector<geometry_msgs::TransformStamped> scriptedFrameTransforms(const scene::SceneDef& scene,
+                                                                     const std::string& sim_frame,
+                                                                     const ros::Time& stamp)
+{
+  std::vector<geometry_msgs::TransformStamped> transforms;
+  transforms.reserve(scene.frames.size());
+  for (const scene::ScriptedFrameDef& frame : scene.frames)
+  {
+    const Eigen::Vector3d x = frame.position(stamp.toSec());
+    geometry_msgs::TransformStamped transform;
+    transform.header.stamp = stamp;
+    transform.header.frame_id = sim_frame;
+    transform.child_frame_id = frame.name;
+    transform.transform.translation.x = x.x();
+    transform.transform.translation.y = x.y();
+    transform.transform.translation.z = x.z();
+    transform.transform.rotation.w = 1.0;
+    transforms.push_back(transform);
+  }
+  return transforms;
+}
+
+}  // namespace ros_interface
+}  // namespace particle_sim

@@ -1,0 +1,262 @@
+#include "particle_sim/ros/status_report.h"
+
+#include <diagnostic_msgs/DiagnosticStatus.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+#include <vector>
+
+#include "particle_sim/core/cloth.h"
+#include "particle_sim/core/emitter.h"
+#include "particle_sim/ros/message_text.h"
+
+namespace particle_sim
+{
+namespace ros_interface
+{
+namespace
+{
+geometry_msgs::Vector3 toVector3(const Eigen::Vector3d& v)
+{
+  geometry_msgs::Vector3 out;
+  out.x = v.x();
+  out.y = v.y();
+  out.z = v.z();
+  return out;
+}
+}  // namespace
+
+core::IntegratorType integratorThatRan(const core::SpringNetworkBody& body)
+{
+  return body.integrator().type == core::IntegratorType::Auto ? body.lastIntegrator() : body.integrator().type;
+}
+
+SimStatus buildSimStatus(const core::World& world, const ros::Time& stamp, const std::string& frame_id, bool paused,
+                         double real_time_factor)
+{
+  SimStatus status;
+  status.header.stamp = stamp;
+  status.header.frame_id = frame_id;
+  status.sim_time = world.simTime();
+  status.step_count = world.stepCount();
+  status.paused = paused;
+  status.real_time_factor = real_time_factor;
+  const core::Environment& env = world.environment();
+  status.gravity = toVector3(env.gravity);
+  status.global_damping = env.damping;
+  status.wind = toVector3(env.air.wind);
+  status.bodies.reserve(world.bodies().size());
+  for (const auto& body : world.bodies())
+  {
+    BodyStatus b;
+    b.name = body->name();
+    b.particle_count = static_cast<std::uint32_t>(body->particles().size());
+    if (body->kind() == core::BodyKind::Emitter)
+    {
+      const auto& emitter = static_cast<const core::EmitterBody&>(*body);
+      b.type = "emitter";
+      b.model = core::toString(emitter.definition().type);
+      // Free particles of equal mass: kinetic and gravitational potential energy.
+      const core::ParticlePool& p = emitter.particles();
+      const double m = emitter.definition().particle_mass;
+      for (int i = 0; i < p.size(); ++i)
+      {
+        b.kinetic_energy += 0.5 * m * p.velocity.col(i).squaredNorm();
+        b.potential_energy -= m * env.gravity.dot(p.position.col(i));
+      }
+    }
+    else if (body->kind() == core::BodyKind::SpringNetwork)
+    {
+      const auto& spring_body = static_cast<const core::SpringNetworkBody&>(*body);
+      b.type = core::toString(spring_body.shape());
+      b.model = spring_body.definition().baraff_witkin.empty() ? core::toString(core::ClothModel::Springs)
+                                                               : core::toString(core::ClothModel::BaraffWitkin);
+      b.integrator = core::toString(spring_body.integrator().type);
+      b.last_integrator = core::toString(integratorThatRan(spring_body));
+      b.auto_choice = spring_body.autoChoice();
+      b.substeps = static_cast<std::uint32_t>(spring_body.lastSubsteps());
+      b.stability_events = static_cast<std::uint64_t>(spring_body.stabilityEvents());
+      b.last_stability_event = spring_body.lastStabilityEvent();
+      b.kinetic_energy = spring_body.kineticEnergy();
+      b.potential_energy = spring_body.potentialEnergy(env.gravity);
+      b.max_strain = spring_body.maxStrain();
+      b.pinned_count = static_cast<std::uint32_t>(spring_body.pinnedCount());
+      b.solver_iterations = static_cast<std::uint32_t>(std::max(0, spring_body.lastSolve().iterations));
+      b.solver_residual = spring_body.lastSolve().relative_residual;
+      b.frozen = spring_body.frozen();
+      b.frozen_reason = spring_body.frozenReason();
+    }
+    status.bodies.push_back(std::move(b));
+  }
+  return status;
+}
+
+void buildDiagnostics(const core::World& world, const LoopFigures& loop, double max_strain_warn,
+                      diagnostic_updater::DiagnosticStatusWrapper& stat)
+{
+  using diagnostic_msgs::DiagnosticStatus;
+
+  // Over the spring bodies: the last implicit solves, strain and frozen bodies.
+  int iterations = 0, not_converged = 0;
+  double residual = 0.0, max_strain = 0.0;
+  std::string strained_body;
+  std::vector<std::string> frozen;
+  for (const auto& body : world.bodies())
+  {
+    if (body->kind() != core::BodyKind::SpringNetwork) continue;
+    const auto& spring_body = static_cast<const core::SpringNetworkBody&>(*body);
+    if (spring_body.frozen())
+    {
+      frozen.push_back(toMessageText(body->name(), kMaxQuotedBytes) + " (" +
+                       core::toString(integratorThatRan(spring_body)) + ": " + spring_body.frozenReason() + ")");
+      continue;
+    }
+    if (integratorThatRan(spring_body) == core::IntegratorType::ImplicitEuler)
+    {
+      iterations = std::max(iterations, spring_body.lastSolve().iterations);
+      residual = std::max(residual, spring_body.lastSolve().relative_residual);
+      if (!spring_body.lastSolve().converged) ++not_converged;
+    }
+    const double strain = spring_body.maxStrain();
+    if (strain > max_strain)
+    {
+      max_strain = strain;
+      strained_body = body->name();
+    }
+  }
+
+  stat.summary(DiagnosticStatus::OK, loop.paused_in_window || loop.paused ? "paused" : "running");
+  char text[256];
+  // Thresholds: README "Diagnostics".
+  if (!frozen.empty())
+  {
+    std::string names;
+    for (const std::string& name : frozen)
+      names += (names.empty() ? "" : ", ") + name;
+    stat.mergeSummary(DiagnosticStatus::ERROR, "frozen bodies: " + names);
+  }
+  if (!loop.paused_in_window && !loop.paused && loop.target_real_time_factor > 0.0 &&
+      loop.real_time_factor < kRealTimeFactorWarnRatio * loop.target_real_time_factor)
+  {
+    std::snprintf(text, sizeof(text), "real-time factor %.3g below %.0f %% of the target %.3g", loop.real_time_factor,
+                  100.0 * kRealTimeFactorWarnRatio, loop.target_real_time_factor);
+    stat.mergeSummary(DiagnosticStatus::WARN, text);
+  }
+  if (not_converged > 0)
+    stat.mergeSummary(DiagnosticStatus::WARN,
+                      std::to_string(not_converged) + " implicit solves did not reach cg_tolerance in their last step");
+  if (loop.stability_events > 0)
+    stat.mergeSummary(DiagnosticStatus::WARN,
+                      std::to_string(loop.stability_events) + " stability events since the last report (see ~status)");
+  if (max_strain > max_strain_warn)
+  {
+    std::snprintf(text, sizeof(text), "max strain %.3g of '%s' above %.3g", max_strain, strained_body.c_str(),
+                  max_strain_warn);
+    stat.mergeSummary(DiagnosticStatus::WARN, text);
+  }
+
+  stat.add("sim time [s]", world.simTime());
+  stat.add("paused", loop.paused);
+  stat.add("real-time factor", loop.real_time_factor);
+  stat.add("target real-time factor", loop.target_real_time_factor);
+  stat.add("step time [us]", loop.step_time_us);
+  stat.add("steps per tick", loop.steps_per_tick);
+  stat.add("live particles", world.particleCount());
+  stat.add("bodies", static_cast<int>(world.bodies().size()));
+  stat.add("solver iterations (max, last step)", iterations);
+  stat.add("solver residual (max, last step)", residual);
+  stat.add("max strain", max_strain);
+  stat.add("frozen bodies", static_cast<int>(frozen.size()));
+  stat.add("stability events since last report", loop.stability_events);
+}
+
+std::string statusLine(const core::World& world, double real_time_factor, double step_time_us, bool paused)
+{
+  // The implicit solves of the last step: most CG iterations and worst relative residual.
+  int cg_iterations = 0;
+  double cg_residual = 0.0;
+  bool any_implicit = false;
+  for (const auto& body : world.bodies())
+  {
+    if (body->kind() != core::BodyKind::SpringNetwork) continue;
+    const auto& spring_body = static_cast<const core::SpringNetworkBody&>(*body);
+    if (integratorThatRan(spring_body) != core::IntegratorType::ImplicitEuler) continue;
+    any_implicit = true;
+    cg_iterations = std::max(cg_iterations, spring_body.lastSolve().iterations);
+    cg_residual = std::max(cg_residual, spring_body.lastSolve().relative_residual);
+  }
+  char solver[96] = "";
+  if (any_implicit)
+    std::snprintf(solver, sizeof(solver), " | CG %d iterations, residual %.1e", cg_iterations, cg_residual);
+  char line[512];
+  std::snprintf(line, sizeof(line), "sim time %.3f s | real-time factor %.2f | live particles %d | step %.1f us%s%s",
+                world.simTime(), real_time_factor, world.particleCount(), step_time_us, solver,
+                paused ? " | paused" : "");
+  return line;
+}
+
+long long stabilityEventCount(const core::World& world)
+{
+  long long events = 0;
+  for (const auto& body : world.bodies())
+  {
+    if (const auto* spring_body = world.findSpringBody(body->name())) events += spring_body->stabilityEvents();
+  }
+  return events;
+}
+
+std::string stepReport(const core::World& world, std::uint64_t requested, long long events)
+{
+  // Stability events and freezes during these steps are part of the answer.
+  std::string message = "advanced " + std::to_string(requested) + " steps";
+  std::string last_event;
+  std::vector<std::string> frozen;
+  for (const auto& body : world.bodies())
+  {
+    const auto* spring_body = world.findSpringBody(body->name());
+    if (!spring_body) continue;
+    if (!spring_body->lastStabilityEvent().empty())
+      last_event = quoteName(body->name()) + ": " + spring_body->lastStabilityEvent();
+    if (spring_body->frozen()) frozen.push_back(quoteName(body->name()) + " (" + spring_body->frozenReason() + ")");
+  }
+  if (events > 0) message += "; " + std::to_string(events) + " stability events, last " + last_event;
+  if (!frozen.empty())
+  {
+    message += "; frozen: ";
+    for (std::size_t k = 0; k < frozen.size(); ++k)
+      message += (k ? ", " : "") + frozen[k];
+  }
+  return message;
+}
+
+std::string springConstantsReport(const core::SpringNetworkBody& body, const std::string& body_name,
+                                  const std::string& class_name, double stiffness, double damping, double dt)
+{
+  // Say what the change means for stability: the new frequency bound and, for an explicit
+  // integrator, how many substeps a step of dt will take (auto re-decides at the next step).
+  std::ostringstream message;
+  message << "set " << class_name << " springs of '" << body_name << "' to " << stiffness << " N/m, " << damping
+          << " N·s/m; omega_max <= " << body.frequencyBound() << " 1/s";
+  const core::IntegratorType type = body.integrator().type;
+  const double limit = core::stabilityLimit(type);
+  if (std::isfinite(limit) && type != core::IntegratorType::Auto)
+  {
+    const double product = dt * (body.frequencyBound() + body.dampingBound());
+    const int substeps = std::max(1, static_cast<int>(std::ceil(product / (0.9 * limit))));
+    message << ", so " << core::toString(type) << " takes " << std::min(substeps, body.integrator().max_substeps)
+            << " substep(s) per step of " << dt << " s";
+    if (substeps > body.integrator().max_substeps)
+      message << " (it would need " << substeps << ", above max_substeps: expect it to freeze)";
+  }
+  else if (type == core::IntegratorType::Auto)
+  {
+    const double product = dt * (body.frequencyBound() + body.dampingBound());
+    message << ", so auto will use " << (product <= 1.0 ? "verlet" : "implicit_euler");
+  }
+  return message.str();
+}
+
+}  // namespace ros_interface
+}  // namespace particle_sim

@@ -1,0 +1,233 @@
+// What the node shows (~status, /diagnostics, the status line, ~step's and
+// ~set_spring_constants' answers), built from a const world without a ROS master: fields against
+// the world they describe, energy conservation of free flight, and the diagnostic levels at the
+// thresholds README "Diagnostics" names.
+
+#include <diagnostic_msgs/DiagnosticStatus.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "particle_sim/ros/status_report.h"
+#include "test_helpers.h"
+
+using namespace particle_sim;
+using namespace particle_sim::ros_interface;
+using diagnostic_msgs::DiagnosticStatus;
+
+namespace
+{
+// A world without ground (free flight) holding a fountain that bursts 5 particles straight up at
+// 2 m/s from 1 m high, mass 0.01 kg each, and a rope of 10 particles pinned at both ends, 2 m long
+// at rest but stretched to 3 m (strain 0.5).
+core::World makeWorld(core::IntegratorType rope_integrator = core::IntegratorType::ImplicitEuler)
+{
+  core::WorldDef def;
+  def.ground.enabled = false;
+  core::World world{def};
+  core::EmitterDef fountain;
+  fountain.name = "fountain";
+  fountain.origin = {0.0, 0.0, 1.0};
+  fountain.rate = 0.0;
+  fountain.burst_count = 5;
+  fountain.speed = 2.0;
+  fountain.spread = 0.0;
+  fountain.lifetime = 100.0;
+  fountain.particle_mass = 0.01;
+  EXPECT_TRUE(world.addEmitter(fountain).ok);
+  core::RopeDef rope;
+  rope.name = "taut";
+  rope.particles = 10;
+  rope.start = {0.0, 0.0, 2.0};
+  rope.end = {3.0, 0.0, 2.0};
+  rope.rest_length = 2.0;
+  rope.pins = {0, -1};
+  rope.integrator.type = rope_integrator;
+  EXPECT_TRUE(world.addRope(rope).ok);
+  return world;
+}
+
+const std::string* findValue(const diagnostic_updater::DiagnosticStatusWrapper& stat, const std::string& key)
+{
+  for (const auto& pair : stat.values)
+  {
+    if (pair.key == key) return &pair.value;
+  }
+  return nullptr;
+}
+
+LoopFigures runningOnTime()
+{
+  LoopFigures loop;
+  loop.real_time_factor = 1.0;
+  loop.target_real_time_factor = 1.0;
+  loop.step_time_us = 12.5;
+  loop.steps_per_tick = 20;
+  return loop;
+}
+}  // namespace
+
+TEST(StatusConversions, SimStatusDescribesTheWorldAndEveryBody)
+{
+  core::World world = makeWorld();
+  for (int k = 0; k < 10; ++k)
+    world.step();
+  const SimStatus status = buildSimStatus(world, ros::Time(0.01), "sim", true, 2.0);
+  EXPECT_EQ(status.header.stamp, ros::Time(0.01));
+  EXPECT_EQ(status.header.frame_id, "sim");
+  EXPECT_EQ(status.sim_time, world.simTime());
+  EXPECT_EQ(status.step_count, 10u);
+  EXPECT_TRUE(status.paused);
+  EXPECT_EQ(status.real_time_factor, 2.0);
+  EXPECT_EQ(status.gravity.z, -9.81);  // [m/s^2]
+  EXPECT_EQ(status.global_damping, 0.0);
+  ASSERT_EQ(status.bodies.size(), 2u);
+
+  const BodyStatus& fountain = status.bodies[0];
+  EXPECT_EQ(fountain.name, "fountain");
+  EXPECT_EQ(fountain.type, "emitter");
+  EXPECT_EQ(fountain.model, "fountain");
+  EXPECT_EQ(fountain.particle_count, 5u);
+
+  const BodyStatus& rope = status.bodies[1];
+  EXPECT_EQ(rope.name, "taut");
+  EXPECT_EQ(rope.type, "rope");
+  EXPECT_EQ(rope.model, "springs");
+  EXPECT_EQ(rope.integrator, "implicit_euler");
+  EXPECT_EQ(rope.last_integrator, "implicit_euler");
+  EXPECT_EQ(rope.particle_count, 10u);
+  EXPECT_EQ(rope.pinned_count, 2u);
+  EXPECT_FALSE(rope.frozen);
+  EXPECT_TRUE(rope.frozen_reason.empty());
+  EXPECT_GT(rope.solver_iterations, 0u);  // an implicit step solves
+  EXPECT_GE(rope.max_strain, 0.0);
+}
+
+TEST(StatusConversions, EmitterEnergyIsThatOfFreeFlightAndIsConserved)
+{
+  // Five particles at 2 m/s, 1 m high: E = 5 (m v² / 2 + m g z) = 5 (0.02 + 0.0981) J, whatever
+  // the time (the emitter's ballistic step is exact).
+  const double expected = 5.0 * (0.5 * 0.01 * 4.0 + 0.01 * 9.81 * 1.0);
+  core::World world = makeWorld();
+  for (int k = 0; k < 150; ++k)
+  {
+    world.step();
+    if (k != 0 && k != 149) continue;
+    const BodyStatus fountain = buildSimStatus(world, ros::Time(), "sim", false, 1.0).bodies[0];
+    ASSERT_EQ(fountain.particle_count, 5u);
+    EXPECT_NEAR(fountain.kinetic_energy + fountain.potential_energy, expected, 1e-12);
+    EXPECT_GT(fountain.kinetic_energy, 0.0);
+  }
+}
+
+TEST(StatusConversions, DiagnosticsAreOkWhenRunningOnTimeAndListEveryFigure)
+{
+  core::World world = makeWorld();
+  world.step();
+  diagnostic_updater::DiagnosticStatusWrapper stat;
+  buildDiagnostics(world, runningOnTime(), 0.9, stat);  // strain 0.5 is below 0.9
+  EXPECT_EQ(stat.level, DiagnosticStatus::OK);
+  EXPECT_EQ(stat.message, "running");
+  ASSERT_NE(findValue(stat, "steps per tick"), nullptr);
+  EXPECT_EQ(*findValue(stat, "steps per tick"), "20");
+  EXPECT_EQ(*findValue(stat, "live particles"), "15");
+  EXPECT_EQ(*findValue(stat, "bodies"), "2");
+  EXPECT_EQ(*findValue(stat, "frozen bodies"), "0");
+  EXPECT_EQ(*findValue(stat, "paused"), "False");
+  for (const char* key : {"sim time [s]", "real-time factor", "target real-time factor", "step time [us]",
+                          "solver iterations (max, last step)", "solver residual (max, last step)", "max strain",
+                          "stability events since last report"})
+    EXPECT_NE(findValue(stat, key), nullptr) << key;
+}
+
+TEST(StatusConversions, DiagnosticsWarnBelowNinetyPercentOfTheTargetRealTimeFactorOnlyWhileRunning)
+{
+  core::World world = makeWorld();
+  LoopFigures loop = runningOnTime();
+  loop.real_time_factor = 0.89;  // just below 90 % of 1
+  diagnostic_updater::DiagnosticStatusWrapper slow;
+  buildDiagnostics(world, loop, 0.9, slow);
+  EXPECT_EQ(slow.level, DiagnosticStatus::WARN);
+  EXPECT_EQ(slow.message, "real-time factor 0.89 below 90 % of the target 1");
+
+  loop.real_time_factor = 0.91;
+  diagnostic_updater::DiagnosticStatusWrapper on_time;
+  buildDiagnostics(world, loop, 0.9, on_time);
+  EXPECT_EQ(on_time.level, DiagnosticStatus::OK);
+
+  // Paused (now or at some time in the window), or as fast as possible: no target to miss.
+  loop.real_time_factor = 0.0;
+  loop.paused_in_window = true;
+  diagnostic_updater::DiagnosticStatusWrapper paused;
+  buildDiagnostics(world, loop, 0.9, paused);
+  EXPECT_EQ(paused.level, DiagnosticStatus::OK);
+  EXPECT_EQ(paused.message, "paused");
+  loop.paused_in_window = false;
+  loop.target_real_time_factor = 0.0;
+  diagnostic_updater::DiagnosticStatusWrapper fastest;
+  buildDiagnostics(world, loop, 0.9, fastest);
+  EXPECT_EQ(fastest.level, DiagnosticStatus::OK);
+}
+
+TEST(StatusConversions, DiagnosticsWarnOfStabilityEventsAndStrainAboveTheThreshold)
+{
+  core::World world = makeWorld();
+  LoopFigures loop = runningOnTime();
+  loop.stability_events = 3;
+  diagnostic_updater::DiagnosticStatusWrapper stat;
+  buildDiagnostics(world, loop, 0.4, stat);  // the rope starts at strain 0.5
+  EXPECT_EQ(stat.level, DiagnosticStatus::WARN);
+  EXPECT_EQ(stat.message, "3 stability events since the last report (see ~status); max strain 0.5 of 'taut' above 0.4");
+  EXPECT_EQ(*findValue(stat, "stability events since last report"), "3");
+  EXPECT_EQ(*findValue(stat, "max strain"), "0.5");
+}
+
+TEST(StatusConversions, StatusLineShowsTimeRateParticlesStepAndTheImplicitSolves)
+{
+  core::World world = makeWorld();
+  for (int k = 0; k < 10; ++k)
+    world.step();
+  const std::string line = statusLine(world, 0.987, 42.26, true);
+  EXPECT_EQ(line.rfind("sim time 0.010 s | real-time factor 0.99 | live particles 15 | step 42.3 us | CG ", 0), 0u)
+      << line;
+  EXPECT_NE(line.find(" iterations, residual "), std::string::npos) << line;
+  EXPECT_EQ(line.substr(line.size() - 9), " | paused");
+
+  // Without an implicit body, no solver figures.
+  core::World explicit_world = makeWorld(core::IntegratorType::Verlet);
+  explicit_world.step();
+  EXPECT_EQ(statusLine(explicit_world, 1.0, 1.0, false),
+            "sim time 0.001 s | real-time factor 1.00 | live particles 15 | step 1.0 us");
+}
+
+TEST(StatusConversions, StepReportCountsStepsAndEvents)
+{
+  core::World world = makeWorld();
+  world.step();
+  EXPECT_EQ(stabilityEventCount(world), 0);
+  EXPECT_EQ(stepReport(world, 1, 0), "advanced 1 steps");
+}
+
+TEST(StatusConversions, SpringConstantsReportSaysWhatTheChangeMeansForStability)
+{
+  // Verlet at dt = 1 ms on a soft rope: one substep.
+  core::World world = makeWorld(core::IntegratorType::Verlet);
+  core::SpringNetworkBody& rope = *world.findSpringBody("taut");
+  ASSERT_TRUE(rope.setSpringConstants(core::SpringClass::Stretch, 100.0, 0.1).ok);
+  std::string report = springConstantsReport(rope, "taut", "stretch", 100.0, 0.1, world.dt());
+  EXPECT_EQ(report.rfind("set stretch springs of 'taut' to 100 N/m, 0.1 N·s/m; omega_max <= ", 0), 0u) << report;
+  EXPECT_NE(report.find(" 1/s, so verlet takes 1 substep(s) per step of 0.001 s"), std::string::npos) << report;
+
+  // So stiff that even max_substeps (64) cannot keep h ω below the limit: it says it will freeze.
+  ASSERT_TRUE(rope.setSpringConstants(core::SpringClass::Stretch, 1e9, 0.1).ok);
+  report = springConstantsReport(rope, "taut", "stretch", 1e9, 0.1, world.dt());
+  EXPECT_NE(report.find("verlet takes 64 substep(s)"), std::string::npos) << report;
+  EXPECT_NE(report.find("above max_substeps: expect it to freeze)"), std::string::npos) << report;
+
+  // Implicit Euler has no stability limit: nothing about substeps.
+  core::World implicit_world = makeWorld(core::IntegratorType::ImplicitEuler);
+  const core::SpringNetworkBody& implicit_rope = *implicit_world.findSpringBody("taut");
+  report = springConstantsReport(implicit_rope, "taut", "all", 500.0, 0.5, implicit_world.dt());
+  EXPECT_EQ(report.find("substep"), std::string::npos) << report;
+  EXPECT_EQ(report.find("auto"), std::string::npos) << report;
+}
