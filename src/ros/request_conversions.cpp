@@ -196,5 +196,41 @@ core::Status toPinSpec(const PinParticle::Request& req, const core::SpringNetwor
   }
 }
 
+core::Status inRequestTerms(SpawnRequest request, core::Status status)
+{
+  if (status) return status;
+  struct Rename
+  {
+    const char* core_field;
+    const char* request_field;
+  };
+  // The spring constants of every spring body, then what differs per request.
+  static const Rename kSprings[] = {{"stretch.stiffness", "stretch_stiffness"}, {"stretch.damping", "stretch_damping"},
+                                    {"shear.stiffness", "shear_stiffness"},     {"shear.damping", "shear_damping"},
+                                    {"bend.stiffness", "bend_stiffness"},       {"bend.damping", "bend_damping"}};
+  static const Rename kEmitter[] = {{"particle_mass", "mass"}};
+  static const Rename kCloth[] = {{"resolution[0]", "nu"}, {"resolution[1]", "nv"}};
+  static const Rename kJelly[] = {{"resolution[0]", "nx"}, {"resolution[1]", "ny"}, {"resolution[2]", "nz"}};
+
+  auto rename = [&status](const Rename& r) {
+    const std::string prefix = std::string(r.core_field) + " ";
+    if (status.message.compare(0, prefix.size(), prefix) != 0) return false;
+    status.message = r.request_field + status.message.substr(std::string(r.core_field).size());
+    return true;
+  };
+  for (const Rename& r : kSprings)
+    if (request != SpawnRequest::Emitter && rename(r)) return status;
+  if (request == SpawnRequest::Emitter)
+    for (const Rename& r : kEmitter)
+      if (rename(r)) return status;
+  if (request == SpawnRequest::Cloth)
+    for (const Rename& r : kCloth)
+      if (rename(r)) return status;
+  if (request == SpawnRequest::Jelly)
+    for (const Rename& r : kJelly)
+      if (rename(r)) return status;
+  return status;
+}
+
 }  // namespace ros_interface
 }  // namespace particle_sim

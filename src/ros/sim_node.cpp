@@ -391,7 +391,7 @@ bool SimNode::spawnEmitter(SpawnEmitter::Request& req, SpawnEmitter::Response& r
   // The request becomes the same EmitterDef a scene file builds, checked by the same validate().
   core::EmitterDef def;
   if (core::Status s = toEmitterDef(req, world_->definition().seed, def); !s) return answer(res, s);
-  core::Status status = world_->addEmitter(def);
+  core::Status status = inRequestTerms(SpawnRequest::Emitter, world_->addEmitter(def));
   if (status)
     status.message = "spawned " + std::string(core::toString(def.type)) + " emitter " + quoteName(def.name);
   else
@@ -404,7 +404,7 @@ bool SimNode::spawnRope(SpawnRope::Request& req, SpawnRope::Response& res)
   // The request becomes the same RopeDef a scene file builds, checked by the same validate().
   core::RopeDef def;
   if (core::Status s = toRopeDef(req, default_integrator_, def); !s) return answer(res, s);
-  core::Status status = world_->addRope(def);
+  core::Status status = inRequestTerms(SpawnRequest::Rope, world_->addRope(def));
   if (status)
     status.message = "spawned rope " + quoteName(def.name) + " with " + std::to_string(def.particles) + " particles, " +
                      core::toString(def.integrator.type);
@@ -482,7 +482,7 @@ bool SimNode::spawnCloth(SpawnCloth::Request& req, SpawnCloth::Response& res)
 {
   core::ClothGridDef def;
   if (core::Status s = toClothGridDef(req, default_integrator_, def); !s) return answer(res, s);
-  core::Status status = world_->addClothGrid(def);
+  core::Status status = inRequestTerms(SpawnRequest::Cloth, world_->addClothGrid(def));
   if (status)
     status.message = "spawned " + std::string(core::toString(def.model)) + " cloth " + quoteName(def.name) + " of " +
                      std::to_string(def.nu) + " x " + std::to_string(def.nv) + " particles";
@@ -495,7 +495,7 @@ bool SimNode::spawnJelly(SpawnJelly::Request& req, SpawnJelly::Response& res)
 {
   core::JellyDef def;
   if (core::Status s = toJellyDef(req, default_integrator_, def); !s) return answer(res, s);
-  core::Status status = world_->addJelly(def);
+  core::Status status = inRequestTerms(SpawnRequest::Jelly, world_->addJelly(def));
   if (status)
     status.message =
         "spawned jelly " + quoteName(def.name) + " of " + std::to_string(def.nx * def.ny * def.nz) + " particles";

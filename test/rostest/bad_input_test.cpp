@@ -238,7 +238,7 @@ TEST_F(BadInputTest, EveryBadRequestIsRefusedAndTheNodeKeepsServingWithoutGrowin
     SCOPED_TRACE("stiffness " + value);
     SpawnRope::Request req = rope("stiff_" + alternative.substr(2));
     req.stretch_stiffness = stiffness;
-    expectRefused(call<SpawnRope>("spawn_rope", req), "stiffness", {value.c_str(), alternative.c_str()});
+    expectRefused(call<SpawnRope>("spawn_rope", req), "stretch_stiffness", {value.c_str(), alternative.c_str()});
 
     SetSpringConstants::Request set;
     set.body = "anchor";

@@ -103,9 +103,8 @@ class Cli(unittest.TestCase):
         self.bad("spawn_rope", "{name: bad_rope, particles: 1, end: {x: 1}}", "particles")
         self.good("spawn_cloth", "{name: cli_cloth, origin: {x: 0, y: -2, z: 2}, edge_u: {x: 0.5}, edge_v: {y: 0.5}, "
                   "nu: 4, nv: 4, mass: 0.1, stretch_stiffness: 300, named_pins: [corner_00]}")
-        # (the answer names the scene key, resolution[0], for the service's nu)
         self.bad("spawn_cloth", "{name: bad_cloth, edge_u: {x: 0.5}, edge_v: {y: 0.5}, nu: 1, nv: 4}",
-                 "= 1 is out of range")
+                 "nu = 1 is out of range")
         self.good("spawn_jelly", "{name: cli_jelly, origin: {x: -2, y: -2, z: 0.5}, size: {x: 0.2, y: 0.2, z: 0.2}, "
                   "nx: 2, ny: 2, nz: 2, mass: 0.1, stretch_stiffness: 200}")
         self.bad("spawn_jelly", "{name: bad_jelly, size: {x: 0, y: 0.2, z: 0.2}, nx: 2, ny: 2, nz: 2}", "size")

@@ -295,13 +295,13 @@ TEST_F(ClothTest, BaraffWitkinClothSpawnsPublishesAndTakesItsConstants)
 TEST_F(ClothTest, BadClothAndJellyRequestsAreRefusedNamingTheField)
 {
   std::vector<std::pair<std::string, SpawnCloth::Request>> cloth(5, {"", clothRequest("bad", 3.0)});
-  cloth[0].first = "resolution[0] = 1 is out of range";
+  cloth[0].first = "nu = 1 is out of range";
   cloth[0].second.nu = 1;
   cloth[1].first = "must be non-zero and not parallel";
   cloth[1].second.edge_v = cloth[1].second.edge_u;
   cloth[2].first = "pins[0] = 'middle' is not a pin name";
   cloth[2].second.named_pins = {"middle"};
-  cloth[3].first = "shear.stiffness = -3 is out of range";
+  cloth[3].first = "shear_stiffness = -3 is out of range";
   cloth[3].second.shear_stiffness = -3.0;
   cloth[4].first = "name = 'sheet' is already taken";
   cloth[4].second.name = "sheet";

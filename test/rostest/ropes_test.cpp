@@ -112,7 +112,7 @@ TEST_F(RopesTest, BadSpawnRopeRequestsAreRefusedNamingTheField)
   std::vector<std::pair<std::string, SpawnRope::Request>> cases;
   cases.push_back({"particles = 1 is out of range", ropeRequest("bad_count", 1)});
   cases.back().second.particles = 1;
-  cases.push_back({"stretch.stiffness = -5 is out of range", ropeRequest("bad_k", 1)});
+  cases.push_back({"stretch_stiffness = -5 is out of range", ropeRequest("bad_k", 1)});
   cases.back().second.stretch_stiffness = -5.0;
   cases.push_back({"start = [nan, 1, 2] is not finite", ropeRequest("bad_start", 1)});
   cases.back().second.start.x = std::nan("");

@@ -470,3 +470,54 @@ TEST(RequestConversions, PinRefusesBadIndexPointTargetFrameAndOffset)
   EXPECT_EQ(toPinSpec(req, rope, spec).message, "offset = [0, nan, 0] m is not finite");
   EXPECT_FALSE(toPinSpec(req, rope, spec).ok);
 }
+
+TEST(RequestConversions, CoreRefusalsOfSpawnsNameTheRequestsFieldNotTheDefinitions)
+{
+  // Each request with one field out of the core's range: the core names its definition's field,
+  // inRequestTerms the request's, with the value as received and the range kept.
+  SpawnRope::Request rope;
+  rope.name = "line";
+  rope.end = point(1.0, 0.0, 0.0);
+  rope.stretch_stiffness = 1e200;
+  core::RopeDef rope_def;
+  ASSERT_TRUE(toRopeDef(rope, worldDefaultIntegrator(), rope_def).ok);
+  const core::Status rope_refusal = core::validate(rope_def, 1000);
+  ASSERT_FALSE(rope_refusal.ok);
+  EXPECT_EQ(rope_refusal.message.rfind("stretch.stiffness = 1e+200", 0), 0u) << rope_refusal.message;
+  EXPECT_EQ(inRequestTerms(SpawnRequest::Rope, rope_refusal).message,
+            "stretch_stiffness" + rope_refusal.message.substr(std::string("stretch.stiffness").size()));
+
+  SpawnCloth::Request cloth;
+  cloth.name = "sheet";
+  cloth.edge_u = vector(1.0, 0.0, 0.0);
+  cloth.edge_v = vector(0.0, 1.0, 0.0);
+  cloth.nu = 1;
+  core::ClothGridDef cloth_def;
+  ASSERT_TRUE(toClothGridDef(cloth, worldDefaultIntegrator(), cloth_def).ok);
+  const core::Status cloth_refusal = inRequestTerms(SpawnRequest::Cloth, core::validate(cloth_def, 1000));
+  EXPECT_EQ(cloth_refusal.message.rfind("nu = 1 is out of range", 0), 0u) << cloth_refusal.message;
+
+  SpawnJelly::Request jelly;
+  jelly.name = "cube";
+  jelly.size = vector(0.5, 0.5, 0.5);
+  jelly.nz = 1;
+  core::JellyDef jelly_def;
+  ASSERT_TRUE(toJellyDef(jelly, worldDefaultIntegrator(), jelly_def).ok);
+  const core::Status jelly_refusal = inRequestTerms(SpawnRequest::Jelly, core::validate(jelly_def, 1000));
+  EXPECT_EQ(jelly_refusal.message.rfind("nz = 1 is out of range", 0), 0u) << jelly_refusal.message;
+
+  SpawnEmitter::Request emitter;
+  emitter.name = "jet";
+  emitter.type = "fountain";
+  emitter.rate = 10.0;
+  emitter.mass = -1.0;
+  core::EmitterDef emitter_def;
+  ASSERT_TRUE(toEmitterDef(emitter, 1, emitter_def).ok);
+  const core::Status emitter_refusal = inRequestTerms(SpawnRequest::Emitter, core::validate(emitter_def));
+  EXPECT_EQ(emitter_refusal.message.rfind("mass = -1 ", 0), 0u) << emitter_refusal.message;
+
+  // A field named alike in both, and a success, pass unchanged.
+  const core::Status rate = core::Status::failure("rate = -3 is out of range: must be >= 0");
+  EXPECT_EQ(inRequestTerms(SpawnRequest::Emitter, rate).message, rate.message);
+  EXPECT_TRUE(inRequestTerms(SpawnRequest::Rope, core::Status::success()).ok);
+}

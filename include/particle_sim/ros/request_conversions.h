@@ -50,6 +50,22 @@ core::Status toClothGridDef(const SpawnCloth::Request& req, const core::Integrat
 core::Status toJellyDef(const SpawnJelly::Request& req, const core::IntegratorDef& default_integrator,
                         core::JellyDef& def);
 
+/// Which ~spawn_* request a refusal of the core answers (see inRequestTerms).
+enum class SpawnRequest
+{
+  Emitter,
+  Rope,
+  Cloth,
+  Jelly
+};
+
+/// The core's refusal of a converted definition names the definition's field (`stretch.stiffness`,
+/// `resolution[0]`, `particle_mass`); a service caller knows the request's (`stretch_stiffness`,
+/// `nu`, `mass`). Renames the field the message starts with to the request's; the rest of the
+/// message (value as received, range, unit) is kept. A field whose name is the same in both is
+/// left alone.
+core::Status inRequestTerms(SpawnRequest request, core::Status status);
+
 /// ~set_spring_constants and dynamic_reconfigure's spring_class: "stretch", "shear" or "bend" is
 /// that class, "all" is every class (no value). Refuses anything else, listing the allowed names.
 core::Status parseSpringClassSelection(const std::string& name, std::optional<core::SpringClass>& spring_class);
