@@ -6,8 +6,8 @@
 #include <map>
 #include <utility>
 
+#include "particle_sim/core/names.h"
 #include "particle_sim/core/validation.h"
-#include "particle_sim/core/world.h"
 
 namespace particle_sim
 {

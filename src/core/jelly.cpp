@@ -1,7 +1,7 @@
 #include "particle_sim/core/jelly.h"
 
+#include "particle_sim/core/names.h"
 #include "particle_sim/core/validation.h"
-#include "particle_sim/core/world.h"
 
 namespace particle_sim
 {
