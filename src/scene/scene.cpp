@@ -627,40 +627,6 @@ Status buildWorld(const SceneDef& scene, std::unique_ptr<core::World>& world)
   return Status::success();
 }
 
-Eigen::Vector3d ScriptedFrameDef::position(double t) const
-{
-  const double angle = 2.0 * M_PI * t / period + phase;
-  return center + radius * Eigen::Vector3d(std::cos(angle), std::sin(angle), 0.0);
-}
-
-const ScriptedFrameDef* findFrame(const SceneDef& scene, const std::string& name)
-{
-  for (const ScriptedFrameDef& frame : scene.frames)
-  {
-    if (frame.name == name) return &frame;
-  }
-  return nullptr;
-}
-
-Status applyScriptedFrames(const SceneDef& scene, double t, core::World& world)
-{
-  for (const FramePinDef& pin : scene.frame_pins)
-  {
-    const ScriptedFrameDef* frame = findFrame(scene, pin.frame);
-    core::SpringNetworkBody* body = world.findSpringBody(pin.body);
-    if (!frame || !body || !body->isPinned(pin.index)) continue;
-    if (Status s = body->setPinTarget(pin.index, frame->position(t) + pin.offset); !s) return s;
-  }
-  for (const FrameSphereDef& follower : scene.frame_spheres)
-  {
-    if (const ScriptedFrameDef* frame = findFrame(scene, follower.frame))
-    {
-      if (Status s = world.setSphereCenter(follower.sphere, frame->position(t)); !s) return s;
-    }
-  }
-  return Status::success();
-}
-
 namespace
 {
 YAML::Node vector3(const Eigen::Vector3d& v)

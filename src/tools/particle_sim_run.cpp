@@ -10,8 +10,6 @@
 #include <fstream>
 #include <iostream>
 #include <string>
-#include <type_traits>
-#include <variant>
 #include <vector>
 
 #include "particle_sim/scene/scene.h"
@@ -122,17 +120,8 @@ int main(int argc, char** argv)
   {
     particle_sim::core::IntegratorType type;
     particle_sim::core::parseIntegratorType(integrator_name, type);
-    scene.world.integrator.type = type;
-    // Every spring body: ropes, spring networks, grid and mesh cloth, jelly (emitters have none).
-    for (auto& body : scene.bodies)
-    {
-      std::visit(
-          [type](auto& def) {
-            if constexpr (!std::is_same_v<std::decay_t<decltype(def)>, particle_sim::core::EmitterDef>)
-              def.integrator.type = type;
-          },
-          body);
-    }
+    // The world's default and every spring body: ropes, spring networks, grid and mesh cloth, jelly.
+    particle_sim::scene::editIntegrators(scene, [type](particle_sim::core::IntegratorDef& def) { def.type = type; });
   }
   std::unique_ptr<particle_sim::core::World> world;
   if (auto status = particle_sim::scene::buildWorld(scene, world); !status)
@@ -192,9 +181,7 @@ int main(int argc, char** argv)
   for (std::uint64_t k = 1; k <= steps; ++k)
   {
     const auto before = Clock::now();
-    // Pins and spheres that follow scripted frames go where the frames are at the end of the step.
-    particle_sim::scene::applyScriptedFrames(scene, world->simTime() + world->dt(), *world);
-    world->step();
+    particle_sim::scene::stepScene(scene, *world);
     const auto after = Clock::now();
     stepping_seconds += std::chrono::duration<double>(after - before).count();
     for (SolverStats& stats : solver_stats)
