@@ -16,13 +16,18 @@
 
 namespace
 {
-constexpr const char* kUsage =
-    "usage: particle_sim_run SCENE.yaml --duration T [--dt DT] [--integrator NAME] [--output states.csv] [--every N]\n"
-    "  SCENE.yaml       scene file (see README, 'Scene files')\n"
-    "  --duration T     sim time to run [s], > 0; duration / dt must give 1 to 2^64 - 1 steps\n"
-    "  --dt DT          physics step [s], overrides the scene's world.dt, in (0, 0.1]\n"
-    "  --integrator NAME  integrator of every spring body (rope, spring network, cloth, jelly): symplectic_euler,\n"
-    "                   verlet, implicit_euler, rk4, auto\n"
+// The integrators are the core's (integratorTypeNames()): one added there is listed here.
+const std::string kUsage =
+    std::string(
+        "usage: particle_sim_run SCENE.yaml --duration T [--dt DT] [--integrator NAME] [--output states.csv] "
+        "[--every N]\n"
+        "  SCENE.yaml       scene file (see README, 'Scene files')\n"
+        "  --duration T     sim time to run [s], > 0; duration / dt must give 1 to 2^64 - 1 steps\n"
+        "  --dt DT          physics step [s], overrides the scene's world.dt, in (0, 0.1]\n"
+        "  --integrator NAME  integrator of every spring body (rope, spring network, cloth, jelly):\n"
+        "                   ") +
+    particle_sim::core::integratorTypeNames() +
+    "\n"
     "  --output FILE    write time,body,index,x,y,z,vx,vy,vz rows for every live particle\n"
     "  --every N        write every N-th step (default 1); the initial state is always written\n";
 
