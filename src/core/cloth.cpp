@@ -6,8 +6,9 @@
 #include <map>
 #include <utility>
 
+#include "particle_sim/core/names.h"
+#include "particle_sim/core/particle_index.h"
 #include "particle_sim/core/validation.h"
-#include "particle_sim/core/world.h"
 
 namespace particle_sim
 {
@@ -28,15 +29,14 @@ Status checkCommon(const std::string& name, const SpringConstants& stretch, cons
   if (Status s = checkPositive("mass", mass); !s) return s;
   if (Status s = checkSpringConstants("stretch.", stretch.stiffness, stretch.damping); !s) return s;
   if (Status s = checkSpringConstants("bend.", bend.stiffness, bend.damping); !s) return s;
-  if (Status s = checkMin("max_strain", strain_limit.max_strain, 0.0); !s) return s;
-  if (Status s = checkIntRange("strain_iterations", strain_limit.iterations, 1, 100000); !s) return s;
+  if (Status s = validate(strain_limit); !s) return s;
   return validate(integrator);
 }
 
 void addPins(const std::vector<int>& pins, int n, std::vector<int>& out)
 {
   for (int pin : pins)
-    out.push_back(pin < 0 ? n + pin : pin);
+    out.push_back(resolveParticleIndex(pin, n));
 }
 }  // namespace
 

@@ -4,8 +4,8 @@
 #include <cmath>
 #include <limits>
 
+#include "particle_sim/core/names.h"
 #include "particle_sim/core/validation.h"
-#include "particle_sim/core/world.h"
 
 namespace particle_sim
 {

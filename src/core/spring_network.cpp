@@ -5,8 +5,9 @@
 #include <cmath>
 #include <limits>
 
+#include "particle_sim/core/names.h"
+#include "particle_sim/core/particle_index.h"
 #include "particle_sim/core/validation.h"
-#include "particle_sim/core/world.h"
 
 namespace particle_sim
 {
@@ -806,7 +807,7 @@ SpringNetworkDef buildRope(const RopeDef& def)
       net.springs.push_back({i, i + 2, 2.0 * segment, def.bend_stiffness, def.bend_damping, SpringClass::Bend});
   }
   for (int pin : def.pins)
-    net.pins.push_back(pin < 0 ? n + pin : pin);
+    net.pins.push_back(resolveParticleIndex(pin, n));
   return net;
 }
 

@@ -142,15 +142,6 @@ std::vector<Case> benchCases(bool quick)
 // ---------------------------------------------------------------------------------------------
 // Setting a scene's integrator and step.
 
-template <class T, class = void>
-struct HasIntegrator : std::false_type
-{
-};
-template <class T>
-struct HasIntegrator<T, std::void_t<decltype(std::declval<T&>().integrator)>> : std::true_type
-{
-};
-
 // The stability guard of issue #6 splits explicit steps into substeps where they would be unstable
 // (IntegratorDef::max_substeps). The bench measures each method as it is: one substep per step.
 // (Compiles with or without that field.)
@@ -177,19 +168,10 @@ void setIntegrator(scene::SceneDef& def, const std::string& name)
   core::IntegratorType type;
   if (!core::parseIntegratorType(name, type)) return;  // emitters' "ballistic": no integrator
   const bool raw = name != "auto";
-  auto apply = [&](core::IntegratorDef& integrator) {
+  scene::editIntegrators(def, [&](core::IntegratorDef& integrator) {
     integrator.type = type;
     if (raw) oneSubstep(integrator, 0);
-  };
-  apply(def.world.integrator);
-  for (auto& body : def.bodies)
-  {
-    std::visit(
-        [&](auto& b) {
-          if constexpr (HasIntegrator<std::decay_t<decltype(b)>>::value) apply(b.integrator);
-        },
-        body);
-  }
+  });
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -272,8 +254,7 @@ bool runOnce(const scene::SceneDef& def, double duration, Run& run, double& seco
   const auto start = Clock::now();
   for (long long k = 1; k <= steps; ++k)
   {
-    scene::applyScriptedFrames(def, world->simTime() + dt, *world);
-    world->step();
+    scene::stepScene(def, *world);
     for (const auto& body : world->bodies())
     {
       if (const auto* spring_body = dynamic_cast<const core::SpringNetworkBody*>(body.get()))

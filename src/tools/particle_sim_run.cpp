@@ -10,21 +10,24 @@
 #include <fstream>
 #include <iostream>
 #include <string>
-#include <type_traits>
-#include <variant>
 #include <vector>
 
 #include "particle_sim/scene/scene.h"
 
 namespace
 {
-constexpr const char* kUsage =
-    "usage: particle_sim_run SCENE.yaml --duration T [--dt DT] [--integrator NAME] [--output states.csv] [--every N]\n"
-    "  SCENE.yaml       scene file (see README, 'Scene files')\n"
-    "  --duration T     sim time to run [s], > 0; duration / dt must give 1 to 2^64 - 1 steps\n"
-    "  --dt DT          physics step [s], overrides the scene's world.dt, in (0, 0.1]\n"
-    "  --integrator NAME  integrator of every spring body (rope, spring network, cloth, jelly): symplectic_euler,\n"
-    "                   verlet, implicit_euler, rk4, auto\n"
+// The integrators are the core's (integratorTypeNames()): one added there is listed here.
+const std::string kUsage =
+    std::string(
+        "usage: particle_sim_run SCENE.yaml --duration T [--dt DT] [--integrator NAME] [--output states.csv] "
+        "[--every N]\n"
+        "  SCENE.yaml       scene file (see README, 'Scene files')\n"
+        "  --duration T     sim time to run [s], > 0; duration / dt must give 1 to 2^64 - 1 steps\n"
+        "  --dt DT          physics step [s], overrides the scene's world.dt, in (0, 0.1]\n"
+        "  --integrator NAME  integrator of every spring body (rope, spring network, cloth, jelly):\n"
+        "                   ") +
+    particle_sim::core::integratorTypeNames() +
+    "\n"
     "  --output FILE    write time,body,index,x,y,z,vx,vy,vz rows for every live particle\n"
     "  --every N        write every N-th step (default 1); the initial state is always written\n";
 
@@ -122,17 +125,8 @@ int main(int argc, char** argv)
   {
     particle_sim::core::IntegratorType type;
     particle_sim::core::parseIntegratorType(integrator_name, type);
-    scene.world.integrator.type = type;
-    // Every spring body: ropes, spring networks, grid and mesh cloth, jelly (emitters have none).
-    for (auto& body : scene.bodies)
-    {
-      std::visit(
-          [type](auto& def) {
-            if constexpr (!std::is_same_v<std::decay_t<decltype(def)>, particle_sim::core::EmitterDef>)
-              def.integrator.type = type;
-          },
-          body);
-    }
+    // The world's default and every spring body: ropes, spring networks, grid and mesh cloth, jelly.
+    particle_sim::scene::editIntegrators(scene, [type](particle_sim::core::IntegratorDef& def) { def.type = type; });
   }
   std::unique_ptr<particle_sim::core::World> world;
   if (auto status = particle_sim::scene::buildWorld(scene, world); !status)
@@ -192,9 +186,7 @@ int main(int argc, char** argv)
   for (std::uint64_t k = 1; k <= steps; ++k)
   {
     const auto before = Clock::now();
-    // Pins and spheres that follow scripted frames go where the frames are at the end of the step.
-    particle_sim::scene::applyScriptedFrames(scene, world->simTime() + world->dt(), *world);
-    world->step();
+    particle_sim::scene::stepScene(scene, *world);
     const auto after = Clock::now();
     stepping_seconds += std::chrono::duration<double>(after - before).count();
     for (SolverStats& stats : solver_stats)

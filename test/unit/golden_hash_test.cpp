@@ -9,12 +9,12 @@
 // The integrator is applied the way `particle_sim_run --integrator NAME` means it: to every spring
 // body of the scene (rope, network, cloth, jelly), after the scene is built, keeping the body's
 // other integrator settings (on the tree of 2026-11-23 this gave, for all 170 pairs, the same
-// state as setting it in every body's definition before the build). Each step first moves what
-// follows scripted frames, then steps the world, as particle_sim_run does. A frame that only tf
-// provides (not scripted in the scene) is not moved offline: what follows it stays where the
-// scene puts it, which is what the core does without a node. A body that freezes (an explicit
-// method that blows up even with its most substeps) is hashed where it stopped; the golden
-// file's comments list such pairs.
+// state as setting it in every body's definition before the build). Each step is scene::stepScene,
+// the step every front-end shares: it first moves what follows scripted frames, then steps the
+// world. A frame that only tf provides (not scripted in the scene) is not moved offline: what
+// follows it stays where the scene puts it, which is what the core does without a node. A body
+// that freezes (an explicit method that blows up even with its most substeps) is hashed where it
+// stopped; the golden file's comments list such pairs.
 //
 // A deliberate physics change regenerates the golden file in its own commit, saying why:
 //
@@ -120,10 +120,7 @@ std::string runAndHash(const scene::SceneDef& scene_def, core::IntegratorType ty
   // The step count of particle_sim_run --duration 2.
   const auto steps = static_cast<std::uint64_t>(std::ceil(kSimTime / world->dt() - 1e-9));
   for (std::uint64_t k = 0; k < steps; ++k)
-  {
-    scene::applyScriptedFrames(scene_def, world->simTime() + world->dt(), *world);
-    world->step();
-  }
+    scene::stepScene(scene_def, *world);
   for (const auto& body : world->bodies())
     if (const core::SpringNetworkBody* spring_body = world->findSpringBody(body->name());
         spring_body && spring_body->frozen())

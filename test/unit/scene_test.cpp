@@ -5,8 +5,10 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <sstream>
 #include <utility>
 #include <vector>
@@ -280,6 +282,55 @@ TEST(SceneFiles, ReadsGridClothWithNamedPinsFramePinsAirAndFrames)
   EXPECT_TRUE((world->findSpringBody("c")->pinTarget(11) - Eigen::Vector3d(0.5, 0, 1.9)).norm() < 1e-12);
   ASSERT_TRUE(scene::applyScriptedFrames(def, 2.0, *world).ok);  // half a turn
   EXPECT_TRUE((world->findSpringBody("c")->pinTarget(11) - Eigen::Vector3d(-0.5, 0, 1.9)).norm() < 1e-12);
+}
+
+// The step every front-end shares: the frame pin and the sphere go where the scripted frame is at
+// the end of the step (t + dt), and the world advances one step.
+TEST(SceneStep, MovesScriptedFollowersToTheEndOfTheStepThenStepsTheWorld)
+{
+  const scene::SceneDef def = parseOk(
+      "world: {dt: 0.1, spheres: [{name: ball, center: [9, 9, 9], radius: 0.1, frame: gripper}]}\n"
+      "frames:\n  - {name: gripper, center: [0, 0, 2], radius: 0.5, period: 4}\n"
+      "bodies:\n"
+      "  - name: c\n    kind: cloth\n    resolution: [4, 3]\n"
+      "    frame_pins:\n      - {pin: corner_11, frame: gripper, offset: [0, 0, -0.1]}\n");
+  std::unique_ptr<core::World> world;
+  ASSERT_TRUE(scene::buildWorld(def, world).ok);
+  ASSERT_TRUE(scene::stepScene(def, *world).ok);
+  EXPECT_EQ(world->stepCount(), 1u);
+  // At t = dt = 0.1 s the frame has turned 2π · 0.1 / 4 around its centre, on a 0.5 m radius.
+  const double angle = 2.0 * M_PI * 0.1 / 4.0;
+  const Eigen::Vector3d frame(0.5 * std::cos(angle), 0.5 * std::sin(angle), 2.0);
+  EXPECT_LT((world->findSpringBody("c")->pinTarget(11) - (frame + Eigen::Vector3d(0, 0, -0.1))).norm(), 1e-12);
+  EXPECT_LT((world->findSpringBody("c")->particles().position.col(11) - (frame + Eigen::Vector3d(0, 0, -0.1))).norm(),
+            1e-12);  // a pinned particle ends the step on its target
+  EXPECT_LT((world->environment().spheres[0].center - frame).norm(), 1e-12);
+}
+
+// What particle_sim_run --integrator and the bench set: the world's default and every spring body.
+TEST(SceneStep, EditIntegratorsReachesTheWorldAndEverySpringBody)
+{
+  scene::SceneDef def = parseOk(
+      "world: {integrator: implicit_euler}\n"
+      "bodies:\n  - {name: f, kind: emitter, type: fountain}\n  - {name: r, kind: rope}\n"
+      "  - {name: n, kind: spring_network, particles: [{position: [0, 0, 1]}]}\n"
+      "  - {name: g, kind: cloth}\n"
+      "  - {name: m, kind: cloth, vertices: [[0, 0, 1], [1, 0, 1], [0, 1, 1]], triangles: [[0, 1, 2]]}\n"
+      "  - {name: j, kind: jelly}\n");
+  int edited = 0;
+  scene::editIntegrators(def, [&](core::IntegratorDef& integrator) {
+    integrator.type = core::IntegratorType::Rk4;
+    ++edited;
+  });
+  EXPECT_EQ(edited, 6);  // the world and five spring bodies; the emitter has no integrator
+  EXPECT_EQ(def.world.integrator.type, core::IntegratorType::Rk4);
+  std::unique_ptr<core::World> world;
+  ASSERT_TRUE(scene::buildWorld(def, world).ok);
+  for (const char* name : {"r", "n", "g", "m", "j"})
+  {
+    ASSERT_NE(world->findSpringBody(name), nullptr) << name;
+    EXPECT_EQ(world->findSpringBody(name)->integrator().type, core::IntegratorType::Rk4) << name;
+  }
 }
 
 TEST(SceneFiles, ReadsMeshClothFromAnObjFileRelativeToTheScene)

@@ -38,6 +38,9 @@ struct StrainLimitDef
   int iterations = 50;      ///< cap on relaxation passes, >= 1 (the limit holds exactly only with enough)
 };
 
+/// max_strain >= 0 and iterations in [1, 100000]; every body kind with a strain limit checks it here.
+Status validate(const StrainLimitDef& def);
+
 /// A body of particles joined by springs. Ropes, cloth and jelly are builders of this one
 /// structure, not separate physics.
 struct SpringNetworkDef

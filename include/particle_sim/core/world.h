@@ -11,6 +11,7 @@
 #include "particle_sim/core/environment.h"
 #include "particle_sim/core/integrator.h"
 #include "particle_sim/core/jelly.h"
+#include "particle_sim/core/names.h"  // body names follow validateBodyName()
 #include "particle_sim/core/spring_network.h"
 #include "particle_sim/core/status.h"
 
@@ -36,10 +37,6 @@ struct WorldDef
 constexpr double kMaxDt = 0.1;
 
 Status validate(const WorldDef& def);
-
-/// Body names: 1 to limits::kMaxNameLength characters, of letters, digits, '_', '-' and '/', not
-/// starting with '_' (reserved).
-Status validateBodyName(const std::string& name);
 
 /// A deterministic per-body seed from the world seed and the body name (FNV-1a hash), for
 /// bodies that do not set their own seed.

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <functional>
 #include <memory>
 #include <string>
 #include <variant>
@@ -67,6 +68,18 @@ const ScriptedFrameDef* findFrame(const SceneDef& scene, const std::string& name
 /// targets (frame position + offset) and sphere centres. Frames that are not scripted are left to
 /// the caller (the node looks them up on tf).
 core::Status applyScriptedFrames(const SceneDef& scene, double t, core::World& world);
+
+/// The one step every front-end shares (the node, the nodelet, particle_sim_run, particle_sim_bench,
+/// the golden test): moves what follows scripted frames to where the frames are at the end of the
+/// step (sim time + dt), then advances the world by one step of dt. The world steps even when a
+/// follower could not be moved; the status says why. Frames that only tf provides are the node's to
+/// move before calling this.
+core::Status stepScene(const SceneDef& scene, core::World& world);
+
+/// Applies `edit` to the world's default integrator and to the integrator of every spring body of
+/// `scene` (rope, spring network, grid and mesh cloth, jelly; emitters have none), before the world
+/// is built: what `particle_sim_run --integrator` and the bench mean by "this integrator".
+void editIntegrators(SceneDef& scene, const std::function<void(core::IntegratorDef&)>& edit);
 
 /// Parses scene YAML text. Unknown keys, wrong types and out-of-range or non-finite values are
 /// refused with a message that starts with `source:line:` and names the key, the value and what is

@@ -1,0 +1,80 @@
+#pragma once
+// YAML reading and writing of the scene's parts, side by side: one unit per body kind
+// (emitter.cpp, rope.cpp, spring_network.cpp, cloth.cpp, jelly.cpp), the world and scripted frames
+// (world.cpp), and the pieces they share (common.cpp). Private to the scene layer: scene.cpp
+// orchestrates them (parseScene, toYaml).
+
+#include <yaml-cpp/yaml.h>
+
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "../map_reader.h"
+#include "particle_sim/scene/scene.h"
+
+namespace particle_sim
+{
+namespace scene
+{
+namespace body_yaml
+{
+// ---- Shared pieces (common.cpp)
+
+// Fails at `reader`'s node with a core validation message, prefixed by the entry's path.
+void check(const MapReader& reader, const std::string& prefix, const Status& status);
+
+// The integrator keys, read at world level (the default) and per body (an override), and written.
+void readIntegrator(MapReader& reader, core::IntegratorDef& integrator);
+void writeIntegrator(YAML::Node node, const core::IntegratorDef& integrator);
+
+// Reads {stiffness, damping} of one spring class; writes it as a flow mapping.
+void readSpringConstants(MapReader& parent, const std::string& key, double& stiffness, double& damping,
+                         const std::string& source);
+YAML::Node springConstants(double stiffness, double damping);
+// The stretch, shear (when `shear` is given) and bend constants of cloth and jelly.
+void readClothConstants(MapReader& reader, core::SpringConstants& stretch, core::SpringConstants* shear,
+                        core::SpringConstants& bend, const std::string& source);
+
+// A list of integer particle indices.
+std::vector<int> readIndexList(MapReader& reader, const std::string& key);
+YAML::Node indexList(const std::vector<int>& values);
+// Pins given by index (negative counts from the end) or, where `names` is given, by name.
+void readPins(MapReader& reader, std::vector<int>& indices, std::vector<std::string>* names);
+
+// Provot's strain limit keys (max_strain, strain_iterations) of cloth and jelly.
+void readStrainLimit(MapReader& reader, core::StrainLimitDef& limit);
+void writeStrainLimit(YAML::Node node, const core::StrainLimitDef& limit);
+
+// [x, y, z] as a flow sequence.
+YAML::Node vector3(const Eigen::Vector3d& v);
+
+// ---- World settings and scripted frames (world.cpp)
+
+void readWorld(const YAML::Node& node, const std::string& source, SceneDef& scene);
+void readFrames(const YAML::Node& node, const std::string& source, SceneDef& scene);
+// Writes root["world"] and root["frames"].
+void writeWorld(YAML::Node root, const SceneDef& scene);
+
+// ---- One unit per body kind: read (entry `reader` of the bodies list) and write
+
+core::EmitterDef readEmitter(MapReader& reader, const core::WorldDef& world);
+YAML::Node writeEmitter(const core::EmitterDef& def);
+
+core::RopeDef readRope(MapReader& reader, const core::WorldDef& world, const std::string& source);
+YAML::Node writeRope(const core::RopeDef& def);
+
+core::SpringNetworkDef readSpringNetwork(MapReader& reader, const core::WorldDef& world, const std::string& source);
+YAML::Node writeSpringNetwork(const core::SpringNetworkDef& def);
+
+// A grid or a mesh cloth; adds its frame pins to `scene`.
+BodyDef readCloth(MapReader& reader, SceneDef& scene, const std::string& source);
+YAML::Node writeClothGrid(const SceneDef& scene, const core::ClothGridDef& def);
+YAML::Node writeMeshCloth(const SceneDef& scene, const core::MeshClothDef& def);
+
+core::JellyDef readJelly(MapReader& reader, SceneDef& scene, const std::string& source);
+YAML::Node writeJelly(const core::JellyDef& def);
+
+}  // namespace body_yaml
+}  // namespace scene
+}  // namespace particle_sim

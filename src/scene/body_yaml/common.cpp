@@ -1,0 +1,133 @@
+#include "body_yaml.h"
+
+namespace particle_sim
+{
+namespace scene
+{
+namespace body_yaml
+{
+void check(const MapReader& reader, const std::string& prefix, const Status& status)
+{
+  if (!status) reader.fail(reader.node(), prefix + status.message);
+}
+
+void readIntegrator(MapReader& reader, core::IntegratorDef& integrator)
+{
+  std::string name;
+  reader.read("integrator", name);
+  if (reader.has("integrator"))
+  {
+    if (!core::parseIntegratorType(name, integrator.type))
+      reader.fail(reader.node()["integrator"], reader.field("integrator") + " = " + core::quoteReceived(name) +
+                                                   " is not an integrator; allowed: " + core::integratorTypeNames());
+  }
+  reader.read("verlet_damping", integrator.verlet_damping);
+  reader.read("cg_tolerance", integrator.cg_tolerance);
+  reader.read("cg_max_iterations", integrator.cg_max_iterations);
+  reader.read("max_substeps", integrator.max_substeps);
+}
+
+void writeIntegrator(YAML::Node node, const core::IntegratorDef& i)
+{
+  node["integrator"] = core::toString(i.type);
+  node["verlet_damping"] = i.verlet_damping;
+  node["cg_tolerance"] = i.cg_tolerance;
+  node["cg_max_iterations"] = i.cg_max_iterations;
+  node["max_substeps"] = i.max_substeps;
+}
+
+void readSpringConstants(MapReader& parent, const std::string& key, double& stiffness, double& damping,
+                         const std::string& source)
+{
+  const YAML::Node node = parent.child(key);
+  if (!node) return;
+  MapReader reader(node, parent.field(key), source);
+  reader.read("stiffness", stiffness);
+  reader.read("damping", damping);
+  reader.finish();
+}
+
+YAML::Node springConstants(double stiffness, double damping)
+{
+  YAML::Node node;
+  node.SetStyle(YAML::EmitterStyle::Flow);
+  node["stiffness"] = stiffness;
+  node["damping"] = damping;
+  return node;
+}
+
+void readClothConstants(MapReader& reader, core::SpringConstants& stretch, core::SpringConstants* shear,
+                        core::SpringConstants& bend, const std::string& source)
+{
+  readSpringConstants(reader, "stretch", stretch.stiffness, stretch.damping, source);
+  if (shear) readSpringConstants(reader, "shear", shear->stiffness, shear->damping, source);
+  readSpringConstants(reader, "bend", bend.stiffness, bend.damping, source);
+}
+
+std::vector<int> readIndexList(MapReader& reader, const std::string& key)
+{
+  std::vector<int> values;
+  const YAML::Node node = reader.child(key);
+  if (!node) return values;
+  if (!node.IsSequence()) reader.fail(node, reader.field(key) + " must be a list of particle indices");
+  for (std::size_t i = 0; i < node.size(); ++i)
+  {
+    int value = 0;
+    if (!node[i].IsScalar() || !YAML::convert<int>::decode(node[i], value))
+      reader.fail(node[i], reader.field(key) + "[" + std::to_string(i) + "] must be an integer particle index");
+    values.push_back(value);
+  }
+  return values;
+}
+
+YAML::Node indexList(const std::vector<int>& values)
+{
+  YAML::Node node(YAML::NodeType::Sequence);
+  node.SetStyle(YAML::EmitterStyle::Flow);
+  for (int v : values)
+    node.push_back(v);
+  return node;
+}
+
+void readPins(MapReader& reader, std::vector<int>& indices, std::vector<std::string>* names)
+{
+  const YAML::Node node = reader.child("pins");
+  if (!node) return;
+  if (!node.IsSequence()) reader.fail(node, reader.field("pins") + " must be a list of particle indices");
+  for (std::size_t i = 0; i < node.size(); ++i)
+  {
+    int value = 0;
+    if (node[i].IsScalar() && YAML::convert<int>::decode(node[i], value))
+      indices.push_back(value);
+    else if (names && node[i].IsScalar())
+      names->push_back(node[i].Scalar());
+    else
+      reader.fail(node[i], reader.field("pins") + "[" + std::to_string(i) + "] must be an integer particle index" +
+                               (names ? std::string(" or a pin name") : std::string()));
+  }
+}
+
+void readStrainLimit(MapReader& reader, core::StrainLimitDef& limit)
+{
+  reader.read("max_strain", limit.max_strain);
+  reader.read("strain_iterations", limit.iterations);
+}
+
+void writeStrainLimit(YAML::Node node, const core::StrainLimitDef& limit)
+{
+  node["max_strain"] = limit.max_strain;
+  node["strain_iterations"] = limit.iterations;
+}
+
+YAML::Node vector3(const Eigen::Vector3d& v)
+{
+  YAML::Node node;
+  node.SetStyle(YAML::EmitterStyle::Flow);
+  for (int i = 0; i < 3; ++i)
+    node.push_back(v[i]);
+  return node;
+}
+
+}  // namespace body_yaml
+}  // namespace scene
+}  // namespace particle_sim

@@ -1,0 +1,69 @@
+// What a scene does while it runs: its scripted frames move, what follows them moves along, and
+// the one step every front-end shares (stepScene).
+
+#include <cmath>
+#include <type_traits>
+
+#include "particle_sim/scene/scene.h"
+
+namespace particle_sim
+{
+namespace scene
+{
+Eigen::Vector3d ScriptedFrameDef::position(double t) const
+{
+  const double angle = 2.0 * M_PI * t / period + phase;
+  return center + radius * Eigen::Vector3d(std::cos(angle), std::sin(angle), 0.0);
+}
+
+const ScriptedFrameDef* findFrame(const SceneDef& scene, const std::string& name)
+{
+  for (const ScriptedFrameDef& frame : scene.frames)
+  {
+    if (frame.name == name) return &frame;
+  }
+  return nullptr;
+}
+
+core::Status applyScriptedFrames(const SceneDef& scene, double t, core::World& world)
+{
+  for (const FramePinDef& pin : scene.frame_pins)
+  {
+    const ScriptedFrameDef* frame = findFrame(scene, pin.frame);
+    core::SpringNetworkBody* body = world.findSpringBody(pin.body);
+    if (!frame || !body || !body->isPinned(pin.index)) continue;
+    if (core::Status s = body->setPinTarget(pin.index, frame->position(t) + pin.offset); !s) return s;
+  }
+  for (const FrameSphereDef& follower : scene.frame_spheres)
+  {
+    if (const ScriptedFrameDef* frame = findFrame(scene, follower.frame))
+    {
+      if (core::Status s = world.setSphereCenter(follower.sphere, frame->position(t)); !s) return s;
+    }
+  }
+  return core::Status::success();
+}
+
+core::Status stepScene(const SceneDef& scene, core::World& world)
+{
+  // Pins and spheres that follow scripted frames go where the frames are at the end of the step.
+  const core::Status moved = applyScriptedFrames(scene, world.simTime() + world.dt(), world);
+  world.step();
+  return moved;
+}
+
+void editIntegrators(SceneDef& scene, const std::function<void(core::IntegratorDef&)>& edit)
+{
+  edit(scene.world.integrator);
+  for (BodyDef& body : scene.bodies)
+  {
+    std::visit(
+        [&](auto& def) {
+          if constexpr (!std::is_same_v<std::decay_t<decltype(def)>, core::EmitterDef>) edit(def.integrator);
+        },
+        body);
+  }
+}
+
+}  // namespace scene
+}  // namespace particle_sim
