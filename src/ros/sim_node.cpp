@@ -275,9 +275,9 @@ void SimNode::stepPhysics(std::uint64_t steps)
   for (std::uint64_t i = 0; i < steps; ++i)
   {
     frame_followers_.moveTargets(*world_, i, steps);
-    // Scripted frames are known exactly: where they are at the end of this step.
-    scene::applyScriptedFrames(scene_, world_->simTime() + world_->dt(), *world_);
-    world_->step();
+    // The step every front-end shares: scripted frames where they are at the end of this step
+    // (known exactly), then the world's step.
+    scene::stepScene(scene_, *world_);
   }
   const double seconds = secondsSince(start);
   for (Window* window : {&status_window_, &diagnostics_window_})
