@@ -1,9 +1,10 @@
 # Shared by the shell tests that need a ROS master: sourced, not run. Sets up a private master
 # URI on a free port, a scratch folder, and cleanup of every process the test started.
-#   PARTICLE_SIM_BUILD   build folder whose devel/setup.bash is sourced (default: <package>/build)
+#   PARTICLE_SIM_BUILD   workspace whose devel/setup.bash is sourced (default: the one scripts/common.sh
+#                        uses, ../<checkout>_ws)
 export PATH="/usr/bin:$PATH"
 PARTICLE_SIM_ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
-PARTICLE_SIM_BUILD="${PARTICLE_SIM_BUILD:-$PARTICLE_SIM_ROOT/build}"
+PARTICLE_SIM_BUILD="${PARTICLE_SIM_BUILD:-$(dirname "$PARTICLE_SIM_ROOT")/$(basename "$PARTICLE_SIM_ROOT")_ws}"
 set +u  # ROS's setup files read unset variables
 # shellcheck disable=SC1091
 source "$PARTICLE_SIM_BUILD/devel/setup.bash"
