@@ -11,7 +11,7 @@
 set -uo pipefail
 
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
-build="${PARTICLE_SIM_BUILD:-$root/build}"
+build="${PARTICLE_SIM_BUILD:-$(dirname "$root")/$(basename "$root")_ws}"
 run="${PARTICLE_SIM_RUN:-$build/devel/lib/particle_sim/particle_sim_run}"
 if [ ! -x "$run" ]; then
   echo "FAIL: particle_sim_run not found at $run (build first, or set PARTICLE_SIM_BUILD)" >&2
