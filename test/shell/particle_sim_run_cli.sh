@@ -7,7 +7,7 @@
 # Exits 0 when every check passes, 1 with a message per failed check otherwise.
 #
 # The binary is $PARTICLE_SIM_RUN, else $PARTICLE_SIM_BUILD/devel/lib/particle_sim/particle_sim_run
-# (PARTICLE_SIM_BUILD defaults to the package's build/ folder).
+# (PARTICLE_SIM_BUILD defaults to the workspace scripts/common.sh uses, ../<checkout>_ws).
 set -uo pipefail
 
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
