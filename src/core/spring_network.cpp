@@ -5,6 +5,8 @@
 #include <cmath>
 #include <limits>
 
+#include "particle_sim/core/forces/spring_body_forces.h"
+#include "particle_sim/core/forces/springs.h"
 #include "particle_sim/core/validation.h"
 #include "particle_sim/core/world.h"
 
@@ -117,7 +119,8 @@ Status validate(const SpringNetworkDef& def, int max_particles)
   return validate(def.integrator);
 }
 
-SpringNetworkBody::SpringNetworkBody(const SpringNetworkDef& def) : Body(def.name), def_(def)
+SpringNetworkBody::SpringNetworkBody(const SpringNetworkDef& def)
+    : Body(def.name), def_(def), forces_(makeSpringBodyForces(def_.springs, def_.baraff_witkin, def_.triangles))
 {
   const int n = static_cast<int>(def_.positions.size());
   particles_.resize(n, n);
@@ -137,19 +140,11 @@ SpringNetworkBody::SpringNetworkBody(const SpringNetworkDef& def) : Body(def.nam
     rk_kx_[k].setZero(3, n);
     rk_kv_[k].setZero(3, n);
   }
-  // The implicit system couples the two ends of every spring; each spring keeps the indices of
-  // its four blocks (ii, ij, ji, jj).
-  // Baraff–Witkin elements couple the corners of each triangle and of each bend pair.
+  // The implicit system's pattern: the particle pairs every force element couples, bound once.
   std::vector<std::pair<int, int>> pairs;
-  for (const Spring& spring : def_.springs)
-    pairs.emplace_back(spring.i, spring.j);
-  if (!def_.baraff_witkin.empty())
-  {
-    baraff_witkin_.emplace(def_.baraff_witkin);
-    baraff_witkin_->coupledPairs(pairs);
-  }
+  forces_.coupledPairs(pairs);
   implicit_solver_.setPattern(n, pairs);
-  if (baraff_witkin_) baraff_witkin_->setPattern(implicit_solver_);
+  forces_.bindPattern(implicit_solver_);
   step_target_.setZero(3, n);
 
   // The size of the body's energy, for the blow-up check: total mass · extent.
@@ -162,12 +157,6 @@ SpringNetworkBody::SpringNetworkBody(const SpringNetworkDef& def) : Body(def.nam
     total_mass += def_.masses[i];
   }
   energy_scale_ = total_mass * std::max((high - low).norm(), 1e-3);
-  for (const Spring& spring : def_.springs)
-  {
-    spring_blocks_.push_back(
-        {implicit_solver_.blockIndex(spring.i, spring.i), implicit_solver_.blockIndex(spring.i, spring.j),
-         implicit_solver_.blockIndex(spring.j, spring.i), implicit_solver_.blockIndex(spring.j, spring.j)});
-  }
   reset();
 }
 
@@ -191,16 +180,7 @@ void SpringNetworkBody::reset()
     p.inverse_mass[index] = 0.0;
     pin_target_.col(index) = def_.positions[index];
   }
-  springs_ = def_.springs;
-  if (baraff_witkin_)
-  {
-    for (SpringClass c : {SpringClass::Stretch, SpringClass::Shear, SpringClass::Bend})
-    {
-      const BaraffWitkinDef& bw = def_.baraff_witkin;
-      const SpringConstants& k = c == SpringClass::Stretch ? bw.stretch : c == SpringClass::Shear ? bw.shear : bw.bend;
-      baraff_witkin_->setConstants(c, k.stiffness, k.damping);
-    }
-  }
+  forces_.resetConstants();
   integrator_ = def_.integrator;
   updateStabilityBound();
   stability_events_ = 0;
@@ -269,14 +249,14 @@ int SpringNetworkBody::nearestParticle(const Eigen::Vector3d& point) const
   return best;
 }
 
-bool SpringNetworkBody::hasSpringClass(SpringClass spring_class) const
+const std::vector<Spring>& SpringNetworkBody::springs() const
 {
-  if (baraff_witkin_ && (spring_class != SpringClass::Bend || !baraff_witkin_->definition().bends.empty())) return true;
-  for (const Spring& spring : springs_)
-  {
-    if (spring.spring_class == spring_class) return true;
-  }
-  return false;
+  return forces_.find<SpringForces>()->springs();  // makeSpringBodyForces() always adds one
+}
+
+double SpringNetworkBody::dampingBound() const
+{
+  return damping_bound_ + forces_.uniformDampingRate(forceContext(Eigen::Vector3d::Zero()));  // no gravity in it
 }
 
 Status SpringNetworkBody::setSpringConstants(std::optional<SpringClass> spring_class, double stiffness, double damping)
@@ -285,19 +265,7 @@ Status SpringNetworkBody::setSpringConstants(std::optional<SpringClass> spring_c
   if (spring_class && !hasSpringClass(*spring_class))
     return Status::failure("spring_class = '" + std::string(toString(*spring_class)) + "': body '" + name() +
                            "' has no such springs");
-  for (Spring& spring : springs_)
-  {
-    if (spring_class && spring.spring_class != *spring_class) continue;
-    spring.stiffness = stiffness;
-    spring.damping = damping;
-  }
-  if (baraff_witkin_)
-  {
-    for (SpringClass c : {SpringClass::Stretch, SpringClass::Shear, SpringClass::Bend})
-    {
-      if (!spring_class || *spring_class == c) baraff_witkin_->setConstants(c, stiffness, damping);
-    }
-  }
+  forces_.setClassConstants(spring_class, stiffness, damping);
   updateStabilityBound();
   return Status::success();
 }
@@ -320,53 +288,12 @@ Status SpringNetworkBody::setIntegrator(const IntegratorDef& integrator)
 void SpringNetworkBody::computeForces(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v,
                                       const Eigen::Vector3d& gravity, Eigen::Matrix3Xd& force) const
 {
-  for (int i = 0; i < x.cols(); ++i)
-    force.col(i) = mass_[i] * gravity;
-  for (const Spring& s : springs_)
-  {
-    const Eigen::Vector3d f =
-        springForce(x.col(s.i), x.col(s.j), v.col(s.i), v.col(s.j), s.rest_length, s.stiffness, s.damping);
-    force.col(s.i) += f;
-    force.col(s.j) -= f;
-  }
-  if (baraff_witkin_) baraff_witkin_->addForces(x, v, force);
-  addAirForces(x, v, force);
-  // Global damping (Environment::damping): f −= damping · m · v (explicit, also in implicit steps).
-  if (damping_ != 0.0)
-  {
-    for (int i = 0; i < x.cols(); ++i)
-      force.col(i) -= damping_ * mass_[i] * v.col(i);
-  }
-}
-
-void SpringNetworkBody::addAirForces(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v,
-                                     Eigen::Matrix3Xd& force) const
-{
-  if (air_.drag == 0.0) return;
-  // Per triangle: f = drag · A · ((wind − v̄)·n) n with A n = (e1 × e2) / 2, shared by the corners.
-  for (const Eigen::Vector3i& t : def_.triangles)
-  {
-    const Eigen::Vector3d area_normal = 0.5 * (x.col(t[1]) - x.col(t[0])).cross(x.col(t[2]) - x.col(t[0]));
-    const double area = area_normal.norm();
-    if (area == 0.0) continue;
-    const Eigen::Vector3d relative = air_.wind - (v.col(t[0]) + v.col(t[1]) + v.col(t[2])) / 3.0;
-    // A ((u·n) n) = (u·(A n)) (A n) / A
-    const Eigen::Vector3d f = air_.drag * relative.dot(area_normal) / area * area_normal;
-    for (int c = 0; c < 3; ++c)
-      force.col(t[c]) += f / 3.0;
-  }
+  forces_.computeForces(forceContext(gravity), x, v, force);
 }
 
 double SpringNetworkBody::maxStrain() const
 {
-  double strain = baraff_witkin_ ? baraff_witkin_->maxStrain(particles_.position) : 0.0;
-  for (const Spring& s : springs_)
-  {
-    if (s.spring_class == SpringClass::Bend || s.rest_length == 0.0) continue;
-    const double length = (particles_.position.col(s.j) - particles_.position.col(s.i)).norm();
-    strain = std::max(strain, (length - s.rest_length) / s.rest_length);
-  }
-  return strain;
+  return forces_.maxStrain(particles_.position);
 }
 
 void SpringNetworkBody::limitStrain(double h)
@@ -381,7 +308,7 @@ void SpringNetworkBody::limitStrain(double h)
   for (int pass = 0; pass < limit.iterations; ++pass)
   {
     bool over = false;
-    for (const Spring& s : springs_)
+    for (const Spring& s : def_.springs)
     {
       if (s.spring_class == SpringClass::Bend) continue;
       const double w_i = p.inverse_mass[s.i], w_j = p.inverse_mass[s.j];
@@ -422,15 +349,7 @@ double SpringNetworkBody::kineticEnergy() const
 
 double SpringNetworkBody::potentialEnergy(const Eigen::Vector3d& gravity) const
 {
-  double energy = 0.0;
-  for (const Spring& s : springs_)
-    energy += springEnergy(particles_.position.col(s.i), particles_.position.col(s.j), s.rest_length, s.stiffness);
-  for (int i = 0; i < particles_.size(); ++i)
-  {
-    if (!pinned_[i]) energy -= mass_[i] * gravity.dot(particles_.position.col(i));
-  }
-  if (baraff_witkin_) energy += baraff_witkin_->energy(particles_.position);
-  return energy;
+  return forces_.energy(forceContext(gravity), particles_.position);
 }
 
 Eigen::Vector3d SpringNetworkBody::momentum() const
@@ -449,7 +368,7 @@ Eigen::Vector3d SpringNetworkBody::momentum() const
 void SpringNetworkBody::step(double dt, const Environment& env)
 {
   if (frozen()) return;
-  air_ = def_.triangles.empty() ? AirDef{} : env.air;
+  air_ = env.air;
   damping_ = env.damping;
   ParticlePool& p = particles_;
   const int n = p.size();
@@ -591,15 +510,7 @@ void SpringNetworkBody::updateStabilityBound()
   // alike for damping; the bound is the largest row over the mass of its (free) particle.
   const int n = particles_.size();
   std::vector<double> stiffness_rows(n, 0.0), damping_rows(n, 0.0);
-  for (const Spring& s : springs_)
-  {
-    for (int end : {s.i, s.j})
-    {
-      stiffness_rows[end] += 2.0 * s.stiffness;
-      damping_rows[end] += 2.0 * s.damping;
-    }
-  }
-  if (baraff_witkin_) baraff_witkin_->addStabilityRows(def_.positions, stiffness_rows, damping_rows);
+  forces_.addStabilityRows(def_.positions, stiffness_rows, damping_rows);
   omega_bound_ = 0.0;
   damping_bound_ = 0.0;
   for (int i = 0; i < n; ++i)
@@ -662,38 +573,13 @@ void SpringNetworkBody::stepVerlet(double h, const Eigen::Vector3d& gravity)
   last_solve_ = SolverReport{};
 }
 
-void SpringNetworkBody::assembleImplicit(const Eigen::Matrix3Xd& x)
-{
-  // Springs: ∂f_i/∂x_i = ∂f_j/∂x_j = −∂f_i/∂x_j = −∂f_j/∂x_i (definite form), alike for v.
-  for (std::size_t s = 0; s < springs_.size(); ++s)
-  {
-    const Spring& spring = springs_[s];
-    Eigen::Matrix3d dfdx, dfdv;
-    springJacobians(x.col(spring.i), x.col(spring.j), spring.rest_length, spring.stiffness, spring.damping, true, dfdx,
-                    dfdv);
-    const auto& blocks = spring_blocks_[s];
-    implicit_solver_.addBlock(blocks[0], dfdx, dfdv);
-    implicit_solver_.addBlock(blocks[1], -dfdx, -dfdv);
-    implicit_solver_.addBlock(blocks[2], -dfdx, -dfdv);
-    implicit_solver_.addBlock(blocks[3], dfdx, dfdv);
-  }
-  // Baraff–Witkin conditions, in their definite form.
-  if (baraff_witkin_) baraff_witkin_->addJacobians(x, implicit_solver_);
-  // Global damping f = −c m v: ∂f_i/∂v_i = −c m_i I.
-  if (damping_ != 0.0)
-  {
-    for (int i = 0; i < x.cols(); ++i)
-      implicit_solver_.addToDiagonal(i, Eigen::Matrix3d::Zero(), -damping_ * mass_[i] * Eigen::Matrix3d::Identity());
-  }
-}
-
 void SpringNetworkBody::stepImplicitEuler(double h, const Eigen::Vector3d& gravity)
 {
   ParticlePool& p = particles_;
   const int n = p.size();
 
   // Without moving pins or wind nothing does work on the body, so its energy must not grow.
-  bool conservative = air_.drag == 0.0 || air_.wind.isZero();
+  bool conservative = !forces_.suppliesEnergy(forceContext(gravity));
   for (int i = 0; i < n && conservative; ++i)
     conservative = !pinned_[i] || p.velocity.col(i).isZero();
   const double energy_before = conservative ? mechanicalEnergy(gravity) : 0.0;
@@ -703,7 +589,7 @@ void SpringNetworkBody::stepImplicitEuler(double h, const Eigen::Vector3d& gravi
   // 1. Baraff & Witkin's step: one linearisation at (x0, v0).
   computeForces(p.position, p.velocity, gravity, force_);
   implicit_solver_.begin(h, mass_, force_, &implicit_v0_);
-  assembleImplicit(p.position);
+  forces_.addJacobians(forceContext(gravity), p.position, implicit_solver_);
   last_solve_ =
       implicit_solver_.solve(pinned_, integrator_.cg_tolerance, integrator_.cg_max_iterations, p.position, p.velocity);
   if (!conservative || last_solve_.breakdown) return;
@@ -719,7 +605,7 @@ void SpringNetworkBody::stepImplicitEuler(double h, const Eigen::Vector3d& gravi
     for (int i = 0; i < n; ++i)
       force_.col(i) -= mass_[i] * (p.velocity.col(i) - implicit_v0_.col(i)) / h;
     implicit_solver_.begin(h, mass_, force_, nullptr);
-    assembleImplicit(p.position);
+    forces_.addJacobians(forceContext(gravity), p.position, implicit_solver_);
     p.position = implicit_x0_;  // the solve sets x = x0 + h v_{k+1}
     last_solve_ = implicit_solver_.solve(pinned_, integrator_.cg_tolerance, integrator_.cg_max_iterations, p.position,
                                          p.velocity);

@@ -6,8 +6,9 @@
 #include <string>
 #include <vector>
 
-#include "particle_sim/core/baraff_witkin_model.h"
 #include "particle_sim/core/body.h"
+#include "particle_sim/core/forces/baraff_witkin_model.h"
+#include "particle_sim/core/forces/force_set.h"
 #include "particle_sim/core/implicit_euler_solver.h"
 #include "particle_sim/core/integrator.h"
 #include "particle_sim/core/spring.h"
@@ -60,8 +61,10 @@ struct SpringNetworkDef
 /// field (e.g. "springs[3].stiffness"), its value and the allowed range.
 Status validate(const SpringNetworkDef& def, int max_particles);
 
-/// A spring network: particles (struct-of-arrays pool), springs and pins, advanced by its chosen
-/// integrator. Forces: gravity m g on every particle and the lecture's spring forces.
+/// A spring network: particles (struct-of-arrays pool), pins and force elements, advanced by its
+/// chosen integrator. The forces are a ForceSet (makeSpringBodyForces(): gravity, springs,
+/// Baraff–Witkin conditions, air, global damping); the body asks it for forces, Jacobian blocks,
+/// stability rows, energy and run-time constants, and knows none of the elements by name.
 ///
 /// Pins make a particle kinematic (inverse mass 0): during each step it moves in a straight line
 /// to its pin target, and it ends the step exactly there. Targets can be moved between steps (a
@@ -108,13 +111,16 @@ public:
   /// Index of the particle nearest to `point`.
   int nearestParticle(const Eigen::Vector3d& point) const;
 
-  // Springs and Baraff–Witkin conditions ------------------------------------------------------
-  const std::vector<Spring>& springs() const { return springs_; }
-  /// The Baraff–Witkin energies, or null for a spring-only body.
-  const BaraffWitkinModel* baraffWitkin() const { return baraff_witkin_ ? &*baraff_witkin_ : nullptr; }
-  bool hasSpringClass(SpringClass spring_class) const;
-  /// Sets stiffness [N/m] and damping [N·s/m] of every spring of `spring_class` (all springs when
-  /// empty), and of the Baraff–Witkin condition class of that name. Takes effect at the next step;
+  // Force elements ---------------------------------------------------------------------------
+  const ForceSet& forces() const { return forces_; }
+  /// Read-only views of two elements, for drawing and status: the springs with their current
+  /// constants (empty for a body without springs), and the Baraff–Witkin energies (null for a
+  /// spring-only body).
+  const std::vector<Spring>& springs() const;
+  const BaraffWitkinModel* baraffWitkin() const { return forces_.find<BaraffWitkinModel>(); }
+  bool hasSpringClass(SpringClass spring_class) const { return forces_.hasClass(spring_class); }
+  /// Sets stiffness [N/m] and damping [N·s/m] of `spring_class` (every class when empty) in every
+  /// force element that has it (springs, Baraff–Witkin conditions). Takes effect at the next step;
   /// the implicit system is rebuilt every step.
   Status setSpringConstants(std::optional<SpringClass> spring_class, double stiffness, double damping);
 
@@ -131,7 +137,7 @@ public:
   /// Upper bounds of the highest frequency ω_max [1/s] and damping rate c_max [1/s] of the body
   /// (Gershgorin, at rest geometry; recomputed when spring constants change).
   double frequencyBound() const { return omega_bound_; }
-  double dampingBound() const { return damping_bound_ + damping_; }
+  double dampingBound() const;
   /// Stability events (substeps added, blow-ups rolled back) since build or reset.
   long long stabilityEvents() const { return stability_events_; }
   const std::string& lastStabilityEvent() const { return last_stability_event_; }
@@ -145,7 +151,8 @@ public:
   bool frozen() const { return !frozen_reason_.empty(); }
   const std::string& frozenReason() const { return frozen_reason_; }
 
-  /// Total force on every particle at state (x, v): gravity, springs and the air of the current step.
+  /// Total force on every particle at state (x, v): every force element, with the air and global
+  /// damping of the current step.
   void computeForces(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v, const Eigen::Vector3d& gravity,
                      Eigen::Matrix3Xd& force) const;
 
@@ -153,8 +160,6 @@ private:
   void stepSymplecticEuler(double h, const Eigen::Vector3d& gravity);
   void stepVerlet(double h, const Eigen::Vector3d& gravity);
   void stepImplicitEuler(double h, const Eigen::Vector3d& gravity);
-  // Adds every element's Jacobian blocks at positions x to the implicit solver.
-  void assembleImplicit(const Eigen::Matrix3Xd& x);
   void stepRk4(double h, const Eigen::Vector3d& gravity);
   // Provot's correction of over-stretched springs, then velocities by the correction over h.
   void limitStrain(double h);
@@ -170,11 +175,11 @@ private:
   // a = f / m for free particles, 0 for pinned ones.
   void accelerations(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v, const Eigen::Vector3d& gravity,
                      Eigen::Matrix3Xd& a);
-  // Adds the air's force on every surface triangle (nothing when there is no air or no triangle).
-  void addAirForces(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v, Eigen::Matrix3Xd& force) const;
+  // What the force elements read besides the state, with `gravity` [m/s²].
+  ForceContext forceContext(const Eigen::Vector3d& gravity) const { return {mass_, pinned_, gravity, air_, damping_}; }
 
   SpringNetworkDef def_;
-  std::vector<Spring> springs_;
+  ForceSet forces_;
   IntegratorDef integrator_;
   AirDef air_;            // the air of the current step
   double damping_ = 0.0;  // [1/s] global damping of the current step (Environment::damping)
@@ -195,8 +200,6 @@ private:
 
   // Work arrays, sized once.
   ImplicitEulerSolver implicit_solver_;
-  std::vector<std::array<int, 4>> spring_blocks_;  // per spring: its blocks ii, ij, ji, jj
-  std::optional<BaraffWitkinModel> baraff_witkin_;
   Eigen::Matrix3Xd force_, saved_position_, saved_velocity_, unlimited_position_;
   Eigen::Matrix3Xd step_target_;                // pin targets at the end of the whole step (substeps approach them)
   Eigen::Matrix3Xd implicit_x0_, implicit_v0_;  // state at the start of an implicit (sub)step

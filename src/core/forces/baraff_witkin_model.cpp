@@ -1,4 +1,4 @@
-#include "particle_sim/core/baraff_witkin_model.h"
+#include "particle_sim/core/forces/baraff_witkin_model.h"
 
 #include <map>
 #include <string>
@@ -67,6 +67,21 @@ void BaraffWitkinModel::setConstants(SpringClass spring_class, double stiffness,
   c = {stiffness, damping};
 }
 
+void BaraffWitkinModel::setClassConstants(std::optional<SpringClass> spring_class, double stiffness, double damping)
+{
+  for (SpringClass c : {SpringClass::Stretch, SpringClass::Shear, SpringClass::Bend})
+  {
+    if (!spring_class || *spring_class == c) setConstants(c, stiffness, damping);
+  }
+}
+
+void BaraffWitkinModel::resetConstants()
+{
+  def_.stretch = built_[0];
+  def_.shear = built_[1];
+  def_.bend = built_[2];
+}
+
 const SpringConstants& BaraffWitkinModel::constants(SpringClass spring_class) const
 {
   return spring_class == SpringClass::Stretch ? def_.stretch
@@ -86,7 +101,7 @@ void BaraffWitkinModel::coupledPairs(std::vector<std::pair<int, int>>& pairs) co
         pairs.emplace_back(b.v[m], b.v[n]);
 }
 
-void BaraffWitkinModel::setPattern(const ImplicitEulerSolver& solver)
+void BaraffWitkinModel::bindPattern(const ImplicitEulerSolver& solver)
 {
   triangle_blocks_.clear();
   bend_blocks_.clear();
