@@ -28,8 +28,7 @@ Status checkCommon(const std::string& name, const SpringConstants& stretch, cons
   if (Status s = checkPositive("mass", mass); !s) return s;
   if (Status s = checkSpringConstants("stretch.", stretch.stiffness, stretch.damping); !s) return s;
   if (Status s = checkSpringConstants("bend.", bend.stiffness, bend.damping); !s) return s;
-  if (Status s = checkMin("max_strain", strain_limit.max_strain, 0.0); !s) return s;
-  if (Status s = checkIntRange("strain_iterations", strain_limit.iterations, 1, 100000); !s) return s;
+  if (Status s = validate(strain_limit); !s) return s;
   return validate(integrator);
 }
 

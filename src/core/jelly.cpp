@@ -32,8 +32,7 @@ Status validate(const JellyDef& def, int max_particles)
   if (Status s = checkSpringConstants("bend.", def.bend.stiffness, def.bend.damping); !s) return s;
   if (Status s = checkFinite("velocity", def.velocity); !s) return s;
   if (Status s = checkPinIndices(def.pins, static_cast<int>(n)); !s) return s;
-  if (Status s = checkMin("max_strain", def.strain_limit.max_strain, 0.0); !s) return s;
-  if (Status s = checkIntRange("strain_iterations", def.strain_limit.iterations, 1, 100000); !s) return s;
+  if (Status s = validate(def.strain_limit); !s) return s;
   if (Status s = checkRange("contact_thickness", def.contact_thickness, limits::kContactThickness); !s) return s;
   return validate(def.integrator);
 }

@@ -7,6 +7,7 @@
 
 #include "particle_sim/core/forces/spring_body_forces.h"
 #include "particle_sim/core/forces/springs.h"
+#include "particle_sim/core/integrators/registry.h"
 #include "particle_sim/core/validation.h"
 #include "particle_sim/core/world.h"
 
@@ -16,9 +17,6 @@ namespace core
 {
 namespace
 {
-// Relative slack allowed above the strain limit, for rounding.
-constexpr double kStrainTolerance = 1e-9;
-
 std::string indexed(const char* field, std::size_t i)
 {
   return std::string(field) + "[" + std::to_string(i) + "]";
@@ -46,12 +44,6 @@ const char* toString(NetworkShape shape)
       return "jelly";
   }
   return "unknown";
-}
-
-Status validate(const StrainLimitDef& def)
-{
-  if (Status s = checkMin("max_strain", def.max_strain, 0.0); !s) return s;
-  return checkIntRange("strain_iterations", def.iterations, 1, 100000);
 }
 
 Status validate(const SpringNetworkDef& def, int max_particles)
@@ -120,31 +112,28 @@ Status validate(const SpringNetworkDef& def, int max_particles)
 }
 
 SpringNetworkBody::SpringNetworkBody(const SpringNetworkDef& def)
-    : Body(def.name), def_(def), forces_(makeSpringBodyForces(def_.springs, def_.baraff_witkin, def_.triangles))
+    : Body(def.name),
+      def_(def),
+      forces_(makeSpringBodyForces(def_.springs, def_.baraff_witkin, def_.triangles)),
+      strain_limit_(def_.strain_limit, def_.springs, static_cast<int>(def_.positions.size()))
 {
   const int n = static_cast<int>(def_.positions.size());
   particles_.resize(n, n);
   mass_.resize(n);
   pinned_.assign(n, 0);
   pin_target_.setZero(3, n);
-  force_.setZero(3, n);
   saved_position_.setZero(3, n);
   saved_velocity_.setZero(3, n);
-  unlimited_position_.setZero(3, n);
-  implicit_x0_.setZero(3, n);
-  implicit_v0_.setZero(3, n);
-  rk_x_.setZero(3, n);
-  rk_v_.setZero(3, n);
-  for (int k = 0; k < 4; ++k)
-  {
-    rk_kx_[k].setZero(3, n);
-    rk_kv_[k].setZero(3, n);
-  }
-  // The implicit system's pattern: the particle pairs every force element couples, bound once.
+  // The implicit system's pattern: the particle pairs every force element couples. The elements
+  // look up their block indices once; they depend only on the pattern, which every implicit
+  // method's solver is given.
   std::vector<std::pair<int, int>> pairs;
   forces_.coupledPairs(pairs);
-  implicit_solver_.setPattern(n, pairs);
-  forces_.bindPattern(implicit_solver_);
+  ImplicitEulerSolver pattern;
+  pattern.setPattern(n, pairs);
+  forces_.bindPattern(pattern);
+  for (const IntegratorInfo& info : integratorRegistry())
+    methods_.push_back(info.make(n, pairs));
   step_target_.setZero(3, n);
 
   // The size of the body's energy, for the blow-up check: total mass · extent.
@@ -186,10 +175,9 @@ void SpringNetworkBody::reset()
   stability_events_ = 0;
   last_stability_event_.clear();
   last_substeps_ = 1;
-  verlet_started_ = false;
   last_solve_ = SolverReport{};
   frozen_reason_.clear();
-  implicit_solver_.clearWarmStart();
+  restartMethods();
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -273,11 +261,7 @@ Status SpringNetworkBody::setSpringConstants(std::optional<SpringClass> spring_c
 Status SpringNetworkBody::setIntegrator(const IntegratorDef& integrator)
 {
   if (Status s = validate(integrator); !s) return s;
-  if (integrator.type != integrator_.type)
-  {
-    verlet_started_ = false;
-    implicit_solver_.clearWarmStart();
-  }
+  if (integrator.type != integrator_.type) restartMethods();
   integrator_ = integrator;
   return Status::success();
 }
@@ -294,47 +278,6 @@ void SpringNetworkBody::computeForces(const Eigen::Matrix3Xd& x, const Eigen::Ma
 double SpringNetworkBody::maxStrain() const
 {
   return forces_.maxStrain(particles_.position);
-}
-
-void SpringNetworkBody::limitStrain(double h)
-{
-  const StrainLimitDef& limit = def_.strain_limit;
-  if (limit.max_strain <= 0.0) return;
-  ParticlePool& p = particles_;
-  unlimited_position_ = p.position;
-
-  // Relaxation passes (Provot 1995): each over-stretched spring is shortened to its longest allowed
-  // length, its two ends moving in proportion to their inverse masses.
-  for (int pass = 0; pass < limit.iterations; ++pass)
-  {
-    bool over = false;
-    for (const Spring& s : def_.springs)
-    {
-      if (s.spring_class == SpringClass::Bend) continue;
-      const double w_i = p.inverse_mass[s.i], w_j = p.inverse_mass[s.j];
-      if (w_i + w_j == 0.0) continue;
-      const Eigen::Vector3d delta = p.position.col(s.j) - p.position.col(s.i);
-      const double length = delta.norm();
-      const double longest = (1.0 + limit.max_strain) * s.rest_length;
-      if (length <= longest * (1.0 + kStrainTolerance)) continue;
-      over = true;
-      const Eigen::Vector3d correction = (length - longest) / (length * (w_i + w_j)) * delta;
-      p.position.col(s.i) += w_i * correction;
-      p.position.col(s.j) -= w_j * correction;
-    }
-    if (!over) break;
-  }
-
-  // Velocities follow the positions: what the correction moved, over the step.
-  p.velocity += (p.position - unlimited_position_) / h;
-}
-
-void SpringNetworkBody::accelerations(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v,
-                                      const Eigen::Vector3d& gravity, Eigen::Matrix3Xd& a)
-{
-  computeForces(x, v, gravity, a);
-  for (int i = 0; i < a.cols(); ++i)
-    a.col(i) *= particles_.inverse_mass[i];  // 0 for pinned
 }
 
 double SpringNetworkBody::kineticEnergy() const
@@ -370,14 +313,15 @@ void SpringNetworkBody::step(double dt, const Environment& env)
   if (frozen()) return;
   air_ = env.air;
   damping_ = env.damping;
+  gravity_ = env.gravity;
   ParticlePool& p = particles_;
   const int n = p.size();
   saved_position_ = p.position;
   saved_velocity_ = p.velocity;
   step_target_ = pin_target_;
-  const bool verlet_was_started = verlet_started_;
   const IntegratorType type = chooseIntegrator(dt);
-  const bool explicit_method = type != IntegratorType::ImplicitEuler;
+  const bool explicit_method = !isImplicit(type);
+  const bool had_history = method(type).hasHistory();
 
   // See instability coming: an explicit method gets enough substeps for h (ω_max + c_max) to stay
   // within 90 % of its stability limit.
@@ -419,7 +363,7 @@ void SpringNetworkBody::step(double dt, const Environment& env)
     if (!blew_up) break;
     p.position = saved_position_;
     p.velocity = saved_velocity_;
-    verlet_started_ = verlet_was_started;
+    if (!had_history) method(type).restart();
     if (substeps >= integrator_.max_substeps)
     {
       // What ran, not what the body was built with.
@@ -467,22 +411,7 @@ void SpringNetworkBody::substep(double h, IntegratorType type, const Environment
     if (pinned_[i]) p.velocity.col(i) = (pin_target_.col(i) - p.position.col(i)) / h;
   }
 
-  switch (type)
-  {
-    case IntegratorType::SymplecticEuler:
-      stepSymplecticEuler(h, env.gravity);
-      break;
-    case IntegratorType::Verlet:
-      stepVerlet(h, env.gravity);
-      break;
-    case IntegratorType::ImplicitEuler:
-    case IntegratorType::Auto:  // resolved before; implicit is the safe reading
-      stepImplicitEuler(h, env.gravity);
-      break;
-    case IntegratorType::Rk4:
-      stepRk4(h, env.gravity);
-      break;
-  }
+  last_solve_ = method(type).step(h, *this, integrator_);
 
   // Pinned particles end exactly on their target.
   for (int i = 0; i < n; ++i)
@@ -491,11 +420,39 @@ void SpringNetworkBody::substep(double h, IntegratorType type, const Environment
   }
   // Restriction forces: collisions, strain limiting, and collisions again for what it moved.
   resolveCollisions(env, p, &saved_velocity_, nullptr, def_.contact_thickness);
-  if (def_.strain_limit.max_strain > 0.0)
+  if (strain_limit_.enabled())
   {
-    limitStrain(h);
+    strain_limit_.apply(h, p);
     resolveCollisions(env, p, &saved_velocity_, nullptr, def_.contact_thickness);
   }
+}
+
+IntegrationMethod& SpringNetworkBody::method(IntegratorType type)
+{
+  const std::vector<IntegratorInfo>& registry = integratorRegistry();
+  for (std::size_t k = 0; k < registry.size(); ++k)
+  {
+    if (registry[k].type == type) return *methods_[k];
+  }
+  return *methods_[0];  // unreachable: `auto` is resolved before and every other type is registered
+}
+
+void SpringNetworkBody::restartMethods()
+{
+  for (const std::unique_ptr<IntegrationMethod>& m : methods_)
+    m->restart();
+}
+
+void SpringNetworkBody::accelerations(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v, Eigen::Matrix3Xd& a) const
+{
+  computeForces(x, v, gravity_, a);
+  for (int i = 0; i < a.cols(); ++i)
+    a.col(i) *= particles_.inverse_mass[i];  // 0 for pinned
+}
+
+void SpringNetworkBody::addJacobians(const Eigen::Matrix3Xd& x, ImplicitEulerSolver& solver) const
+{
+  forces_.addJacobians(forceContext(gravity_), x, solver);
 }
 
 void SpringNetworkBody::recordEvent(std::string event)
@@ -531,122 +488,13 @@ IntegratorType SpringNetworkBody::chooseIntegrator(double dt)
   const IntegratorType choice = product <= limit ? IntegratorType::Verlet : IntegratorType::ImplicitEuler;
   if (auto_choice_.empty() || choice != last_integrator_)
   {
-    if (choice != last_integrator_)
-    {
-      verlet_started_ = false;
-      implicit_solver_.clearWarmStart();
-    }
+    if (choice != last_integrator_) restartMethods();
     auto_choice_ = std::string(toString(choice)) + ": h (omega_max + c_max) = " + formatValue(product) +
                    (choice == IntegratorType::Verlet ? " <= " : " > ") + formatValue(limit) +
                    " (half of Verlet's limit 2; omega_max = " + formatValue(omega_bound_) +
                    " 1/s, c_max = " + formatValue(dampingBound()) + " 1/s, dt = " + formatValue(dt) + " s)";
   }
   return choice;
-}
-
-// The lecture's loop: v += h f(x, v) / m, then x += h v with the new v.
-void SpringNetworkBody::stepSymplecticEuler(double h, const Eigen::Vector3d& gravity)
-{
-  ParticlePool& p = particles_;
-  accelerations(p.position, p.velocity, gravity, force_);
-  p.velocity += h * force_;
-  p.position += h * p.velocity;
-  last_solve_ = SolverReport{};
-}
-
-// The lecture's Verlet, x_{n+1} = x_n + k_d (x_n − x_{n−1}) + h² f(x_n, v_n) / m, written with the
-// displacement u_n = (x_n − x_{n−1}) / h kept in the velocity array (so collisions and pins can edit
-// it like a velocity): u_{n+1} = k_d u_n + h a_n, x_{n+1} = x_n + h u_{n+1}. The first step after
-// build, reset or a switch starts it at second order: x_{−1} = x_0 − h v_0 + h² a_0 / 2, i.e.
-// u_0 = v_0 − h a_0 / 2.
-void SpringNetworkBody::stepVerlet(double h, const Eigen::Vector3d& gravity)
-{
-  ParticlePool& p = particles_;
-  accelerations(p.position, p.velocity, gravity, force_);
-  if (!verlet_started_)
-  {
-    p.velocity -= 0.5 * h * force_;
-    verlet_started_ = true;
-  }
-  p.velocity = integrator_.verlet_damping * p.velocity + h * force_;
-  p.position += h * p.velocity;
-  last_solve_ = SolverReport{};
-}
-
-void SpringNetworkBody::stepImplicitEuler(double h, const Eigen::Vector3d& gravity)
-{
-  ParticlePool& p = particles_;
-  const int n = p.size();
-
-  // Without moving pins or wind nothing does work on the body, so its energy must not grow.
-  bool conservative = !forces_.suppliesEnergy(forceContext(gravity));
-  for (int i = 0; i < n && conservative; ++i)
-    conservative = !pinned_[i] || p.velocity.col(i).isZero();
-  const double energy_before = conservative ? mechanicalEnergy(gravity) : 0.0;
-  implicit_x0_ = p.position;
-  implicit_v0_ = p.velocity;
-
-  // 1. Baraff & Witkin's step: one linearisation at (x0, v0).
-  computeForces(p.position, p.velocity, gravity, force_);
-  implicit_solver_.begin(h, mass_, force_, &implicit_v0_);
-  forces_.addJacobians(forceContext(gravity), p.position, implicit_solver_);
-  last_solve_ =
-      implicit_solver_.solve(pinned_, integrator_.cg_tolerance, integrator_.cg_max_iterations, p.position, p.velocity);
-  if (!conservative || last_solve_.breakdown) return;
-
-  // 2. If that one linearisation gained energy (large rotations or stretches in one step), Newton
-  //    iterations of full backward Euler: solve (M − h ∂f/∂v − h² ∂f/∂x) δ = h f(x_k, v_k) − M (v_k − v0)
-  //    at x_k = x0 + h v_k, then v_{k+1} = v_k + δ.
-  const double tolerance = 1e-12 * (1.0 + std::abs(energy_before));
-  int newton = 0;
-  for (; newton < kNewtonIterations && mechanicalEnergy(gravity) > energy_before + tolerance; ++newton)
-  {
-    computeForces(p.position, p.velocity, gravity, force_);
-    for (int i = 0; i < n; ++i)
-      force_.col(i) -= mass_[i] * (p.velocity.col(i) - implicit_v0_.col(i)) / h;
-    implicit_solver_.begin(h, mass_, force_, nullptr);
-    forces_.addJacobians(forceContext(gravity), p.position, implicit_solver_);
-    p.position = implicit_x0_;  // the solve sets x = x0 + h v_{k+1}
-    last_solve_ = implicit_solver_.solve(pinned_, integrator_.cg_tolerance, integrator_.cg_max_iterations, p.position,
-                                         p.velocity);
-    if (last_solve_.breakdown) return;
-  }
-
-  // 3. Still more energy than before (a non-convex energy can do that even to backward Euler): the
-  //    excess is taken out of the kinetic energy, and reported.
-  const double energy_after = mechanicalEnergy(gravity);
-  if (energy_after > energy_before + tolerance)
-  {
-    const double kinetic = kineticEnergy();
-    const double allowed = std::max(0.0, kinetic - (energy_after - energy_before));
-    const double scale = kinetic > 0.0 ? std::sqrt(allowed / kinetic) : 0.0;
-    for (int i = 0; i < n; ++i)
-    {
-      if (!pinned_[i]) p.velocity.col(i) *= scale;
-    }
-    recordEvent("implicit_euler would have gained " + formatValue(energy_after - energy_before) + " J in one step (" +
-                std::to_string(newton) + " Newton iterations); velocities scaled by " + formatValue(scale));
-  }
-}
-
-// Classical fourth-order Runge–Kutta on (x, v) with derivative (v, a(x, v)).
-void SpringNetworkBody::stepRk4(double h, const Eigen::Vector3d& gravity)
-{
-  ParticlePool& p = particles_;
-  const Eigen::Matrix3Xd& x0 = saved_position_;  // the state at the start of the step
-  rk_kx_[0] = p.velocity;
-  accelerations(p.position, p.velocity, gravity, rk_kv_[0]);
-  const double stage_offset[3] = {0.5 * h, 0.5 * h, h};
-  for (int k = 1; k < 4; ++k)
-  {
-    rk_x_ = x0 + stage_offset[k - 1] * rk_kx_[k - 1];
-    rk_v_ = p.velocity + stage_offset[k - 1] * rk_kv_[k - 1];
-    rk_kx_[k] = rk_v_;
-    accelerations(rk_x_, rk_v_, gravity, rk_kv_[k]);
-  }
-  p.position = x0 + (h / 6.0) * (rk_kx_[0] + 2.0 * rk_kx_[1] + 2.0 * rk_kx_[2] + rk_kx_[3]);
-  p.velocity += (h / 6.0) * (rk_kv_[0] + 2.0 * rk_kv_[1] + 2.0 * rk_kv_[2] + rk_kv_[3]);
-  last_solve_ = SolverReport{};
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -1,16 +1,17 @@
 #pragma once
 
 #include <Eigen/Core>
-#include <array>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "particle_sim/core/body.h"
+#include "particle_sim/core/constraints/strain_limit.h"
 #include "particle_sim/core/forces/baraff_witkin_model.h"
 #include "particle_sim/core/forces/force_set.h"
-#include "particle_sim/core/implicit_euler_solver.h"
 #include "particle_sim/core/integrator.h"
+#include "particle_sim/core/integrators/integration_method.h"
 #include "particle_sim/core/spring.h"
 #include "particle_sim/core/status.h"
 
@@ -28,16 +29,6 @@ enum class NetworkShape
 };
 
 const char* toString(NetworkShape shape);
-
-/// Provot's strain limiting (1995): after each step, relaxation passes over the stretch and shear
-/// springs move the ends of every spring longer than (1 + max_strain) times its rest length back to
-/// that length (shared by inverse mass; pinned ends stay), until none is over or `iterations`
-/// passes are done. Velocities change by the position correction over dt.
-struct StrainLimitDef
-{
-  double max_strain = 0.0;  ///< [-] > 0 turns it on (e.g. 0.1 = 10 %); 0 = off
-  int iterations = 50;      ///< cap on relaxation passes, >= 1 (the limit holds exactly only with enough)
-};
 
 /// A body of particles joined by springs. Ropes, cloth and jelly are builders of this one
 /// structure, not separate physics.
@@ -85,7 +76,7 @@ Status validate(const SpringNetworkDef& def, int max_particles);
 /// The `auto` integrator picks, per step, Verlet when h (ω_max + c_max) is at most half its limit
 /// (one substep, with margin), else implicit Euler; it re-decides when the spring constants or
 /// the step change and says what it picked and why (autoChoice()).
-class SpringNetworkBody : public Body
+class SpringNetworkBody : public Body, private DynamicSystem
 {
 public:
   /// `def` must have passed validate().
@@ -157,12 +148,6 @@ public:
                      Eigen::Matrix3Xd& force) const;
 
 private:
-  void stepSymplecticEuler(double h, const Eigen::Vector3d& gravity);
-  void stepVerlet(double h, const Eigen::Vector3d& gravity);
-  void stepImplicitEuler(double h, const Eigen::Vector3d& gravity);
-  void stepRk4(double h, const Eigen::Vector3d& gravity);
-  // Provot's correction of over-stretched springs, then velocities by the correction over h.
-  void limitStrain(double h);
   // One (sub)step of length h with `type`: pins, integrator, pin targets, collisions, strain limit.
   void substep(double h, IntegratorType type, const Environment& env);
   // Recomputes omega_bound_ and damping_bound_ from the current constants.
@@ -171,10 +156,27 @@ private:
   IntegratorType chooseIntegrator(double dt);
   // Kinetic plus potential energy of the current state [J].
   double mechanicalEnergy(const Eigen::Vector3d& gravity) const { return kineticEnergy() + potentialEnergy(gravity); }
-  void recordEvent(std::string event);
-  // a = f / m for free particles, 0 for pinned ones.
-  void accelerations(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v, const Eigen::Vector3d& gravity,
-                     Eigen::Matrix3Xd& a);
+  // The method of `type` (not auto).
+  IntegrationMethod& method(IntegratorType type);
+  // Forgets every method's history (Verlet's start, warm starts).
+  void restartMethods();
+
+  // What the integrators see (DynamicSystem), with the gravity of the current step.
+  Eigen::Matrix3Xd& positions() override { return particles_.position; }
+  Eigen::Matrix3Xd& velocities() override { return particles_.velocity; }
+  const Eigen::Matrix3Xd& stepStartPositions() const override { return saved_position_; }
+  const Eigen::VectorXd& masses() const override { return mass_; }
+  const std::vector<char>& pinned() const override { return pinned_; }
+  void computeForces(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v, Eigen::Matrix3Xd& force) const override
+  {
+    computeForces(x, v, gravity_, force);
+  }
+  void accelerations(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v, Eigen::Matrix3Xd& a) const override;
+  void addJacobians(const Eigen::Matrix3Xd& x, ImplicitEulerSolver& solver) const override;
+  void coupledPairs(std::vector<std::pair<int, int>>& pairs) const override { forces_.coupledPairs(pairs); }
+  bool suppliesEnergy() const override { return forces_.suppliesEnergy(forceContext(gravity_)); }
+  double mechanicalEnergy() const override { return mechanicalEnergy(gravity_); }
+  void recordEvent(std::string event) override;
   // What the force elements read besides the state, with `gravity` [m/s²].
   ForceContext forceContext(const Eigen::Vector3d& gravity) const { return {mass_, pinned_, gravity, air_, damping_}; }
 
@@ -183,10 +185,10 @@ private:
   IntegratorDef integrator_;
   AirDef air_;            // the air of the current step
   double damping_ = 0.0;  // [1/s] global damping of the current step (Environment::damping)
-  Eigen::VectorXd mass_;  // [kg], kept for pinned particles too
+  Eigen::Vector3d gravity_ = Eigen::Vector3d::Zero();  // [m/s²] gravity of the current step
+  Eigen::VectorXd mass_;                               // [kg], kept for pinned particles too
   std::vector<char> pinned_;
   Eigen::Matrix3Xd pin_target_;
-  bool verlet_started_ = false;  // Verlet needs its second-order start after build, reset or a switch
   IntegratorType last_integrator_ = IntegratorType::ImplicitEuler;
   int last_substeps_ = 1;
   double omega_bound_ = 0.0;    // [1/s]
@@ -199,12 +201,10 @@ private:
   std::string frozen_reason_;
 
   // Work arrays, sized once.
-  ImplicitEulerSolver implicit_solver_;
-  Eigen::Matrix3Xd force_, saved_position_, saved_velocity_, unlimited_position_;
-  Eigen::Matrix3Xd step_target_;                // pin targets at the end of the whole step (substeps approach them)
-  Eigen::Matrix3Xd implicit_x0_, implicit_v0_;  // state at the start of an implicit (sub)step
-  static constexpr int kNewtonIterations = 8;
-  Eigen::Matrix3Xd rk_x_, rk_v_, rk_kx_[4], rk_kv_[4];
+  std::vector<std::unique_ptr<IntegrationMethod>> methods_;  // one per registered integrator, in its order
+  StrainLimit strain_limit_;                                 // Provot's constraint, applied after the integrator
+  Eigen::Matrix3Xd saved_position_, saved_velocity_;
+  Eigen::Matrix3Xd step_target_;  // pin targets at the end of the whole step (substeps approach them)
 };
 
 /// A rope: `particles` evenly spaced from `start` to `end`, N − 1 stretch springs and, when

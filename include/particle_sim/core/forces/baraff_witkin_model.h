@@ -9,7 +9,7 @@
 
 #include "particle_sim/core/baraff_witkin.h"
 #include "particle_sim/core/forces/force_element.h"
-#include "particle_sim/core/implicit_euler_solver.h"
+#include "particle_sim/core/integrators/implicit_euler_solver.h"
 #include "particle_sim/core/spring.h"
 #include "particle_sim/core/status.h"
 

@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "particle_sim/core/environment.h"
-#include "particle_sim/core/implicit_euler_solver.h"
+#include "particle_sim/core/integrators/implicit_euler_solver.h"
 #include "particle_sim/core/spring.h"
 
 namespace particle_sim
