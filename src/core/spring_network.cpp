@@ -171,9 +171,8 @@ void SpringNetworkBody::reset()
   }
   forces_.resetConstants();
   integrator_ = def_.integrator;
+  guard_.clear();
   updateStabilityBound();
-  stability_events_ = 0;
-  last_stability_event_.clear();
   last_substeps_ = 1;
   last_solve_ = SolverReport{};
   frozen_reason_.clear();
@@ -319,25 +318,15 @@ void SpringNetworkBody::step(double dt, const Environment& env)
   saved_position_ = p.position;
   saved_velocity_ = p.velocity;
   step_target_ = pin_target_;
-  const IntegratorType type = chooseIntegrator(dt);
+  bool switched = false;
+  const IntegratorType type =
+      guard_.resolve(integrator_.type, dt, omega_bound_, dampingBound(), last_integrator_, switched);
+  if (switched) restartMethods();
   const bool explicit_method = !isImplicit(type);
   const bool had_history = method(type).hasHistory();
-
-  // See instability coming: an explicit method gets enough substeps for h (ω_max + c_max) to stay
-  // within 90 % of its stability limit.
-  int substeps = 1;
-  if (explicit_method)
-  {
-    const double needed = dt * (omega_bound_ + dampingBound()) / (0.9 * stabilityLimit(type));
-    substeps = static_cast<int>(std::min<double>(std::ceil(needed), integrator_.max_substeps));
-    substeps = std::max(substeps, 1);
-    if (substeps > 1 && substeps != last_substeps_)
-      recordEvent(std::string(toString(type)) + " needs h (omega + c) <= " + formatValue(stabilityLimit(type)) +
-                  ": dt = " + formatValue(dt) + " s split into " + std::to_string(substeps) +
-                  " substeps (omega_max = " + formatValue(omega_bound_) + " 1/s)");
-  }
-  const double energy_before = explicit_method ? mechanicalEnergy(env.gravity) : 0.0;
-  const double allowed_growth = 100.0 * (std::abs(energy_before) + energy_scale_ * (env.gravity.norm() + 1.0));
+  int substeps = guard_.substeps(type, dt, omega_bound_, dampingBound(), integrator_.max_substeps, last_substeps_);
+  guard_.beginStep(explicit_method, explicit_method ? mechanicalEnergy(env.gravity) : 0.0, energy_scale_,
+                   env.gravity.norm());
 
   for (;;)
   {
@@ -357,28 +346,22 @@ void SpringNetworkBody::step(double dt, const Environment& env)
     }
     pin_target_ = step_target_;
 
-    // Blow-up check of explicit methods: roll back and retry with twice the substeps.
+    // Blow-up of an explicit method: roll back and retry with more substeps, or freeze.
     const bool finite = p.position.allFinite() && p.velocity.allFinite();
-    const bool blew_up = explicit_method && (!finite || mechanicalEnergy(env.gravity) > energy_before + allowed_growth);
-    if (!blew_up) break;
+    if (!guard_.blewUp(finite, explicit_method ? mechanicalEnergy(env.gravity) : 0.0)) break;
     p.position = saved_position_;
     p.velocity = saved_velocity_;
     if (!had_history) method(type).restart();
-    if (substeps >= integrator_.max_substeps)
+    const int retry = guard_.retrySubsteps(type, dt, substeps, integrator_.max_substeps, frozen_reason_);
+    if (retry == 0)
     {
       // What ran, not what the body was built with.
       last_integrator_ = type;
       last_substeps_ = substeps;
-      frozen_reason_ = std::string(toString(type)) + " blew up at dt = " + formatValue(dt) + " s even with " +
-                       std::to_string(substeps) + " substeps (integrator.max_substeps); the body is frozen at its " +
-                       "last good state";
-      recordEvent(frozen_reason_);
       p.previous_position = saved_position_;
       return;
     }
-    substeps = std::min(2 * substeps, integrator_.max_substeps);
-    recordEvent(std::string(toString(type)) + " blew up at dt = " + formatValue(dt) + " s; step rolled back and " +
-                "retried with " + std::to_string(substeps) + " substeps");
+    substeps = retry;
   }
   last_substeps_ = substeps;
   last_integrator_ = type;
@@ -392,10 +375,7 @@ void SpringNetworkBody::step(double dt, const Environment& env)
   {
     p.position = saved_position_;
     p.velocity = saved_velocity_;
-    frozen_reason_ =
-        std::string(last_solve_.breakdown ? "the implicit solve failed (CG breakdown)" : "state became non-finite") +
-        " under " + toString(type) + " at dt = " + formatValue(dt) + " s; the body is frozen at its last good state";
-    recordEvent(frozen_reason_);
+    frozen_reason_ = guard_.freezeReason(type, dt, last_solve_.breakdown);
   }
 }
 
@@ -455,12 +435,6 @@ void SpringNetworkBody::addJacobians(const Eigen::Matrix3Xd& x, ImplicitEulerSol
   forces_.addJacobians(forceContext(gravity_), x, solver);
 }
 
-void SpringNetworkBody::recordEvent(std::string event)
-{
-  ++stability_events_;
-  last_stability_event_ = std::move(event);
-}
-
 void SpringNetworkBody::updateStabilityBound()
 {
   // Gershgorin: each element adds k |∂C/∂x_i| Σ_n |∂C/∂x_n| to row i (springs: 2 k at both ends),
@@ -476,25 +450,7 @@ void SpringNetworkBody::updateStabilityBound()
     omega_bound_ = std::max(omega_bound_, std::sqrt(stiffness_rows[i] / mass_[i]));
     damping_bound_ = std::max(damping_bound_, damping_rows[i] / mass_[i]);
   }
-  auto_choice_.clear();  // re-decide and re-explain at the next step
-}
-
-IntegratorType SpringNetworkBody::chooseIntegrator(double dt)
-{
-  if (integrator_.type != IntegratorType::Auto) return integrator_.type;
-  // Verlet where one step is stable with a factor 2 of margin; implicit Euler otherwise.
-  const double product = dt * (omega_bound_ + dampingBound());
-  const double limit = 0.5 * stabilityLimit(IntegratorType::Verlet);
-  const IntegratorType choice = product <= limit ? IntegratorType::Verlet : IntegratorType::ImplicitEuler;
-  if (auto_choice_.empty() || choice != last_integrator_)
-  {
-    if (choice != last_integrator_) restartMethods();
-    auto_choice_ = std::string(toString(choice)) + ": h (omega_max + c_max) = " + formatValue(product) +
-                   (choice == IntegratorType::Verlet ? " <= " : " > ") + formatValue(limit) +
-                   " (half of Verlet's limit 2; omega_max = " + formatValue(omega_bound_) +
-                   " 1/s, c_max = " + formatValue(dampingBound()) + " 1/s, dt = " + formatValue(dt) + " s)";
-  }
-  return choice;
+  guard_.forgetChoice();  // re-decide and re-explain at the next step
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -12,6 +12,7 @@
 #include "particle_sim/core/forces/force_set.h"
 #include "particle_sim/core/integrator.h"
 #include "particle_sim/core/integrators/integration_method.h"
+#include "particle_sim/core/integrators/stability_guard.h"
 #include "particle_sim/core/spring.h"
 #include "particle_sim/core/status.h"
 
@@ -61,7 +62,8 @@ Status validate(const SpringNetworkDef& def, int max_particles);
 /// to its pin target, and it ends the step exactly there. Targets can be moved between steps (a
 /// gripper carrying the rope end). Implicit Euler filters pinned degrees of freedom.
 ///
-/// Stability. Before each step an explicit method sees instability coming from the body's
+/// Stability (the policy is StabilityGuard, integrators/stability_guard.h; the methods are units in
+/// core/integrators/). Before each step an explicit method sees instability coming from the body's
 /// stability bound (Gershgorin: ω_max² ≤ max_i Σ_elements k |∂C/∂x_i| Σ_n |∂C/∂x_n| / m_i, and
 /// alike a damping rate c_max): when h (ω_max + c_max) exceeds the method's limit (2 for symplectic
 /// Euler and Verlet, 2√2 for RK4) with a 10 % margin, the step is split into enough substeps. After
@@ -124,14 +126,14 @@ public:
   /// Substeps the last step was split into (1 = none).
   int lastSubsteps() const { return last_substeps_; }
   /// For `auto`: what it picked and why, e.g. "verlet: h (ω + c) = 0.31 <= 1 (ω_max = 41.2 1/s)".
-  const std::string& autoChoice() const { return auto_choice_; }
+  const std::string& autoChoice() const { return guard_.autoChoice(); }
   /// Upper bounds of the highest frequency ω_max [1/s] and damping rate c_max [1/s] of the body
   /// (Gershgorin, at rest geometry; recomputed when spring constants change).
   double frequencyBound() const { return omega_bound_; }
   double dampingBound() const;
   /// Stability events (substeps added, blow-ups rolled back) since build or reset.
-  long long stabilityEvents() const { return stability_events_; }
-  const std::string& lastStabilityEvent() const { return last_stability_event_; }
+  long long stabilityEvents() const { return guard_.events(); }
+  const std::string& lastStabilityEvent() const { return guard_.lastEvent(); }
 
   // Measurements -------------------------------------------------------------------------------
   /// Largest (|x_j − x_i| − L) / L over the stretch and shear springs [-].
@@ -152,8 +154,6 @@ private:
   void substep(double h, IntegratorType type, const Environment& env);
   // Recomputes omega_bound_ and damping_bound_ from the current constants.
   void updateStabilityBound();
-  // Resolves `auto` for step dt (and records why).
-  IntegratorType chooseIntegrator(double dt);
   // Kinetic plus potential energy of the current state [J].
   double mechanicalEnergy(const Eigen::Vector3d& gravity) const { return kineticEnergy() + potentialEnergy(gravity); }
   // The method of `type` (not auto).
@@ -176,7 +176,7 @@ private:
   void coupledPairs(std::vector<std::pair<int, int>>& pairs) const override { forces_.coupledPairs(pairs); }
   bool suppliesEnergy() const override { return forces_.suppliesEnergy(forceContext(gravity_)); }
   double mechanicalEnergy() const override { return mechanicalEnergy(gravity_); }
-  void recordEvent(std::string event) override;
+  void recordEvent(std::string event) override { guard_.record(std::move(event)); }
   // What the force elements read besides the state, with `gravity` [m/s²].
   ForceContext forceContext(const Eigen::Vector3d& gravity) const { return {mass_, pinned_, gravity, air_, damping_}; }
 
@@ -194,9 +194,7 @@ private:
   double omega_bound_ = 0.0;    // [1/s]
   double damping_bound_ = 0.0;  // [1/s], springs and conditions (global damping added at use)
   double energy_scale_ = 0.0;   // [J] total mass · (|g| + 1 m/s²) · size, for the blow-up check
-  std::string auto_choice_;
-  long long stability_events_ = 0;
-  std::string last_stability_event_;
+  StabilityGuard guard_;        // substeps, rollback, freeze and `auto`
   SolverReport last_solve_;
   std::string frozen_reason_;
 
