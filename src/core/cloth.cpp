@@ -6,6 +6,7 @@
 #include <utility>
 
 #include "particle_sim/core/builders/mesh_topology.h"
+#include "particle_sim/core/builders/pins.h"
 #include "particle_sim/core/validation.h"
 #include "particle_sim/core/world.h"
 
@@ -30,12 +31,6 @@ Status checkCommon(const std::string& name, const SpringConstants& stretch, cons
   if (Status s = checkSpringConstants("bend.", bend.stiffness, bend.damping); !s) return s;
   if (Status s = validate(strain_limit); !s) return s;
   return validate(integrator);
-}
-
-void addPins(const std::vector<int>& pins, int n, std::vector<int>& out)
-{
-  for (int pin : pins)
-    out.push_back(pin < 0 ? n + pin : pin);
 }
 }  // namespace
 
@@ -256,7 +251,7 @@ SpringNetworkDef buildClothGrid(const ClothGridDef& def)
   }
 
   // Pins by index and by name, each particle once.
-  addPins(def.pins, n, net.pins);
+  appendPins(def.pins, n, net.pins);
   for (const std::string& name : def.named_pins)
   {
     std::vector<int> indices;
@@ -338,7 +333,7 @@ SpringNetworkDef buildMeshCloth(const MeshClothDef& def)
     for (const Eigen::Vector2d& uv : def.uvs)
       uvs.push_back(scale * uv);
     addBaraffWitkin(uvs, def.stretch, def.shear, def.bend, def.b_u, def.b_v, net);
-    addPins(def.pins, n, net.pins);
+    appendPins(def.pins, n, net.pins);
     return net;
   }
   // Each edge once (keyed by its sorted ends): a stretch spring, and across an interior edge
@@ -350,7 +345,7 @@ SpringNetworkDef buildMeshCloth(const MeshClothDef& def)
       net.springs.push_back(
           makeSpring(net.positions, sides[0].opposite, sides[1].opposite, def.bend, SpringClass::Bend));
   }
-  addPins(def.pins, n, net.pins);
+  appendPins(def.pins, n, net.pins);
   return net;
 }
 

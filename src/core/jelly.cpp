@@ -1,5 +1,6 @@
 #include "particle_sim/core/jelly.h"
 
+#include "particle_sim/core/builders/pins.h"
 #include "particle_sim/core/validation.h"
 #include "particle_sim/core/world.h"
 
@@ -113,8 +114,7 @@ SpringNetworkDef buildJelly(const JellyDef& def)
     addFace(axis, true);
   }
 
-  for (int pin : def.pins)
-    net.pins.push_back(pin < 0 ? n + pin : pin);
+  appendPins(def.pins, n, net.pins);
   return net;
 }
 

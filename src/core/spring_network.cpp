@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 
+#include "particle_sim/core/builders/pins.h"
 #include "particle_sim/core/forces/spring_body_forces.h"
 #include "particle_sim/core/forces/springs.h"
 #include "particle_sim/core/integrators/registry.h"
@@ -495,8 +496,7 @@ SpringNetworkDef buildRope(const RopeDef& def)
     for (int i = 0; i + 2 < n; ++i)
       net.springs.push_back({i, i + 2, 2.0 * segment, def.bend_stiffness, def.bend_damping, SpringClass::Bend});
   }
-  for (int pin : def.pins)
-    net.pins.push_back(pin < 0 ? n + pin : pin);
+  appendPins(def.pins, n, net.pins);
   return net;
 }
 
