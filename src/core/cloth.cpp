@@ -3,11 +3,11 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
-#include <map>
 #include <utility>
 
+#include "particle_sim/core/builders/mesh_topology.h"
+#include "particle_sim/core/builders/pins.h"
 #include "particle_sim/core/names.h"
-#include "particle_sim/core/particle_index.h"
 #include "particle_sim/core/validation.h"
 
 namespace particle_sim
@@ -31,12 +31,6 @@ Status checkCommon(const std::string& name, const SpringConstants& stretch, cons
   if (Status s = checkSpringConstants("bend.", bend.stiffness, bend.damping); !s) return s;
   if (Status s = validate(strain_limit); !s) return s;
   return validate(integrator);
-}
-
-void addPins(const std::vector<int>& pins, int n, std::vector<int>& out)
-{
-  for (int pin : pins)
-    out.push_back(resolveParticleIndex(pin, n));
 }
 }  // namespace
 
@@ -257,7 +251,7 @@ SpringNetworkDef buildClothGrid(const ClothGridDef& def)
   }
 
   // Pins by index and by name, each particle once.
-  addPins(def.pins, n, net.pins);
+  appendPins(def.pins, n, net.pins);
   for (const std::string& name : def.named_pins)
   {
     std::vector<int> indices;
@@ -323,16 +317,6 @@ SpringNetworkDef buildMeshCloth(const MeshClothDef& def)
   const int n = static_cast<int>(def.vertices.size());
   net.masses.assign(n, def.mass / n);
 
-  // Each edge once (keyed by its sorted ends), with the vertices opposite it in its triangles.
-  std::map<std::pair<int, int>, std::vector<int>> opposite;
-  for (const Eigen::Vector3i& t : def.triangles)
-  {
-    for (int c = 0; c < 3; ++c)
-    {
-      const int i = t[c], j = t[(c + 1) % 3], k = t[(c + 2) % 3];
-      opposite[{std::min(i, j), std::max(i, j)}].push_back(k);
-    }
-  }
   if (def.model == ClothModel::BaraffWitkin)
   {
     // Texture coordinates scaled so that the (u, v) area equals the mesh's area.
@@ -349,17 +333,19 @@ SpringNetworkDef buildMeshCloth(const MeshClothDef& def)
     for (const Eigen::Vector2d& uv : def.uvs)
       uvs.push_back(scale * uv);
     addBaraffWitkin(uvs, def.stretch, def.shear, def.bend, def.b_u, def.b_v, net);
-    addPins(def.pins, n, net.pins);
+    appendPins(def.pins, n, net.pins);
     return net;
   }
-  for (const auto& [edge, across] : opposite)
+  // Each edge once (keyed by its sorted ends): a stretch spring, and across an interior edge
+  // (two triangles) a bend spring between the vertices opposite it.
+  for (const auto& [edge, sides] : meshEdges(def.triangles))
   {
     net.springs.push_back(makeSpring(net.positions, edge.first, edge.second, def.stretch, SpringClass::Stretch));
-    // An interior edge joins two triangles: a bend spring between the vertices across it.
-    if (def.bend.stiffness > 0.0 && across.size() == 2 && across[0] != across[1])
-      net.springs.push_back(makeSpring(net.positions, across[0], across[1], def.bend, SpringClass::Bend));
+    if (def.bend.stiffness > 0.0 && sides.size() == 2 && sides[0].opposite != sides[1].opposite)
+      net.springs.push_back(
+          makeSpring(net.positions, sides[0].opposite, sides[1].opposite, def.bend, SpringClass::Bend));
   }
-  addPins(def.pins, n, net.pins);
+  appendPins(def.pins, n, net.pins);
   return net;
 }
 

@@ -1,8 +1,9 @@
 #include "particle_sim/core/integrator.h"
 
-#include <cmath>
 #include <limits>
+#include <string>
 
+#include "particle_sim/core/integrators/registry.h"
 #include "particle_sim/core/validation.h"
 
 namespace particle_sim
@@ -11,55 +12,47 @@ namespace core
 {
 const char* toString(IntegratorType type)
 {
-  switch (type)
-  {
-    case IntegratorType::SymplecticEuler:
-      return "symplectic_euler";
-    case IntegratorType::Verlet:
-      return "verlet";
-    case IntegratorType::ImplicitEuler:
-      return "implicit_euler";
-    case IntegratorType::Rk4:
-      return "rk4";
-    case IntegratorType::Auto:
-      return "auto";
-  }
-  return "unknown";
+  if (type == IntegratorType::Auto) return "auto";
+  const IntegratorInfo* info = findIntegrator(type);
+  return info ? info->name : "unknown";
 }
 
 double stabilityLimit(IntegratorType type)
 {
-  switch (type)
-  {
-    case IntegratorType::SymplecticEuler:
-    case IntegratorType::Verlet:
-      return 2.0;
-    case IntegratorType::Rk4:
-      return 2.0 * std::sqrt(2.0);
-    case IntegratorType::ImplicitEuler:
-    case IntegratorType::Auto:
-      break;
-  }
-  return std::numeric_limits<double>::infinity();
+  const IntegratorInfo* info = findIntegrator(type);
+  return info ? info->stability_limit : std::numeric_limits<double>::infinity();
+}
+
+bool isImplicit(IntegratorType type)
+{
+  const IntegratorInfo* info = findIntegrator(type);
+  return info && info->implicit;
 }
 
 const char* integratorTypeNames()
 {
-  return "symplectic_euler, verlet, implicit_euler, rk4, auto";
+  static const std::string names = [] {
+    std::string list;
+    for (const IntegratorInfo& info : integratorRegistry())
+      list += std::string(info.name) + ", ";
+    return list + toString(IntegratorType::Auto);
+  }();
+  return names.c_str();
 }
 
 bool parseIntegratorType(const std::string& text, IntegratorType& type)
 {
-  for (IntegratorType candidate : {IntegratorType::SymplecticEuler, IntegratorType::Verlet,
-                                   IntegratorType::ImplicitEuler, IntegratorType::Rk4, IntegratorType::Auto})
+  for (const IntegratorInfo& info : integratorRegistry())
   {
-    if (text == toString(candidate))
+    if (text == info.name)
     {
-      type = candidate;
+      type = info.type;
       return true;
     }
   }
-  return false;
+  if (text != toString(IntegratorType::Auto)) return false;
+  type = IntegratorType::Auto;
+  return true;
 }
 
 Status validate(const IntegratorDef& def)

@@ -1,7 +1,7 @@
 #include "particle_sim/core/jelly.h"
 
+#include "particle_sim/core/builders/pins.h"
 #include "particle_sim/core/names.h"
-#include "particle_sim/core/particle_index.h"
 #include "particle_sim/core/validation.h"
 
 namespace particle_sim
@@ -114,8 +114,7 @@ SpringNetworkDef buildJelly(const JellyDef& def)
     addFace(axis, true);
   }
 
-  for (int pin : def.pins)
-    net.pins.push_back(resolveParticleIndex(pin, n));
+  appendPins(def.pins, n, net.pins);
   return net;
 }
 

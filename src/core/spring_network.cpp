@@ -5,8 +5,11 @@
 #include <cmath>
 #include <limits>
 
+#include "particle_sim/core/builders/pins.h"
+#include "particle_sim/core/forces/spring_body_forces.h"
+#include "particle_sim/core/forces/springs.h"
+#include "particle_sim/core/integrators/registry.h"
 #include "particle_sim/core/names.h"
-#include "particle_sim/core/particle_index.h"
 #include "particle_sim/core/validation.h"
 
 namespace particle_sim
@@ -15,9 +18,6 @@ namespace core
 {
 namespace
 {
-// Relative slack allowed above the strain limit, for rounding.
-constexpr double kStrainTolerance = 1e-9;
-
 std::string indexed(const char* field, std::size_t i)
 {
   return std::string(field) + "[" + std::to_string(i) + "]";
@@ -45,12 +45,6 @@ const char* toString(NetworkShape shape)
       return "jelly";
   }
   return "unknown";
-}
-
-Status validate(const StrainLimitDef& def)
-{
-  if (Status s = checkMin("max_strain", def.max_strain, 0.0); !s) return s;
-  return checkIntRange("strain_iterations", def.iterations, 1, 100000);
 }
 
 Status validate(const SpringNetworkDef& def, int max_particles)
@@ -118,39 +112,29 @@ Status validate(const SpringNetworkDef& def, int max_particles)
   return validate(def.integrator);
 }
 
-SpringNetworkBody::SpringNetworkBody(const SpringNetworkDef& def) : Body(def.name), def_(def)
+SpringNetworkBody::SpringNetworkBody(const SpringNetworkDef& def)
+    : Body(def.name),
+      def_(def),
+      forces_(makeSpringBodyForces(def_.springs, def_.baraff_witkin, def_.triangles)),
+      strain_limit_(def_.strain_limit, def_.springs, static_cast<int>(def_.positions.size()))
 {
   const int n = static_cast<int>(def_.positions.size());
   particles_.resize(n, n);
   mass_.resize(n);
   pinned_.assign(n, 0);
   pin_target_.setZero(3, n);
-  force_.setZero(3, n);
   saved_position_.setZero(3, n);
   saved_velocity_.setZero(3, n);
-  unlimited_position_.setZero(3, n);
-  implicit_x0_.setZero(3, n);
-  implicit_v0_.setZero(3, n);
-  rk_x_.setZero(3, n);
-  rk_v_.setZero(3, n);
-  for (int k = 0; k < 4; ++k)
-  {
-    rk_kx_[k].setZero(3, n);
-    rk_kv_[k].setZero(3, n);
-  }
-  // The implicit system couples the two ends of every spring; each spring keeps the indices of
-  // its four blocks (ii, ij, ji, jj).
-  // Baraff–Witkin elements couple the corners of each triangle and of each bend pair.
+  // The implicit system's pattern: the particle pairs every force element couples. The elements
+  // look up their block indices once; they depend only on the pattern, which every implicit
+  // method's solver is given.
   std::vector<std::pair<int, int>> pairs;
-  for (const Spring& spring : def_.springs)
-    pairs.emplace_back(spring.i, spring.j);
-  if (!def_.baraff_witkin.empty())
-  {
-    baraff_witkin_.emplace(def_.baraff_witkin);
-    baraff_witkin_->coupledPairs(pairs);
-  }
-  implicit_solver_.setPattern(n, pairs);
-  if (baraff_witkin_) baraff_witkin_->setPattern(implicit_solver_);
+  forces_.coupledPairs(pairs);
+  ImplicitEulerSolver pattern;
+  pattern.setPattern(n, pairs);
+  forces_.bindPattern(pattern);
+  for (const IntegratorInfo& info : integratorRegistry())
+    methods_.push_back(info.make(n, pairs));
   step_target_.setZero(3, n);
 
   // The size of the body's energy, for the blow-up check: total mass · extent.
@@ -163,12 +147,6 @@ SpringNetworkBody::SpringNetworkBody(const SpringNetworkDef& def) : Body(def.nam
     total_mass += def_.masses[i];
   }
   energy_scale_ = total_mass * std::max((high - low).norm(), 1e-3);
-  for (const Spring& spring : def_.springs)
-  {
-    spring_blocks_.push_back(
-        {implicit_solver_.blockIndex(spring.i, spring.i), implicit_solver_.blockIndex(spring.i, spring.j),
-         implicit_solver_.blockIndex(spring.j, spring.i), implicit_solver_.blockIndex(spring.j, spring.j)});
-  }
   reset();
 }
 
@@ -192,25 +170,14 @@ void SpringNetworkBody::reset()
     p.inverse_mass[index] = 0.0;
     pin_target_.col(index) = def_.positions[index];
   }
-  springs_ = def_.springs;
-  if (baraff_witkin_)
-  {
-    for (SpringClass c : {SpringClass::Stretch, SpringClass::Shear, SpringClass::Bend})
-    {
-      const BaraffWitkinDef& bw = def_.baraff_witkin;
-      const SpringConstants& k = c == SpringClass::Stretch ? bw.stretch : c == SpringClass::Shear ? bw.shear : bw.bend;
-      baraff_witkin_->setConstants(c, k.stiffness, k.damping);
-    }
-  }
+  forces_.resetConstants();
   integrator_ = def_.integrator;
+  guard_.clear();
   updateStabilityBound();
-  stability_events_ = 0;
-  last_stability_event_.clear();
   last_substeps_ = 1;
-  verlet_started_ = false;
   last_solve_ = SolverReport{};
   frozen_reason_.clear();
-  implicit_solver_.clearWarmStart();
+  restartMethods();
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -270,14 +237,14 @@ int SpringNetworkBody::nearestParticle(const Eigen::Vector3d& point) const
   return best;
 }
 
-bool SpringNetworkBody::hasSpringClass(SpringClass spring_class) const
+const std::vector<Spring>& SpringNetworkBody::springs() const
 {
-  if (baraff_witkin_ && (spring_class != SpringClass::Bend || !baraff_witkin_->definition().bends.empty())) return true;
-  for (const Spring& spring : springs_)
-  {
-    if (spring.spring_class == spring_class) return true;
-  }
-  return false;
+  return forces_.find<SpringForces>()->springs();  // makeSpringBodyForces() always adds one
+}
+
+double SpringNetworkBody::dampingBound() const
+{
+  return damping_bound_ + forces_.uniformDampingRate(forceContext(Eigen::Vector3d::Zero()));  // no gravity in it
 }
 
 Status SpringNetworkBody::setSpringConstants(std::optional<SpringClass> spring_class, double stiffness, double damping)
@@ -286,19 +253,7 @@ Status SpringNetworkBody::setSpringConstants(std::optional<SpringClass> spring_c
   if (spring_class && !hasSpringClass(*spring_class))
     return Status::failure("spring_class = '" + std::string(toString(*spring_class)) + "': body '" + name() +
                            "' has no such springs");
-  for (Spring& spring : springs_)
-  {
-    if (spring_class && spring.spring_class != *spring_class) continue;
-    spring.stiffness = stiffness;
-    spring.damping = damping;
-  }
-  if (baraff_witkin_)
-  {
-    for (SpringClass c : {SpringClass::Stretch, SpringClass::Shear, SpringClass::Bend})
-    {
-      if (!spring_class || *spring_class == c) baraff_witkin_->setConstants(c, stiffness, damping);
-    }
-  }
+  forces_.setClassConstants(spring_class, stiffness, damping);
   updateStabilityBound();
   return Status::success();
 }
@@ -306,11 +261,7 @@ Status SpringNetworkBody::setSpringConstants(std::optional<SpringClass> spring_c
 Status SpringNetworkBody::setIntegrator(const IntegratorDef& integrator)
 {
   if (Status s = validate(integrator); !s) return s;
-  if (integrator.type != integrator_.type)
-  {
-    verlet_started_ = false;
-    implicit_solver_.clearWarmStart();
-  }
+  if (integrator.type != integrator_.type) restartMethods();
   integrator_ = integrator;
   return Status::success();
 }
@@ -321,94 +272,12 @@ Status SpringNetworkBody::setIntegrator(const IntegratorDef& integrator)
 void SpringNetworkBody::computeForces(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v,
                                       const Eigen::Vector3d& gravity, Eigen::Matrix3Xd& force) const
 {
-  for (int i = 0; i < x.cols(); ++i)
-    force.col(i) = mass_[i] * gravity;
-  for (const Spring& s : springs_)
-  {
-    const Eigen::Vector3d f =
-        springForce(x.col(s.i), x.col(s.j), v.col(s.i), v.col(s.j), s.rest_length, s.stiffness, s.damping);
-    force.col(s.i) += f;
-    force.col(s.j) -= f;
-  }
-  if (baraff_witkin_) baraff_witkin_->addForces(x, v, force);
-  addAirForces(x, v, force);
-  // Global damping (Environment::damping): f −= damping · m · v (explicit, also in implicit steps).
-  if (damping_ != 0.0)
-  {
-    for (int i = 0; i < x.cols(); ++i)
-      force.col(i) -= damping_ * mass_[i] * v.col(i);
-  }
-}
-
-void SpringNetworkBody::addAirForces(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v,
-                                     Eigen::Matrix3Xd& force) const
-{
-  if (air_.drag == 0.0) return;
-  // Per triangle: f = drag · A · ((wind − v̄)·n) n with A n = (e1 × e2) / 2, shared by the corners.
-  for (const Eigen::Vector3i& t : def_.triangles)
-  {
-    const Eigen::Vector3d area_normal = 0.5 * (x.col(t[1]) - x.col(t[0])).cross(x.col(t[2]) - x.col(t[0]));
-    const double area = area_normal.norm();
-    if (area == 0.0) continue;
-    const Eigen::Vector3d relative = air_.wind - (v.col(t[0]) + v.col(t[1]) + v.col(t[2])) / 3.0;
-    // A ((u·n) n) = (u·(A n)) (A n) / A
-    const Eigen::Vector3d f = air_.drag * relative.dot(area_normal) / area * area_normal;
-    for (int c = 0; c < 3; ++c)
-      force.col(t[c]) += f / 3.0;
-  }
+  forces_.computeForces(forceContext(gravity), x, v, force);
 }
 
 double SpringNetworkBody::maxStrain() const
 {
-  double strain = baraff_witkin_ ? baraff_witkin_->maxStrain(particles_.position) : 0.0;
-  for (const Spring& s : springs_)
-  {
-    if (s.spring_class == SpringClass::Bend || s.rest_length == 0.0) continue;
-    const double length = (particles_.position.col(s.j) - particles_.position.col(s.i)).norm();
-    strain = std::max(strain, (length - s.rest_length) / s.rest_length);
-  }
-  return strain;
-}
-
-void SpringNetworkBody::limitStrain(double h)
-{
-  const StrainLimitDef& limit = def_.strain_limit;
-  if (limit.max_strain <= 0.0) return;
-  ParticlePool& p = particles_;
-  unlimited_position_ = p.position;
-
-  // Relaxation passes (Provot 1995): each over-stretched spring is shortened to its longest allowed
-  // length, its two ends moving in proportion to their inverse masses.
-  for (int pass = 0; pass < limit.iterations; ++pass)
-  {
-    bool over = false;
-    for (const Spring& s : springs_)
-    {
-      if (s.spring_class == SpringClass::Bend) continue;
-      const double w_i = p.inverse_mass[s.i], w_j = p.inverse_mass[s.j];
-      if (w_i + w_j == 0.0) continue;
-      const Eigen::Vector3d delta = p.position.col(s.j) - p.position.col(s.i);
-      const double length = delta.norm();
-      const double longest = (1.0 + limit.max_strain) * s.rest_length;
-      if (length <= longest * (1.0 + kStrainTolerance)) continue;
-      over = true;
-      const Eigen::Vector3d correction = (length - longest) / (length * (w_i + w_j)) * delta;
-      p.position.col(s.i) += w_i * correction;
-      p.position.col(s.j) -= w_j * correction;
-    }
-    if (!over) break;
-  }
-
-  // Velocities follow the positions: what the correction moved, over the step.
-  p.velocity += (p.position - unlimited_position_) / h;
-}
-
-void SpringNetworkBody::accelerations(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v,
-                                      const Eigen::Vector3d& gravity, Eigen::Matrix3Xd& a)
-{
-  computeForces(x, v, gravity, a);
-  for (int i = 0; i < a.cols(); ++i)
-    a.col(i) *= particles_.inverse_mass[i];  // 0 for pinned
+  return forces_.maxStrain(particles_.position);
 }
 
 double SpringNetworkBody::kineticEnergy() const
@@ -423,15 +292,7 @@ double SpringNetworkBody::kineticEnergy() const
 
 double SpringNetworkBody::potentialEnergy(const Eigen::Vector3d& gravity) const
 {
-  double energy = 0.0;
-  for (const Spring& s : springs_)
-    energy += springEnergy(particles_.position.col(s.i), particles_.position.col(s.j), s.rest_length, s.stiffness);
-  for (int i = 0; i < particles_.size(); ++i)
-  {
-    if (!pinned_[i]) energy -= mass_[i] * gravity.dot(particles_.position.col(i));
-  }
-  if (baraff_witkin_) energy += baraff_witkin_->energy(particles_.position);
-  return energy;
+  return forces_.energy(forceContext(gravity), particles_.position);
 }
 
 Eigen::Vector3d SpringNetworkBody::momentum() const
@@ -450,32 +311,23 @@ Eigen::Vector3d SpringNetworkBody::momentum() const
 void SpringNetworkBody::step(double dt, const Environment& env)
 {
   if (frozen()) return;
-  air_ = def_.triangles.empty() ? AirDef{} : env.air;
+  air_ = env.air;
   damping_ = env.damping;
+  gravity_ = env.gravity;
   ParticlePool& p = particles_;
   const int n = p.size();
   saved_position_ = p.position;
   saved_velocity_ = p.velocity;
   step_target_ = pin_target_;
-  const bool verlet_was_started = verlet_started_;
-  const IntegratorType type = chooseIntegrator(dt);
-  const bool explicit_method = type != IntegratorType::ImplicitEuler;
-
-  // See instability coming: an explicit method gets enough substeps for h (ω_max + c_max) to stay
-  // within 90 % of its stability limit.
-  int substeps = 1;
-  if (explicit_method)
-  {
-    const double needed = dt * (omega_bound_ + dampingBound()) / (0.9 * stabilityLimit(type));
-    substeps = static_cast<int>(std::min<double>(std::ceil(needed), integrator_.max_substeps));
-    substeps = std::max(substeps, 1);
-    if (substeps > 1 && substeps != last_substeps_)
-      recordEvent(std::string(toString(type)) + " needs h (omega + c) <= " + formatValue(stabilityLimit(type)) +
-                  ": dt = " + formatValue(dt) + " s split into " + std::to_string(substeps) +
-                  " substeps (omega_max = " + formatValue(omega_bound_) + " 1/s)");
-  }
-  const double energy_before = explicit_method ? mechanicalEnergy(env.gravity) : 0.0;
-  const double allowed_growth = 100.0 * (std::abs(energy_before) + energy_scale_ * (env.gravity.norm() + 1.0));
+  bool switched = false;
+  const IntegratorType type =
+      guard_.resolve(integrator_.type, dt, omega_bound_, dampingBound(), last_integrator_, switched);
+  if (switched) restartMethods();
+  const bool explicit_method = !isImplicit(type);
+  const bool had_history = method(type).hasHistory();
+  int substeps = guard_.substeps(type, dt, omega_bound_, dampingBound(), integrator_.max_substeps, last_substeps_);
+  guard_.beginStep(explicit_method, explicit_method ? mechanicalEnergy(env.gravity) : 0.0, energy_scale_,
+                   env.gravity.norm());
 
   for (;;)
   {
@@ -495,28 +347,22 @@ void SpringNetworkBody::step(double dt, const Environment& env)
     }
     pin_target_ = step_target_;
 
-    // Blow-up check of explicit methods: roll back and retry with twice the substeps.
+    // Blow-up of an explicit method: roll back and retry with more substeps, or freeze.
     const bool finite = p.position.allFinite() && p.velocity.allFinite();
-    const bool blew_up = explicit_method && (!finite || mechanicalEnergy(env.gravity) > energy_before + allowed_growth);
-    if (!blew_up) break;
+    if (!guard_.blewUp(finite, explicit_method ? mechanicalEnergy(env.gravity) : 0.0)) break;
     p.position = saved_position_;
     p.velocity = saved_velocity_;
-    verlet_started_ = verlet_was_started;
-    if (substeps >= integrator_.max_substeps)
+    if (!had_history) method(type).restart();
+    const int retry = guard_.retrySubsteps(type, dt, substeps, integrator_.max_substeps, frozen_reason_);
+    if (retry == 0)
     {
       // What ran, not what the body was built with.
       last_integrator_ = type;
       last_substeps_ = substeps;
-      frozen_reason_ = std::string(toString(type)) + " blew up at dt = " + formatValue(dt) + " s even with " +
-                       std::to_string(substeps) + " substeps (integrator.max_substeps); the body is frozen at its " +
-                       "last good state";
-      recordEvent(frozen_reason_);
       p.previous_position = saved_position_;
       return;
     }
-    substeps = std::min(2 * substeps, integrator_.max_substeps);
-    recordEvent(std::string(toString(type)) + " blew up at dt = " + formatValue(dt) + " s; step rolled back and " +
-                "retried with " + std::to_string(substeps) + " substeps");
+    substeps = retry;
   }
   last_substeps_ = substeps;
   last_integrator_ = type;
@@ -530,10 +376,7 @@ void SpringNetworkBody::step(double dt, const Environment& env)
   {
     p.position = saved_position_;
     p.velocity = saved_velocity_;
-    frozen_reason_ =
-        std::string(last_solve_.breakdown ? "the implicit solve failed (CG breakdown)" : "state became non-finite") +
-        " under " + toString(type) + " at dt = " + formatValue(dt) + " s; the body is frozen at its last good state";
-    recordEvent(frozen_reason_);
+    frozen_reason_ = guard_.freezeReason(type, dt, last_solve_.breakdown);
   }
 }
 
@@ -549,22 +392,7 @@ void SpringNetworkBody::substep(double h, IntegratorType type, const Environment
     if (pinned_[i]) p.velocity.col(i) = (pin_target_.col(i) - p.position.col(i)) / h;
   }
 
-  switch (type)
-  {
-    case IntegratorType::SymplecticEuler:
-      stepSymplecticEuler(h, env.gravity);
-      break;
-    case IntegratorType::Verlet:
-      stepVerlet(h, env.gravity);
-      break;
-    case IntegratorType::ImplicitEuler:
-    case IntegratorType::Auto:  // resolved before; implicit is the safe reading
-      stepImplicitEuler(h, env.gravity);
-      break;
-    case IntegratorType::Rk4:
-      stepRk4(h, env.gravity);
-      break;
-  }
+  last_solve_ = method(type).step(h, *this, integrator_);
 
   // Pinned particles end exactly on their target.
   for (int i = 0; i < n; ++i)
@@ -573,17 +401,39 @@ void SpringNetworkBody::substep(double h, IntegratorType type, const Environment
   }
   // Restriction forces: collisions, strain limiting, and collisions again for what it moved.
   resolveCollisions(env, p, &saved_velocity_, nullptr, def_.contact_thickness);
-  if (def_.strain_limit.max_strain > 0.0)
+  if (strain_limit_.enabled())
   {
-    limitStrain(h);
+    strain_limit_.apply(h, p);
     resolveCollisions(env, p, &saved_velocity_, nullptr, def_.contact_thickness);
   }
 }
 
-void SpringNetworkBody::recordEvent(std::string event)
+IntegrationMethod& SpringNetworkBody::method(IntegratorType type)
 {
-  ++stability_events_;
-  last_stability_event_ = std::move(event);
+  const std::vector<IntegratorInfo>& registry = integratorRegistry();
+  for (std::size_t k = 0; k < registry.size(); ++k)
+  {
+    if (registry[k].type == type) return *methods_[k];
+  }
+  return *methods_[0];  // unreachable: `auto` is resolved before and every other type is registered
+}
+
+void SpringNetworkBody::restartMethods()
+{
+  for (const std::unique_ptr<IntegrationMethod>& m : methods_)
+    m->restart();
+}
+
+void SpringNetworkBody::accelerations(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v, Eigen::Matrix3Xd& a) const
+{
+  computeForces(x, v, gravity_, a);
+  for (int i = 0; i < a.cols(); ++i)
+    a.col(i) *= particles_.inverse_mass[i];  // 0 for pinned
+}
+
+void SpringNetworkBody::addJacobians(const Eigen::Matrix3Xd& x, ImplicitEulerSolver& solver) const
+{
+  forces_.addJacobians(forceContext(gravity_), x, solver);
 }
 
 void SpringNetworkBody::updateStabilityBound()
@@ -592,15 +442,7 @@ void SpringNetworkBody::updateStabilityBound()
   // alike for damping; the bound is the largest row over the mass of its (free) particle.
   const int n = particles_.size();
   std::vector<double> stiffness_rows(n, 0.0), damping_rows(n, 0.0);
-  for (const Spring& s : springs_)
-  {
-    for (int end : {s.i, s.j})
-    {
-      stiffness_rows[end] += 2.0 * s.stiffness;
-      damping_rows[end] += 2.0 * s.damping;
-    }
-  }
-  if (baraff_witkin_) baraff_witkin_->addStabilityRows(def_.positions, stiffness_rows, damping_rows);
+  forces_.addStabilityRows(def_.positions, stiffness_rows, damping_rows);
   omega_bound_ = 0.0;
   damping_bound_ = 0.0;
   for (int i = 0; i < n; ++i)
@@ -609,159 +451,7 @@ void SpringNetworkBody::updateStabilityBound()
     omega_bound_ = std::max(omega_bound_, std::sqrt(stiffness_rows[i] / mass_[i]));
     damping_bound_ = std::max(damping_bound_, damping_rows[i] / mass_[i]);
   }
-  auto_choice_.clear();  // re-decide and re-explain at the next step
-}
-
-IntegratorType SpringNetworkBody::chooseIntegrator(double dt)
-{
-  if (integrator_.type != IntegratorType::Auto) return integrator_.type;
-  // Verlet where one step is stable with a factor 2 of margin; implicit Euler otherwise.
-  const double product = dt * (omega_bound_ + dampingBound());
-  const double limit = 0.5 * stabilityLimit(IntegratorType::Verlet);
-  const IntegratorType choice = product <= limit ? IntegratorType::Verlet : IntegratorType::ImplicitEuler;
-  if (auto_choice_.empty() || choice != last_integrator_)
-  {
-    if (choice != last_integrator_)
-    {
-      verlet_started_ = false;
-      implicit_solver_.clearWarmStart();
-    }
-    auto_choice_ = std::string(toString(choice)) + ": h (omega_max + c_max) = " + formatValue(product) +
-                   (choice == IntegratorType::Verlet ? " <= " : " > ") + formatValue(limit) +
-                   " (half of Verlet's limit 2; omega_max = " + formatValue(omega_bound_) +
-                   " 1/s, c_max = " + formatValue(dampingBound()) + " 1/s, dt = " + formatValue(dt) + " s)";
-  }
-  return choice;
-}
-
-// The lecture's loop: v += h f(x, v) / m, then x += h v with the new v.
-void SpringNetworkBody::stepSymplecticEuler(double h, const Eigen::Vector3d& gravity)
-{
-  ParticlePool& p = particles_;
-  accelerations(p.position, p.velocity, gravity, force_);
-  p.velocity += h * force_;
-  p.position += h * p.velocity;
-  last_solve_ = SolverReport{};
-}
-
-// The lecture's Verlet, x_{n+1} = x_n + k_d (x_n − x_{n−1}) + h² f(x_n, v_n) / m, written with the
-// displacement u_n = (x_n − x_{n−1}) / h kept in the velocity array (so collisions and pins can edit
-// it like a velocity): u_{n+1} = k_d u_n + h a_n, x_{n+1} = x_n + h u_{n+1}. The first step after
-// build, reset or a switch starts it at second order: x_{−1} = x_0 − h v_0 + h² a_0 / 2, i.e.
-// u_0 = v_0 − h a_0 / 2.
-void SpringNetworkBody::stepVerlet(double h, const Eigen::Vector3d& gravity)
-{
-  ParticlePool& p = particles_;
-  accelerations(p.position, p.velocity, gravity, force_);
-  if (!verlet_started_)
-  {
-    p.velocity -= 0.5 * h * force_;
-    verlet_started_ = true;
-  }
-  p.velocity = integrator_.verlet_damping * p.velocity + h * force_;
-  p.position += h * p.velocity;
-  last_solve_ = SolverReport{};
-}
-
-void SpringNetworkBody::assembleImplicit(const Eigen::Matrix3Xd& x)
-{
-  // Springs: ∂f_i/∂x_i = ∂f_j/∂x_j = −∂f_i/∂x_j = −∂f_j/∂x_i (definite form), alike for v.
-  for (std::size_t s = 0; s < springs_.size(); ++s)
-  {
-    const Spring& spring = springs_[s];
-    Eigen::Matrix3d dfdx, dfdv;
-    springJacobians(x.col(spring.i), x.col(spring.j), spring.rest_length, spring.stiffness, spring.damping, true, dfdx,
-                    dfdv);
-    const auto& blocks = spring_blocks_[s];
-    implicit_solver_.addBlock(blocks[0], dfdx, dfdv);
-    implicit_solver_.addBlock(blocks[1], -dfdx, -dfdv);
-    implicit_solver_.addBlock(blocks[2], -dfdx, -dfdv);
-    implicit_solver_.addBlock(blocks[3], dfdx, dfdv);
-  }
-  // Baraff–Witkin conditions, in their definite form.
-  if (baraff_witkin_) baraff_witkin_->addJacobians(x, implicit_solver_);
-  // Global damping f = −c m v: ∂f_i/∂v_i = −c m_i I.
-  if (damping_ != 0.0)
-  {
-    for (int i = 0; i < x.cols(); ++i)
-      implicit_solver_.addToDiagonal(i, Eigen::Matrix3d::Zero(), -damping_ * mass_[i] * Eigen::Matrix3d::Identity());
-  }
-}
-
-void SpringNetworkBody::stepImplicitEuler(double h, const Eigen::Vector3d& gravity)
-{
-  ParticlePool& p = particles_;
-  const int n = p.size();
-
-  // Without moving pins or wind nothing does work on the body, so its energy must not grow.
-  bool conservative = air_.drag == 0.0 || air_.wind.isZero();
-  for (int i = 0; i < n && conservative; ++i)
-    conservative = !pinned_[i] || p.velocity.col(i).isZero();
-  const double energy_before = conservative ? mechanicalEnergy(gravity) : 0.0;
-  implicit_x0_ = p.position;
-  implicit_v0_ = p.velocity;
-
-  // 1. Baraff & Witkin's step: one linearisation at (x0, v0).
-  computeForces(p.position, p.velocity, gravity, force_);
-  implicit_solver_.begin(h, mass_, force_, &implicit_v0_);
-  assembleImplicit(p.position);
-  last_solve_ =
-      implicit_solver_.solve(pinned_, integrator_.cg_tolerance, integrator_.cg_max_iterations, p.position, p.velocity);
-  if (!conservative || last_solve_.breakdown) return;
-
-  // 2. If that one linearisation gained energy (large rotations or stretches in one step), Newton
-  //    iterations of full backward Euler: solve (M − h ∂f/∂v − h² ∂f/∂x) δ = h f(x_k, v_k) − M (v_k − v0)
-  //    at x_k = x0 + h v_k, then v_{k+1} = v_k + δ.
-  const double tolerance = 1e-12 * (1.0 + std::abs(energy_before));
-  int newton = 0;
-  for (; newton < kNewtonIterations && mechanicalEnergy(gravity) > energy_before + tolerance; ++newton)
-  {
-    computeForces(p.position, p.velocity, gravity, force_);
-    for (int i = 0; i < n; ++i)
-      force_.col(i) -= mass_[i] * (p.velocity.col(i) - implicit_v0_.col(i)) / h;
-    implicit_solver_.begin(h, mass_, force_, nullptr);
-    assembleImplicit(p.position);
-    p.position = implicit_x0_;  // the solve sets x = x0 + h v_{k+1}
-    last_solve_ = implicit_solver_.solve(pinned_, integrator_.cg_tolerance, integrator_.cg_max_iterations, p.position,
-                                         p.velocity);
-    if (last_solve_.breakdown) return;
-  }
-
-  // 3. Still more energy than before (a non-convex energy can do that even to backward Euler): the
-  //    excess is taken out of the kinetic energy, and reported.
-  const double energy_after = mechanicalEnergy(gravity);
-  if (energy_after > energy_before + tolerance)
-  {
-    const double kinetic = kineticEnergy();
-    const double allowed = std::max(0.0, kinetic - (energy_after - energy_before));
-    const double scale = kinetic > 0.0 ? std::sqrt(allowed / kinetic) : 0.0;
-    for (int i = 0; i < n; ++i)
-    {
-      if (!pinned_[i]) p.velocity.col(i) *= scale;
-    }
-    recordEvent("implicit_euler would have gained " + formatValue(energy_after - energy_before) + " J in one step (" +
-                std::to_string(newton) + " Newton iterations); velocities scaled by " + formatValue(scale));
-  }
-}
-
-// Classical fourth-order Runge–Kutta on (x, v) with derivative (v, a(x, v)).
-void SpringNetworkBody::stepRk4(double h, const Eigen::Vector3d& gravity)
-{
-  ParticlePool& p = particles_;
-  const Eigen::Matrix3Xd& x0 = saved_position_;  // the state at the start of the step
-  rk_kx_[0] = p.velocity;
-  accelerations(p.position, p.velocity, gravity, rk_kv_[0]);
-  const double stage_offset[3] = {0.5 * h, 0.5 * h, h};
-  for (int k = 1; k < 4; ++k)
-  {
-    rk_x_ = x0 + stage_offset[k - 1] * rk_kx_[k - 1];
-    rk_v_ = p.velocity + stage_offset[k - 1] * rk_kv_[k - 1];
-    rk_kx_[k] = rk_v_;
-    accelerations(rk_x_, rk_v_, gravity, rk_kv_[k]);
-  }
-  p.position = x0 + (h / 6.0) * (rk_kx_[0] + 2.0 * rk_kx_[1] + 2.0 * rk_kx_[2] + rk_kx_[3]);
-  p.velocity += (h / 6.0) * (rk_kv_[0] + 2.0 * rk_kv_[1] + 2.0 * rk_kv_[2] + rk_kv_[3]);
-  last_solve_ = SolverReport{};
+  guard_.forgetChoice();  // re-decide and re-explain at the next step
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -806,8 +496,7 @@ SpringNetworkDef buildRope(const RopeDef& def)
     for (int i = 0; i + 2 < n; ++i)
       net.springs.push_back({i, i + 2, 2.0 * segment, def.bend_stiffness, def.bend_damping, SpringClass::Bend});
   }
-  for (int pin : def.pins)
-    net.pins.push_back(resolveParticleIndex(pin, n));
+  appendPins(def.pins, n, net.pins);
   return net;
 }
 

@@ -4,7 +4,7 @@
 
 #include <gtest/gtest.h>
 
-#include "particle_sim/core/baraff_witkin_model.h"
+#include "particle_sim/core/forces/baraff_witkin_model.h"
 #include "particle_sim/ros/spring_constants.h"
 
 using namespace particle_sim;

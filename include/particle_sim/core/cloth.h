@@ -23,7 +23,7 @@ const char* toString(ClothModel model);
 bool parseClothModel(const std::string& text, ClothModel& model);
 
 /// Default constants of a spring cloth (Provot's springs) [N/m], [N·s/m]. Those of a Baraff–Witkin
-/// cloth are kBaraffWitkinStretch, kBaraffWitkinShear and kBaraffWitkinBend (baraff_witkin_model.h).
+/// cloth are kBaraffWitkinStretch, kBaraffWitkinShear and kBaraffWitkinBend (forces/baraff_witkin_model.h).
 constexpr SpringConstants kSpringClothStretch{1000.0, 0.5};
 constexpr SpringConstants kSpringClothShear{200.0, 0.2};
 constexpr SpringConstants kSpringClothBend{20.0, 0.05};

@@ -8,7 +8,10 @@ namespace particle_sim
 {
 namespace core
 {
-/// The time integrators a spring body can use (chosen per body).
+/// The time integrators a spring body can use (chosen per body). Each is a unit of its own in
+/// core/integrators/ and declares its name, order, stability limit and whether it is implicit in
+/// the registry (integrators/registry.h), which toString(), parseIntegratorType(),
+/// integratorTypeNames() and stabilityLimit() read.
 enum class IntegratorType
 {
   SymplecticEuler,  ///< the lecture's loop: v += h f/m, then x += h v (first order)
@@ -35,9 +38,13 @@ struct IntegratorDef
   int max_substeps = 64;        ///< explicit methods: most substeps a step may be split into to stay stable, >= 1
 };
 
-/// The stability limit h·ω of an explicit method on an undamped oscillator of frequency ω:
-/// 2 for symplectic Euler and Verlet, 2√2 for RK4, infinite for implicit Euler.
+/// The stability limit h·ω of a method on an undamped oscillator of frequency ω, as the method
+/// declares it (integrators/registry.h): 2 for symplectic Euler and Verlet, 2√2 for RK4, infinite
+/// for implicit Euler (and for `auto`, which picks a stable method).
 double stabilityLimit(IntegratorType type);
+/// True for a method that solves a linear system each step (implicit Euler); false for explicit
+/// methods and for `auto`, which is not a method (ask the body which method ran).
+bool isImplicit(IntegratorType type);
 
 Status validate(const IntegratorDef& def);
 

@@ -1,15 +1,18 @@
 #pragma once
 
 #include <Eigen/Core>
-#include <array>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
-#include "particle_sim/core/baraff_witkin_model.h"
 #include "particle_sim/core/body.h"
-#include "particle_sim/core/implicit_euler_solver.h"
+#include "particle_sim/core/constraints/strain_limit.h"
+#include "particle_sim/core/forces/baraff_witkin_model.h"
+#include "particle_sim/core/forces/force_set.h"
 #include "particle_sim/core/integrator.h"
+#include "particle_sim/core/integrators/integration_method.h"
+#include "particle_sim/core/integrators/stability_guard.h"
 #include "particle_sim/core/spring.h"
 #include "particle_sim/core/status.h"
 
@@ -27,19 +30,6 @@ enum class NetworkShape
 };
 
 const char* toString(NetworkShape shape);
-
-/// Provot's strain limiting (1995): after each step, relaxation passes over the stretch and shear
-/// springs move the ends of every spring longer than (1 + max_strain) times its rest length back to
-/// that length (shared by inverse mass; pinned ends stay), until none is over or `iterations`
-/// passes are done. Velocities change by the position correction over dt.
-struct StrainLimitDef
-{
-  double max_strain = 0.0;  ///< [-] > 0 turns it on (e.g. 0.1 = 10 %); 0 = off
-  int iterations = 50;      ///< cap on relaxation passes, >= 1 (the limit holds exactly only with enough)
-};
-
-/// max_strain >= 0 and iterations in [1, 100000]; every body kind with a strain limit checks it here.
-Status validate(const StrainLimitDef& def);
 
 /// A body of particles joined by springs. Ropes, cloth and jelly are builders of this one
 /// structure, not separate physics.
@@ -63,14 +53,17 @@ struct SpringNetworkDef
 /// field (e.g. "springs[3].stiffness"), its value and the allowed range.
 Status validate(const SpringNetworkDef& def, int max_particles);
 
-/// A spring network: particles (struct-of-arrays pool), springs and pins, advanced by its chosen
-/// integrator. Forces: gravity m g on every particle and the lecture's spring forces.
+/// A spring network: particles (struct-of-arrays pool), pins and force elements, advanced by its
+/// chosen integrator. The forces are a ForceSet (makeSpringBodyForces(): gravity, springs,
+/// Baraff–Witkin conditions, air, global damping); the body asks it for forces, Jacobian blocks,
+/// stability rows, energy and run-time constants, and knows none of the elements by name.
 ///
 /// Pins make a particle kinematic (inverse mass 0): during each step it moves in a straight line
 /// to its pin target, and it ends the step exactly there. Targets can be moved between steps (a
 /// gripper carrying the rope end). Implicit Euler filters pinned degrees of freedom.
 ///
-/// Stability. Before each step an explicit method sees instability coming from the body's
+/// Stability (the policy is StabilityGuard, integrators/stability_guard.h; the methods are units in
+/// core/integrators/). Before each step an explicit method sees instability coming from the body's
 /// stability bound (Gershgorin: ω_max² ≤ max_i Σ_elements k |∂C/∂x_i| Σ_n |∂C/∂x_n| / m_i, and
 /// alike a damping rate c_max): when h (ω_max + c_max) exceeds the method's limit (2 for symplectic
 /// Euler and Verlet, 2√2 for RK4) with a 10 % margin, the step is split into enough substeps. After
@@ -85,7 +78,7 @@ Status validate(const SpringNetworkDef& def, int max_particles);
 /// The `auto` integrator picks, per step, Verlet when h (ω_max + c_max) is at most half its limit
 /// (one substep, with margin), else implicit Euler; it re-decides when the spring constants or
 /// the step change and says what it picked and why (autoChoice()).
-class SpringNetworkBody : public Body
+class SpringNetworkBody : public Body, private DynamicSystem
 {
 public:
   /// `def` must have passed validate().
@@ -111,13 +104,16 @@ public:
   /// Index of the particle nearest to `point`.
   int nearestParticle(const Eigen::Vector3d& point) const;
 
-  // Springs and Baraff–Witkin conditions ------------------------------------------------------
-  const std::vector<Spring>& springs() const { return springs_; }
-  /// The Baraff–Witkin energies, or null for a spring-only body.
-  const BaraffWitkinModel* baraffWitkin() const { return baraff_witkin_ ? &*baraff_witkin_ : nullptr; }
-  bool hasSpringClass(SpringClass spring_class) const;
-  /// Sets stiffness [N/m] and damping [N·s/m] of every spring of `spring_class` (all springs when
-  /// empty), and of the Baraff–Witkin condition class of that name. Takes effect at the next step;
+  // Force elements ---------------------------------------------------------------------------
+  const ForceSet& forces() const { return forces_; }
+  /// Read-only views of two elements, for drawing and status: the springs with their current
+  /// constants (empty for a body without springs), and the Baraff–Witkin energies (null for a
+  /// spring-only body).
+  const std::vector<Spring>& springs() const;
+  const BaraffWitkinModel* baraffWitkin() const { return forces_.find<BaraffWitkinModel>(); }
+  bool hasSpringClass(SpringClass spring_class) const { return forces_.hasClass(spring_class); }
+  /// Sets stiffness [N/m] and damping [N·s/m] of `spring_class` (every class when empty) in every
+  /// force element that has it (springs, Baraff–Witkin conditions). Takes effect at the next step;
   /// the implicit system is rebuilt every step.
   Status setSpringConstants(std::optional<SpringClass> spring_class, double stiffness, double damping);
 
@@ -130,14 +126,14 @@ public:
   /// Substeps the last step was split into (1 = none).
   int lastSubsteps() const { return last_substeps_; }
   /// For `auto`: what it picked and why, e.g. "verlet: h (ω + c) = 0.31 <= 1 (ω_max = 41.2 1/s)".
-  const std::string& autoChoice() const { return auto_choice_; }
+  const std::string& autoChoice() const { return guard_.autoChoice(); }
   /// Upper bounds of the highest frequency ω_max [1/s] and damping rate c_max [1/s] of the body
   /// (Gershgorin, at rest geometry; recomputed when spring constants change).
   double frequencyBound() const { return omega_bound_; }
-  double dampingBound() const { return damping_bound_ + damping_; }
+  double dampingBound() const;
   /// Stability events (substeps added, blow-ups rolled back) since build or reset.
-  long long stabilityEvents() const { return stability_events_; }
-  const std::string& lastStabilityEvent() const { return last_stability_event_; }
+  long long stabilityEvents() const { return guard_.events(); }
+  const std::string& lastStabilityEvent() const { return guard_.lastEvent(); }
 
   // Measurements -------------------------------------------------------------------------------
   /// Largest (|x_j − x_i| − L) / L over the stretch and shear springs [-].
@@ -148,63 +144,65 @@ public:
   bool frozen() const { return !frozen_reason_.empty(); }
   const std::string& frozenReason() const { return frozen_reason_; }
 
-  /// Total force on every particle at state (x, v): gravity, springs and the air of the current step.
+  /// Total force on every particle at state (x, v): every force element, with the air and global
+  /// damping of the current step.
   void computeForces(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v, const Eigen::Vector3d& gravity,
                      Eigen::Matrix3Xd& force) const;
 
 private:
-  void stepSymplecticEuler(double h, const Eigen::Vector3d& gravity);
-  void stepVerlet(double h, const Eigen::Vector3d& gravity);
-  void stepImplicitEuler(double h, const Eigen::Vector3d& gravity);
-  // Adds every element's Jacobian blocks at positions x to the implicit solver.
-  void assembleImplicit(const Eigen::Matrix3Xd& x);
-  void stepRk4(double h, const Eigen::Vector3d& gravity);
-  // Provot's correction of over-stretched springs, then velocities by the correction over h.
-  void limitStrain(double h);
   // One (sub)step of length h with `type`: pins, integrator, pin targets, collisions, strain limit.
   void substep(double h, IntegratorType type, const Environment& env);
   // Recomputes omega_bound_ and damping_bound_ from the current constants.
   void updateStabilityBound();
-  // Resolves `auto` for step dt (and records why).
-  IntegratorType chooseIntegrator(double dt);
   // Kinetic plus potential energy of the current state [J].
   double mechanicalEnergy(const Eigen::Vector3d& gravity) const { return kineticEnergy() + potentialEnergy(gravity); }
-  void recordEvent(std::string event);
-  // a = f / m for free particles, 0 for pinned ones.
-  void accelerations(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v, const Eigen::Vector3d& gravity,
-                     Eigen::Matrix3Xd& a);
-  // Adds the air's force on every surface triangle (nothing when there is no air or no triangle).
-  void addAirForces(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v, Eigen::Matrix3Xd& force) const;
+  // The method of `type` (not auto).
+  IntegrationMethod& method(IntegratorType type);
+  // Forgets every method's history (Verlet's start, warm starts).
+  void restartMethods();
+
+  // What the integrators see (DynamicSystem), with the gravity of the current step.
+  Eigen::Matrix3Xd& positions() override { return particles_.position; }
+  Eigen::Matrix3Xd& velocities() override { return particles_.velocity; }
+  const Eigen::Matrix3Xd& stepStartPositions() const override { return saved_position_; }
+  const Eigen::VectorXd& masses() const override { return mass_; }
+  const std::vector<char>& pinned() const override { return pinned_; }
+  void computeForces(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v, Eigen::Matrix3Xd& force) const override
+  {
+    computeForces(x, v, gravity_, force);
+  }
+  void accelerations(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v, Eigen::Matrix3Xd& a) const override;
+  void addJacobians(const Eigen::Matrix3Xd& x, ImplicitEulerSolver& solver) const override;
+  void coupledPairs(std::vector<std::pair<int, int>>& pairs) const override { forces_.coupledPairs(pairs); }
+  bool suppliesEnergy() const override { return forces_.suppliesEnergy(forceContext(gravity_)); }
+  double mechanicalEnergy() const override { return mechanicalEnergy(gravity_); }
+  void recordEvent(std::string event) override { guard_.record(std::move(event)); }
+  // What the force elements read besides the state, with `gravity` [m/s²].
+  ForceContext forceContext(const Eigen::Vector3d& gravity) const { return {mass_, pinned_, gravity, air_, damping_}; }
 
   SpringNetworkDef def_;
-  std::vector<Spring> springs_;
+  ForceSet forces_;
   IntegratorDef integrator_;
   AirDef air_;            // the air of the current step
   double damping_ = 0.0;  // [1/s] global damping of the current step (Environment::damping)
-  Eigen::VectorXd mass_;  // [kg], kept for pinned particles too
+  Eigen::Vector3d gravity_ = Eigen::Vector3d::Zero();  // [m/s²] gravity of the current step
+  Eigen::VectorXd mass_;                               // [kg], kept for pinned particles too
   std::vector<char> pinned_;
   Eigen::Matrix3Xd pin_target_;
-  bool verlet_started_ = false;  // Verlet needs its second-order start after build, reset or a switch
   IntegratorType last_integrator_ = IntegratorType::ImplicitEuler;
   int last_substeps_ = 1;
   double omega_bound_ = 0.0;    // [1/s]
   double damping_bound_ = 0.0;  // [1/s], springs and conditions (global damping added at use)
   double energy_scale_ = 0.0;   // [J] total mass · (|g| + 1 m/s²) · size, for the blow-up check
-  std::string auto_choice_;
-  long long stability_events_ = 0;
-  std::string last_stability_event_;
+  StabilityGuard guard_;        // substeps, rollback, freeze and `auto`
   SolverReport last_solve_;
   std::string frozen_reason_;
 
   // Work arrays, sized once.
-  ImplicitEulerSolver implicit_solver_;
-  std::vector<std::array<int, 4>> spring_blocks_;  // per spring: its blocks ii, ij, ji, jj
-  std::optional<BaraffWitkinModel> baraff_witkin_;
-  Eigen::Matrix3Xd force_, saved_position_, saved_velocity_, unlimited_position_;
-  Eigen::Matrix3Xd step_target_;                // pin targets at the end of the whole step (substeps approach them)
-  Eigen::Matrix3Xd implicit_x0_, implicit_v0_;  // state at the start of an implicit (sub)step
-  static constexpr int kNewtonIterations = 8;
-  Eigen::Matrix3Xd rk_x_, rk_v_, rk_kx_[4], rk_kv_[4];
+  std::vector<std::unique_ptr<IntegrationMethod>> methods_;  // one per registered integrator, in its order
+  StrainLimit strain_limit_;                                 // Provot's constraint, applied after the integrator
+  Eigen::Matrix3Xd saved_position_, saved_velocity_;
+  Eigen::Matrix3Xd step_target_;  // pin targets at the end of the whole step (substeps approach them)
 };
 
 /// A rope: `particles` evenly spaced from `start` to `end`, N − 1 stretch springs and, when

@@ -2,7 +2,7 @@
 #include <filesystem>
 
 #include "body_yaml.h"
-#include "particle_sim/core/particle_index.h"
+#include "particle_sim/core/builders/pins.h"
 #include "particle_sim/scene/obj_mesh.h"
 
 namespace particle_sim
@@ -54,7 +54,7 @@ void addFramePins(MapReader& reader, const std::vector<FramePinEntry>& entries, 
     std::vector<int> indices;
     int index = 0;
     if (YAML::convert<int>::decode(e.node["pin"], index))
-      indices.push_back(core::resolveParticleIndex(index, count));
+      indices.push_back(core::resolvePinIndex(index, count));
     else if (!resolve_name(e.pin, indices))
       reader.fail(e.node["pin"], reader.field("frame_pins") + ": pin = " + core::quoteReceived(e.pin) +
                                      " is neither an index nor a pin name");

@@ -1,4 +1,4 @@
-#include "particle_sim/core/implicit_euler_solver.h"
+#include "particle_sim/core/integrators/implicit_euler_solver.h"
 
 #include <Eigen/LU>
 #include <algorithm>

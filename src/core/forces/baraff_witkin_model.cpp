@@ -1,7 +1,8 @@
-#include "particle_sim/core/baraff_witkin_model.h"
+#include "particle_sim/core/forces/baraff_witkin_model.h"
 
-#include <map>
 #include <string>
+
+#include "particle_sim/core/builders/mesh_topology.h"
 
 namespace particle_sim
 {
@@ -28,21 +29,7 @@ bool buildBaraffWitkin(const std::vector<Eigen::Vector3d>& positions, const std:
   }
 
   // Interior edges: the directed edge a -> b of one triangle and its two opposite vertices.
-  struct Side
-  {
-    int triangle, a, b, opposite;
-  };
-  std::map<std::pair<int, int>, std::vector<Side>> edges;
-  for (std::size_t k = 0; k < triangles.size(); ++k)
-  {
-    const Eigen::Vector3i& t = triangles[k];
-    for (int c = 0; c < 3; ++c)
-    {
-      const int a = t[c], b = t[(c + 1) % 3], opposite = t[(c + 2) % 3];
-      edges[{std::min(a, b), std::max(a, b)}].push_back({static_cast<int>(k), a, b, opposite});
-    }
-  }
-  for (const auto& [edge, sides] : edges)
+  for (const auto& [edge, sides] : meshEdges(triangles))
   {
     if (sides.size() != 2) continue;  // a border edge (or a non-manifold one) bends nothing
     BwBend bend;
@@ -67,6 +54,21 @@ void BaraffWitkinModel::setConstants(SpringClass spring_class, double stiffness,
   c = {stiffness, damping};
 }
 
+void BaraffWitkinModel::setClassConstants(std::optional<SpringClass> spring_class, double stiffness, double damping)
+{
+  for (SpringClass c : {SpringClass::Stretch, SpringClass::Shear, SpringClass::Bend})
+  {
+    if (!spring_class || *spring_class == c) setConstants(c, stiffness, damping);
+  }
+}
+
+void BaraffWitkinModel::resetConstants()
+{
+  def_.stretch = built_[0];
+  def_.shear = built_[1];
+  def_.bend = built_[2];
+}
+
 const SpringConstants& BaraffWitkinModel::constants(SpringClass spring_class) const
 {
   return spring_class == SpringClass::Stretch ? def_.stretch
@@ -86,7 +88,7 @@ void BaraffWitkinModel::coupledPairs(std::vector<std::pair<int, int>>& pairs) co
         pairs.emplace_back(b.v[m], b.v[n]);
 }
 
-void BaraffWitkinModel::setPattern(const ImplicitEulerSolver& solver)
+void BaraffWitkinModel::bindPattern(const ImplicitEulerSolver& solver)
 {
   triangle_blocks_.clear();
   bend_blocks_.clear();

@@ -2,12 +2,14 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "particle_sim/core/baraff_witkin.h"
-#include "particle_sim/core/implicit_euler_solver.h"
+#include "particle_sim/core/forces/force_element.h"
+#include "particle_sim/core/integrators/implicit_euler_solver.h"
 #include "particle_sim/core/spring.h"
 #include "particle_sim/core/status.h"
 
@@ -49,12 +51,14 @@ struct BaraffWitkinDef
 bool buildBaraffWitkin(const std::vector<Eigen::Vector3d>& positions, const std::vector<Eigen::Vector2d>& uvs,
                        const std::vector<Eigen::Vector3i>& triangles, BaraffWitkinDef& def, std::string& error);
 
-/// Evaluates a cloth's Baraff–Witkin forces, energy and Jacobians. The implicit solver's block
-/// indices of every element are looked up once, in setPattern().
-class BaraffWitkinModel
+/// Baraff & Witkin's (1998) cloth conditions as a force element: stretch, shear and bend
+/// (kernels in baraff_witkin.h; bend gradient after Bridson et al. 2003). Evaluates forces,
+/// energy, Jacobians and stability rows. The implicit solver's block indices of every element
+/// are looked up once, in bindPattern().
+class BaraffWitkinModel : public ForceElement
 {
 public:
-  explicit BaraffWitkinModel(const BaraffWitkinDef& def) : def_(def) {}
+  explicit BaraffWitkinModel(const BaraffWitkinDef& def) : def_(def), built_{def.stretch, def.shear, def.bend} {}
 
   const BaraffWitkinDef& definition() const { return def_; }
   /// Sets stiffness and damping of one class (stretch, shear or bend).
@@ -62,25 +66,46 @@ public:
   const SpringConstants& constants(SpringClass spring_class) const;
 
   /// The particle pairs each element couples (for the solver's pattern).
-  void coupledPairs(std::vector<std::pair<int, int>>& pairs) const;
+  void coupledPairs(std::vector<std::pair<int, int>>& pairs) const override;
   /// Looks up every element's blocks in `solver` (after its pattern is set).
-  void setPattern(const ImplicitEulerSolver& solver);
+  void bindPattern(const ImplicitEulerSolver& solver) override;
 
   /// force += −k ∂C C − k_d ∂C Ċ for every condition.
   void addForces(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v, Eigen::Matrix3Xd& force) const;
+  void addForces(const ForceContext& /*context*/, const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v,
+                 Eigen::Matrix3Xd& force) const override
+  {
+    addForces(x, v, force);
+  }
   /// Adds every element's blocks K_mn = −k (∂C_m ∂C_nᵀ + H_mn C) and D_mn = −k_d ∂C_m ∂C_nᵀ to the
   /// solver, in the definite form: the H C term only for stretched stretch conditions (where it
   /// is negative semi-definite), never for shear and bend (Gauss–Newton), so the system stays
   /// positive definite.
   void addJacobians(const Eigen::Matrix3Xd& x, ImplicitEulerSolver& solver) const;
+  void addJacobians(const ForceContext& /*context*/, const Eigen::Matrix3Xd& x,
+                    ImplicitEulerSolver& solver) const override
+  {
+    addJacobians(x, solver);
+  }
   /// Adds each element's Gershgorin row sums k |∂C/∂x_m| Σ_n |∂C/∂x_n| (and alike with damping) at
   /// the rest positions `x`, for the body's stability bound.
   void addStabilityRows(const std::vector<Eigen::Vector3d>& x, std::vector<double>& stiffness_rows,
-                        std::vector<double>& damping_rows) const;
+                        std::vector<double>& damping_rows) const override;
   /// Σ k/2 C² [J].
   double energy(const Eigen::Matrix3Xd& x) const;
+  void addEnergy(const ForceContext& /*context*/, const Eigen::Matrix3Xd& x, double& energy_sum) const override
+  {
+    energy_sum += energy(x);
+  }
+  /// Stretch and shear always; bend when the surface has an interior edge.
+  bool hasClass(SpringClass spring_class) const override
+  {
+    return spring_class != SpringClass::Bend || !def_.bends.empty();
+  }
+  void setClassConstants(std::optional<SpringClass> spring_class, double stiffness, double damping) override;
+  void resetConstants() override;
   /// Per triangle, max(|w_u|/b_u, |w_v|/b_v) − 1; the largest over the cloth.
-  double maxStrain(const Eigen::Matrix3Xd& x) const;
+  double maxStrain(const Eigen::Matrix3Xd& x) const override;
   /// Per vertex, the largest strain of its triangles (assigned into `strains`, sized by the caller).
   void vertexStrains(const Eigen::Matrix3Xd& x, std::vector<double>& strains) const;
 
@@ -89,6 +114,7 @@ private:
   Eigen::Matrix<double, 3, 4> corners(const Eigen::Matrix3Xd& x, const BwBend& b) const;
 
   BaraffWitkinDef def_;
+  std::array<SpringConstants, 3> built_;             // stretch, shear, bend as built (reset puts them back)
   std::vector<std::array<int, 9>> triangle_blocks_;  // block (m, n) at 3m + n
   std::vector<std::array<int, 16>> bend_blocks_;     // block (m, n) at 4m + n
 };

@@ -1,0 +1,84 @@
+#pragma once
+
+#include <Eigen/Core>
+#include <optional>
+#include <utility>
+#include <vector>
+
+#include "particle_sim/core/environment.h"
+#include "particle_sim/core/integrators/implicit_euler_solver.h"
+#include "particle_sim/core/spring.h"
+
+namespace particle_sim
+{
+namespace core
+{
+/// What a force element may read besides the state (x, v): the body's particles and the
+/// environment of the current step.
+struct ForceContext
+{
+  const Eigen::VectorXd& mass;      ///< [kg] per particle (kept for pinned ones too)
+  const std::vector<char>& pinned;  ///< 1 = kinematic particle (no gravity energy)
+  Eigen::Vector3d gravity;          ///< [m/s²]
+  AirDef air;                       ///< the air of the current step
+  double damping = 0.0;             ///< [1/s] global damping of the current step (Environment::damping)
+};
+
+/// One kind of force acting on a spring body (springs, Baraff–Witkin conditions, air, global
+/// damping, gravity). A body is composed of elements and asks each, in a fixed order, for:
+/// its forces at (x, v), its Jacobian blocks (pattern bound once), its rows of the stability
+/// bound, its potential energy, and the constants that can be set at run time. Every method
+/// but addForces() has a "contributes nothing" default.
+class ForceElement
+{
+public:
+  virtual ~ForceElement() = default;
+
+  /// force += the element's force on every particle at (x, v) [N].
+  virtual void addForces(const ForceContext& context, const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v,
+                         Eigen::Matrix3Xd& force) const = 0;
+
+  // Jacobian ------------------------------------------------------------------------------------
+  /// Appends the particle pairs the element's Jacobian couples (for the solver's pattern).
+  virtual void coupledPairs(std::vector<std::pair<int, int>>& /*pairs*/) const {}
+  /// Looks up the element's block indices in `solver`, once, after its pattern is set.
+  virtual void bindPattern(const ImplicitEulerSolver& /*solver*/) {}
+  /// Adds the blocks ∂f/∂x, ∂f/∂v at positions x, in a form that keeps the implicit system
+  /// symmetric positive definite. Nothing for an element the implicit step treats explicitly.
+  virtual void addJacobians(const ForceContext& /*context*/, const Eigen::Matrix3Xd& /*x*/,
+                            ImplicitEulerSolver& /*solver*/) const
+  {}
+
+  // Stability bound -----------------------------------------------------------------------------
+  /// Adds the element's Gershgorin rows at the rest positions: k |∂C/∂x_i| Σ_n |∂C/∂x_n| to
+  /// stiffness_rows[i] [N/m], alike with damping to damping_rows[i] [N·s/m].
+  virtual void addStabilityRows(const std::vector<Eigen::Vector3d>& /*rest*/, std::vector<double>& /*stiffness_rows*/,
+                                std::vector<double>& /*damping_rows*/) const
+  {}
+  /// A damping rate [1/s] equal on every particle, added to the bound after the maximum over rows.
+  virtual double uniformDampingRate(const ForceContext& /*context*/) const { return 0.0; }
+
+  // Energy --------------------------------------------------------------------------------------
+  /// energy += the element's potential energy at x [J] (nothing for dissipative elements).
+  virtual void addEnergy(const ForceContext& /*context*/, const Eigen::Matrix3Xd& /*x*/, double& /*energy*/) const {}
+  /// True when the element can do work on the body from outside (wind), so that a step may
+  /// rightly gain energy.
+  virtual bool suppliesEnergy(const ForceContext& /*context*/) const { return false; }
+
+  // Run-time constants ----------------------------------------------------------------------------
+  /// True when the element has stiffness and damping of `spring_class` to set.
+  virtual bool hasClass(SpringClass /*spring_class*/) const { return false; }
+  /// Sets stiffness and damping of `spring_class` (every class when empty); `stiffness` and
+  /// `damping` were validated by the caller.
+  virtual void setClassConstants(std::optional<SpringClass> /*spring_class*/, double /*stiffness*/, double /*damping*/)
+  {}
+  /// Puts back the constants the element was built with.
+  virtual void resetConstants() {}
+
+  // Measurements ----------------------------------------------------------------------------------
+  /// The largest strain [-] of what the element stretches at x; 0 when it stretches nothing.
+  virtual double maxStrain(const Eigen::Matrix3Xd& /*x*/) const { return 0.0; }
+};
+
+}  // namespace core
+}  // namespace particle_sim

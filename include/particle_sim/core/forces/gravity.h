@@ -1,0 +1,21 @@
+#pragma once
+
+#include "particle_sim/core/forces/force_element.h"
+
+namespace particle_sim
+{
+namespace core
+{
+/// Gravity, the lecture's f^g of the mass-spring loop: f_i = m_i g on every particle, with
+/// potential energy −m_i g·x_i on free particles (z = 0 at 0). Constant in (x, v): no Jacobian,
+/// no stability row.
+class GravityForce : public ForceElement
+{
+public:
+  void addForces(const ForceContext& context, const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v,
+                 Eigen::Matrix3Xd& force) const override;
+  void addEnergy(const ForceContext& context, const Eigen::Matrix3Xd& x, double& energy) const override;
+};
+
+}  // namespace core
+}  // namespace particle_sim

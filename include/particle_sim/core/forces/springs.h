@@ -1,0 +1,46 @@
+#pragma once
+
+#include <array>
+#include <vector>
+
+#include "particle_sim/core/forces/force_element.h"
+#include "particle_sim/core/spring.h"
+
+namespace particle_sim
+{
+namespace core
+{
+/// The lecture's springs ("Interaction between particles", spring force = elastic + damping;
+/// kernels in spring.h): forces, energy k_e (l − L)²/2, Jacobian blocks in the definite form of
+/// Choi & Ko 2002 (compressed springs keep no transverse stiffness), and Gershgorin rows 2 k at
+/// both ends. Stiffness and damping are set per SpringClass at run time.
+class SpringForces : public ForceElement
+{
+public:
+  explicit SpringForces(std::vector<Spring> springs) : built_(springs), springs_(std::move(springs)) {}
+
+  /// The springs with their current constants.
+  const std::vector<Spring>& springs() const { return springs_; }
+
+  void addForces(const ForceContext& context, const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v,
+                 Eigen::Matrix3Xd& force) const override;
+  void coupledPairs(std::vector<std::pair<int, int>>& pairs) const override;
+  void bindPattern(const ImplicitEulerSolver& solver) override;
+  void addJacobians(const ForceContext& context, const Eigen::Matrix3Xd& x, ImplicitEulerSolver& solver) const override;
+  void addStabilityRows(const std::vector<Eigen::Vector3d>& rest, std::vector<double>& stiffness_rows,
+                        std::vector<double>& damping_rows) const override;
+  void addEnergy(const ForceContext& context, const Eigen::Matrix3Xd& x, double& energy) const override;
+  bool hasClass(SpringClass spring_class) const override;
+  void setClassConstants(std::optional<SpringClass> spring_class, double stiffness, double damping) override;
+  void resetConstants() override { springs_ = built_; }
+  /// Largest (|x_j − x_i| − L) / L over the stretch and shear springs of positive rest length.
+  double maxStrain(const Eigen::Matrix3Xd& x) const override;
+
+private:
+  std::vector<Spring> built_;               // as built (reset puts these constants back)
+  std::vector<Spring> springs_;             // current constants
+  std::vector<std::array<int, 4>> blocks_;  // per spring: its blocks ii, ij, ji, jj
+};
+
+}  // namespace core
+}  // namespace particle_sim

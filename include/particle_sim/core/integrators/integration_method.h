@@ -1,0 +1,62 @@
+#pragma once
+
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "particle_sim/core/integrator.h"
+#include "particle_sim/core/integrators/implicit_euler_solver.h"
+
+namespace particle_sim
+{
+namespace core
+{
+/// What an integrator sees of a body during one (sub)step: the state it advances, the masses and
+/// pins, and the forces with their Jacobians and energy (the environment of the step is bound
+/// in). Nothing else: collisions, pins' targets and constraints are the body's, before and after.
+class DynamicSystem
+{
+public:
+  virtual ~DynamicSystem() = default;
+
+  /// Positions x [m] and velocities v [m/s], advanced in place.
+  virtual Eigen::Matrix3Xd& positions() = 0;
+  virtual Eigen::Matrix3Xd& velocities() = 0;
+  /// Positions at the start of the whole step (before its first substep) [m].
+  virtual const Eigen::Matrix3Xd& stepStartPositions() const = 0;
+  virtual const Eigen::VectorXd& masses() const = 0;  ///< [kg], also of pinned particles
+  virtual const std::vector<char>& pinned() const = 0;
+
+  /// force = f(x, v) [N] on every particle.
+  virtual void computeForces(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v, Eigen::Matrix3Xd& force) const = 0;
+  /// a = f(x, v) / m for free particles, 0 for pinned ones [m/s²].
+  virtual void accelerations(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v, Eigen::Matrix3Xd& a) const = 0;
+  /// Adds the blocks ∂f/∂x, ∂f/∂v at x to `solver` (whose pattern is the system's couplings).
+  virtual void addJacobians(const Eigen::Matrix3Xd& x, ImplicitEulerSolver& solver) const = 0;
+  /// The particle pairs the Jacobian couples (for a solver's pattern).
+  virtual void coupledPairs(std::vector<std::pair<int, int>>& pairs) const = 0;
+  /// True when an outside force (wind) may rightly add energy in a step.
+  virtual bool suppliesEnergy() const = 0;
+  virtual double kineticEnergy() const = 0;     ///< [J] of the current state, free particles
+  virtual double mechanicalEnergy() const = 0;  ///< [J] kinetic + potential of the current state
+  /// Counts and describes a stability event (e.g. energy taken out by the implicit step).
+  virtual void recordEvent(std::string event) = 0;
+};
+
+/// One time integrator. Its identity, order, stability limit and whether it is implicit are
+/// declared in the registry (integrators/registry.h), next to its factory.
+class IntegrationMethod
+{
+public:
+  virtual ~IntegrationMethod() = default;
+  /// Advances `system` by h [s] with `settings`; the report of its linear solve (empty for
+  /// explicit methods).
+  virtual SolverReport step(double h, DynamicSystem& system, const IntegratorDef& settings) = 0;
+  /// Forgets what it kept from earlier steps (after build, reset, a switch of method).
+  virtual void restart() {}
+  /// True when it keeps something from earlier steps that restart() would forget.
+  virtual bool hasHistory() const { return false; }
+};
+
+}  // namespace core
+}  // namespace particle_sim

@@ -1,0 +1,70 @@
+#pragma once
+
+#include <string>
+
+#include "particle_sim/core/integrator.h"
+
+namespace particle_sim
+{
+namespace core
+{
+/// The stability guard of a body's time integration, `auto` included: the policy and its
+/// explanations, while the body keeps the state it saves and restores.
+///
+///  - `auto` picks, per step, Verlet when h (ω_max + c_max) is at most half Verlet's limit (one
+///    substep, with margin), else implicit Euler; it re-decides when the bound or the step change
+///    and says what it picked and why.
+///  - Substeps: an explicit method gets enough substeps for h (ω_max + c_max) to stay within 90 %
+///    of its stability limit, up to IntegratorDef::max_substeps.
+///  - Blow-up: after an explicit step, a non-finite state or mechanical energy grown past
+///    100 (|E| + scale (|g| + 1 m/s²)) is rolled back and retried with twice the substeps; at
+///    max_substeps the body freezes.
+///  - Freeze: a non-finite end state or a failed implicit solve restores the last good state.
+///
+/// Every such event is counted and the last one described.
+class StabilityGuard
+{
+public:
+  /// The method to run for `requested` at step dt [s], with the body's bounds ω_max and c_max
+  /// [1/s]; `last` is the method of the previous step. Sets `switched` when `auto` picks another
+  /// method than `last` (the caller then restarts the methods' histories).
+  IntegratorType resolve(IntegratorType requested, double dt, double omega_max, double c_max, IntegratorType last,
+                         bool& switched);
+  /// Forgets the `auto` decision (the bounds changed): re-decided and re-explained next step.
+  void forgetChoice() { auto_choice_.clear(); }
+  /// For `auto`: what it picked and why, e.g. "verlet: h (omega_max + c_max) = 0.31 <= 1 (...)".
+  const std::string& autoChoice() const { return auto_choice_; }
+
+  /// Substeps an explicit method `type` needs at step dt (1 for an implicit one); records an event
+  /// when it splits the step into another count than `last_substeps`.
+  int substeps(IntegratorType type, double dt, double omega_max, double c_max, int max_substeps, int last_substeps);
+
+  /// Starts the blow-up check of one step: energy [J] before it, the body's energy scale [J per
+  /// m/s²] and |g| [m/s²].
+  void beginStep(bool explicit_method, double energy_before, double energy_scale, double gravity_norm);
+  /// True when the step just taken blew up (explicit methods only).
+  bool blewUp(bool finite, double energy_after) const;
+  /// After a blow-up with `substeps`: the count to retry with, or 0 when already at `max_substeps`
+  /// (the body freezes; `frozen_reason` says why).
+  int retrySubsteps(IntegratorType type, double dt, int substeps, int max_substeps, std::string& frozen_reason);
+  /// The reason to freeze after a step that ended non-finite or with a failed solve.
+  std::string freezeReason(IntegratorType type, double dt, bool solve_failed);
+
+  /// Counts and describes a stability event.
+  void record(std::string event);
+  long long events() const { return events_; }
+  const std::string& lastEvent() const { return last_event_; }
+  /// Back to no events and no `auto` decision (build, reset).
+  void clear();
+
+private:
+  std::string auto_choice_;
+  long long events_ = 0;
+  std::string last_event_;
+  bool explicit_method_ = false;
+  double energy_before_ = 0.0;
+  double allowed_growth_ = 0.0;
+};
+
+}  // namespace core
+}  // namespace particle_sim

@@ -1,0 +1,27 @@
+#pragma once
+
+#include "particle_sim/core/integrators/integration_method.h"
+
+namespace particle_sim
+{
+namespace core
+{
+/// The lecture's mass-spring loop (symplectic Euler): v += h f(x, v) / m, then x += h v with the
+/// new v. First order; stable for h ω <= 2.
+class SymplecticEulerMethod : public IntegrationMethod
+{
+public:
+  static constexpr const char* kName = "symplectic_euler";
+  static constexpr bool kImplicit = false;
+  static constexpr int kOrder = 1;                // of the global error
+  static constexpr double kStabilityLimit = 2.0;  // h·ω on an undamped oscillator
+
+  explicit SymplecticEulerMethod(int particles) : acceleration_(Eigen::Matrix3Xd::Zero(3, particles)) {}
+  SolverReport step(double h, DynamicSystem& system, const IntegratorDef& settings) override;
+
+private:
+  Eigen::Matrix3Xd acceleration_;
+};
+
+}  // namespace core
+}  // namespace particle_sim

@@ -1,0 +1,23 @@
+#include "particle_sim/core/forces/gravity.h"
+
+namespace particle_sim
+{
+namespace core
+{
+void GravityForce::addForces(const ForceContext& context, const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& /*v*/,
+                             Eigen::Matrix3Xd& force) const
+{
+  for (int i = 0; i < x.cols(); ++i)
+    force.col(i) += context.mass[i] * context.gravity;
+}
+
+void GravityForce::addEnergy(const ForceContext& context, const Eigen::Matrix3Xd& x, double& energy) const
+{
+  for (int i = 0; i < x.cols(); ++i)
+  {
+    if (!context.pinned[i]) energy -= context.mass[i] * context.gravity.dot(x.col(i));
+  }
+}
+
+}  // namespace core
+}  // namespace particle_sim

@@ -1,0 +1,107 @@
+#include "particle_sim/core/forces/springs.h"
+
+#include <algorithm>
+
+namespace particle_sim
+{
+namespace core
+{
+void SpringForces::addForces(const ForceContext& /*context*/, const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v,
+                             Eigen::Matrix3Xd& force) const
+{
+  for (const Spring& s : springs_)
+  {
+    const Eigen::Vector3d f =
+        springForce(x.col(s.i), x.col(s.j), v.col(s.i), v.col(s.j), s.rest_length, s.stiffness, s.damping);
+    force.col(s.i) += f;
+    force.col(s.j) -= f;
+  }
+}
+
+void SpringForces::coupledPairs(std::vector<std::pair<int, int>>& pairs) const
+{
+  for (const Spring& spring : springs_)
+    pairs.emplace_back(spring.i, spring.j);
+}
+
+void SpringForces::bindPattern(const ImplicitEulerSolver& solver)
+{
+  blocks_.clear();
+  for (const Spring& spring : springs_)
+  {
+    blocks_.push_back({solver.blockIndex(spring.i, spring.i), solver.blockIndex(spring.i, spring.j),
+                       solver.blockIndex(spring.j, spring.i), solver.blockIndex(spring.j, spring.j)});
+  }
+}
+
+void SpringForces::addJacobians(const ForceContext& /*context*/, const Eigen::Matrix3Xd& x,
+                                ImplicitEulerSolver& solver) const
+{
+  // ∂f_i/∂x_i = ∂f_j/∂x_j = −∂f_i/∂x_j = −∂f_j/∂x_i (definite form), alike for v.
+  for (std::size_t s = 0; s < springs_.size(); ++s)
+  {
+    const Spring& spring = springs_[s];
+    Eigen::Matrix3d dfdx, dfdv;
+    springJacobians(x.col(spring.i), x.col(spring.j), spring.rest_length, spring.stiffness, spring.damping, true, dfdx,
+                    dfdv);
+    const std::array<int, 4>& blocks = blocks_[s];
+    solver.addBlock(blocks[0], dfdx, dfdv);
+    solver.addBlock(blocks[1], -dfdx, -dfdv);
+    solver.addBlock(blocks[2], -dfdx, -dfdv);
+    solver.addBlock(blocks[3], dfdx, dfdv);
+  }
+}
+
+void SpringForces::addStabilityRows(const std::vector<Eigen::Vector3d>& /*rest*/, std::vector<double>& stiffness_rows,
+                                    std::vector<double>& damping_rows) const
+{
+  // C = l − L has |∂C/∂x_i| = |∂C/∂x_j| = 1: each spring adds 2 k (and 2 k_d) at both ends.
+  for (const Spring& s : springs_)
+  {
+    for (int end : {s.i, s.j})
+    {
+      stiffness_rows[end] += 2.0 * s.stiffness;
+      damping_rows[end] += 2.0 * s.damping;
+    }
+  }
+}
+
+void SpringForces::addEnergy(const ForceContext& /*context*/, const Eigen::Matrix3Xd& x, double& energy) const
+{
+  for (const Spring& s : springs_)
+    energy += springEnergy(x.col(s.i), x.col(s.j), s.rest_length, s.stiffness);
+}
+
+bool SpringForces::hasClass(SpringClass spring_class) const
+{
+  for (const Spring& spring : springs_)
+  {
+    if (spring.spring_class == spring_class) return true;
+  }
+  return false;
+}
+
+void SpringForces::setClassConstants(std::optional<SpringClass> spring_class, double stiffness, double damping)
+{
+  for (Spring& spring : springs_)
+  {
+    if (spring_class && spring.spring_class != *spring_class) continue;
+    spring.stiffness = stiffness;
+    spring.damping = damping;
+  }
+}
+
+double SpringForces::maxStrain(const Eigen::Matrix3Xd& x) const
+{
+  double strain = 0.0;
+  for (const Spring& s : springs_)
+  {
+    if (s.spring_class == SpringClass::Bend || s.rest_length == 0.0) continue;
+    const double length = (x.col(s.j) - x.col(s.i)).norm();
+    strain = std::max(strain, (length - s.rest_length) / s.rest_length);
+  }
+  return strain;
+}
+
+}  // namespace core
+}  // namespace particle_sim

@@ -1,0 +1,99 @@
+#include "particle_sim/core/integrators/stability_guard.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "particle_sim/core/validation.h"
+
+namespace particle_sim
+{
+namespace core
+{
+IntegratorType StabilityGuard::resolve(IntegratorType requested, double dt, double omega_max, double c_max,
+                                       IntegratorType last, bool& switched)
+{
+  switched = false;
+  if (requested != IntegratorType::Auto) return requested;
+  // Verlet where one step is stable with a factor 2 of margin; implicit Euler otherwise.
+  const double product = dt * (omega_max + c_max);
+  const double limit = 0.5 * stabilityLimit(IntegratorType::Verlet);
+  const IntegratorType choice = product <= limit ? IntegratorType::Verlet : IntegratorType::ImplicitEuler;
+  if (auto_choice_.empty() || choice != last)
+  {
+    switched = choice != last;
+    auto_choice_ = std::string(toString(choice)) + ": h (omega_max + c_max) = " + formatValue(product) +
+                   (choice == IntegratorType::Verlet ? " <= " : " > ") + formatValue(limit) +
+                   " (half of Verlet's limit 2; omega_max = " + formatValue(omega_max) +
+                   " 1/s, c_max = " + formatValue(c_max) + " 1/s, dt = " + formatValue(dt) + " s)";
+  }
+  return choice;
+}
+
+int StabilityGuard::substeps(IntegratorType type, double dt, double omega_max, double c_max, int max_substeps,
+                             int last_substeps)
+{
+  if (isImplicit(type)) return 1;
+  // See instability coming: enough substeps for h (ω_max + c_max) to stay within 90 % of the limit.
+  const double needed = dt * (omega_max + c_max) / (0.9 * stabilityLimit(type));
+  int substeps = static_cast<int>(std::min<double>(std::ceil(needed), max_substeps));
+  substeps = std::max(substeps, 1);
+  if (substeps > 1 && substeps != last_substeps)
+    record(std::string(toString(type)) + " needs h (omega + c) <= " + formatValue(stabilityLimit(type)) +
+           ": dt = " + formatValue(dt) + " s split into " + std::to_string(substeps) +
+           " substeps (omega_max = " + formatValue(omega_max) + " 1/s)");
+  return substeps;
+}
+
+void StabilityGuard::beginStep(bool explicit_method, double energy_before, double energy_scale, double gravity_norm)
+{
+  explicit_method_ = explicit_method;
+  energy_before_ = explicit_method ? energy_before : 0.0;
+  allowed_growth_ = 100.0 * (std::abs(energy_before_) + energy_scale * (gravity_norm + 1.0));
+}
+
+bool StabilityGuard::blewUp(bool finite, double energy_after) const
+{
+  return explicit_method_ && (!finite || energy_after > energy_before_ + allowed_growth_);
+}
+
+int StabilityGuard::retrySubsteps(IntegratorType type, double dt, int substeps, int max_substeps,
+                                  std::string& frozen_reason)
+{
+  if (substeps >= max_substeps)
+  {
+    frozen_reason = std::string(toString(type)) + " blew up at dt = " + formatValue(dt) + " s even with " +
+                    std::to_string(substeps) + " substeps (integrator.max_substeps); the body is frozen at its " +
+                    "last good state";
+    record(frozen_reason);
+    return 0;
+  }
+  const int retry = std::min(2 * substeps, max_substeps);
+  record(std::string(toString(type)) + " blew up at dt = " + formatValue(dt) + " s; step rolled back and " +
+         "retried with " + std::to_string(retry) + " substeps");
+  return retry;
+}
+
+std::string StabilityGuard::freezeReason(IntegratorType type, double dt, bool solve_failed)
+{
+  std::string reason =
+      std::string(solve_failed ? "the implicit solve failed (CG breakdown)" : "state became non-finite") + " under " +
+      toString(type) + " at dt = " + formatValue(dt) + " s; the body is frozen at its last good state";
+  record(reason);
+  return reason;
+}
+
+void StabilityGuard::record(std::string event)
+{
+  ++events_;
+  last_event_ = std::move(event);
+}
+
+void StabilityGuard::clear()
+{
+  auto_choice_.clear();
+  events_ = 0;
+  last_event_.clear();
+}
+
+}  // namespace core
+}  // namespace particle_sim
