@@ -113,7 +113,7 @@ void buildDiagnostics(const core::World& world, const LoopFigures& loop, double 
                        core::toString(integratorThatRan(spring_body)) + ": " + spring_body.frozenReason() + ")");
       continue;
     }
-    if (integratorThatRan(spring_body) == core::IntegratorType::ImplicitEuler)
+    if (core::isImplicit(integratorThatRan(spring_body)))
     {
       iterations = std::max(iterations, spring_body.lastSolve().iterations);
       residual = std::max(residual, spring_body.lastSolve().relative_residual);
@@ -182,7 +182,7 @@ std::string statusLine(const core::World& world, double real_time_factor, double
   {
     if (body->kind() != core::BodyKind::SpringNetwork) continue;
     const auto& spring_body = static_cast<const core::SpringNetworkBody&>(*body);
-    if (integratorThatRan(spring_body) != core::IntegratorType::ImplicitEuler) continue;
+    if (!core::isImplicit(integratorThatRan(spring_body))) continue;
     any_implicit = true;
     cg_iterations = std::max(cg_iterations, spring_body.lastSolve().iterations);
     cg_residual = std::max(cg_residual, spring_body.lastSolve().relative_residual);

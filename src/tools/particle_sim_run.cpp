@@ -179,7 +179,7 @@ int main(int argc, char** argv)
   for (const auto& body : world->bodies())
   {
     const auto* spring_body = dynamic_cast<const particle_sim::core::SpringNetworkBody*>(body.get());
-    if (spring_body && spring_body->integrator().type == particle_sim::core::IntegratorType::ImplicitEuler)
+    if (spring_body && particle_sim::core::isImplicit(spring_body->integrator().type))
       solver_stats.push_back({spring_body});
   }
 
