@@ -3,7 +3,6 @@
 #include <diagnostic_msgs/DiagnosticStatus.h>
 
 #include <algorithm>
-#include <cmath>
 #include <cstdio>
 #include <sstream>
 #include <vector>
@@ -232,28 +231,27 @@ std::string stepReport(const core::World& world, std::uint64_t requested, long l
 }
 
 std::string springConstantsReport(const core::SpringNetworkBody& body, const std::string& body_name,
-                                  const std::string& class_name, double stiffness, double damping, double dt)
+                                  const std::string& class_name, double stiffness, double damping,
+                                  const core::World& world)
 {
-  // Say what the change means for stability: the new frequency bound and, for an explicit
-  // integrator, how many substeps a step of dt will take (auto re-decides at the next step).
+  // Say what the change means for stability: the new frequency bound and what the core plans for
+  // the next step: the substeps of an explicit integrator, or the method auto will use.
   std::ostringstream message;
   message << "set " << class_name << " springs of '" << body_name << "' to " << stiffness << " N/m, " << damping
           << " N·s/m; omega_max <= " << body.frequencyBound() << " 1/s";
+  const double dt = world.dt();
+  const core::SubstepPlan plan = body.planStep(dt, world.environment());
   const core::IntegratorType type = body.integrator().type;
-  const double limit = core::stabilityLimit(type);
-  if (std::isfinite(limit) && type != core::IntegratorType::Auto)
+  if (type == core::IntegratorType::Auto)
   {
-    const double product = dt * (body.frequencyBound() + body.dampingBound());
-    const int substeps = std::max(1, static_cast<int>(std::ceil(product / (0.9 * limit))));
-    message << ", so " << core::toString(type) << " takes " << std::min(substeps, body.integrator().max_substeps)
-            << " substep(s) per step of " << dt << " s";
-    if (substeps > body.integrator().max_substeps)
-      message << " (it would need " << substeps << ", above max_substeps: expect it to freeze)";
+    message << ", so auto will use " << core::toString(plan.method);
   }
-  else if (type == core::IntegratorType::Auto)
+  else if (!core::isImplicit(type))
   {
-    const double product = dt * (body.frequencyBound() + body.dampingBound());
-    message << ", so auto will use " << (product <= 1.0 ? "verlet" : "implicit_euler");
+    message << ", so " << core::toString(type) << " takes " << plan.substeps << " substep(s) per step of " << dt
+            << " s";
+    if (plan.needed_substeps > plan.substeps)
+      message << " (it would need " << plan.needed_substeps << ", above max_substeps: expect it to freeze)";
   }
   return message.str();
 }

@@ -125,6 +125,9 @@ public:
   IntegratorType lastIntegrator() const { return last_integrator_; }
   /// Substeps the last step was split into (1 = none).
   int lastSubsteps() const { return last_substeps_; }
+  /// How the next step(dt, env) will run, asked before it: the method (`auto` resolved) and its
+  /// substeps, by the rules the step itself follows (a blow-up retry may add substeps after).
+  SubstepPlan planStep(double dt, const Environment& env) const;
   /// For `auto`: what it picked and why, e.g. "verlet: h (ω + c) = 0.31 <= 1 (ω_max = 41.2 1/s)".
   const std::string& autoChoice() const { return guard_.autoChoice(); }
   /// Upper bounds of the highest frequency ω_max [1/s] and damping rate c_max [1/s] of the body
@@ -152,6 +155,8 @@ public:
 private:
   // One (sub)step of length h with `type`: pins, integrator, pin targets, collisions, strain limit.
   void substep(double h, IntegratorType type, const Environment& env);
+  // c_max [1/s] under the air and global damping [1/s] of a step.
+  double dampingBound(const AirDef& air, double damping) const;
   // Recomputes omega_bound_ and damping_bound_ from the current constants.
   void updateStabilityBound();
   // Kinetic plus potential energy of the current state [J].
