@@ -52,19 +52,13 @@ SimStatus buildSimStatus(const core::World& world, const ros::Time& stamp, const
     BodyStatus b;
     b.name = body->name();
     b.particle_count = static_cast<std::uint32_t>(body->particles().size());
+    b.kinetic_energy = body->kineticEnergy();
+    b.potential_energy = body->potentialEnergy(env.gravity);
     if (body->kind() == core::BodyKind::Emitter)
     {
       const auto& emitter = static_cast<const core::EmitterBody&>(*body);
       b.type = "emitter";
       b.model = core::toString(emitter.definition().type);
-      // Free particles of equal mass: kinetic and gravitational potential energy.
-      const core::ParticlePool& p = emitter.particles();
-      const double m = emitter.definition().particle_mass;
-      for (int i = 0; i < p.size(); ++i)
-      {
-        b.kinetic_energy += 0.5 * m * p.velocity.col(i).squaredNorm();
-        b.potential_energy -= m * env.gravity.dot(p.position.col(i));
-      }
     }
     else if (body->kind() == core::BodyKind::SpringNetwork)
     {
@@ -78,8 +72,6 @@ SimStatus buildSimStatus(const core::World& world, const ros::Time& stamp, const
       b.substeps = static_cast<std::uint32_t>(spring_body.lastSubsteps());
       b.stability_events = static_cast<std::uint64_t>(spring_body.stabilityEvents());
       b.last_stability_event = spring_body.lastStabilityEvent();
-      b.kinetic_energy = spring_body.kineticEnergy();
-      b.potential_energy = spring_body.potentialEnergy(env.gravity);
       b.max_strain = spring_body.maxStrain();
       b.pinned_count = static_cast<std::uint32_t>(spring_body.pinnedCount());
       b.solver_iterations = static_cast<std::uint32_t>(std::max(0, spring_body.lastSolve().iterations));

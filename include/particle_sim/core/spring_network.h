@@ -141,9 +141,9 @@ public:
   // Measurements -------------------------------------------------------------------------------
   /// Largest (|x_j − x_i| − L) / L over the stretch and shear springs [-].
   double maxStrain() const;
-  double kineticEnergy() const;                                  ///< [J], free particles
-  double potentialEnergy(const Eigen::Vector3d& gravity) const;  ///< [J], springs + gravity (z = 0 at 0)
-  Eigen::Vector3d momentum() const;                              ///< [kg·m/s], free particles
+  double kineticEnergy() const override;                                  ///< [J], free particles
+  double potentialEnergy(const Eigen::Vector3d& gravity) const override;  ///< [J], springs + gravity (z = 0 at 0)
+  Eigen::Vector3d momentum() const;                                       ///< [kg·m/s], free particles
   bool frozen() const { return !frozen_reason_.empty(); }
   const std::string& frozenReason() const { return frozen_reason_; }
 
