@@ -242,6 +242,11 @@ const std::vector<Spring>& SpringNetworkBody::springs() const
   return forces_.find<SpringForces>()->springs();  // makeSpringBodyForces() always adds one
 }
 
+ClothModel SpringNetworkBody::clothModel() const
+{
+  return def_.baraff_witkin.empty() ? ClothModel::Springs : ClothModel::BaraffWitkin;
+}
+
 double SpringNetworkBody::dampingBound() const
 {
   return dampingBound(air_, damping_);

@@ -7,7 +7,7 @@
 #include <sstream>
 #include <vector>
 
-#include "particle_sim/core/cloth.h"
+#include "particle_sim/core/cloth_model.h"
 #include "particle_sim/core/emitter.h"
 #include "particle_sim/ros/message_text.h"
 
@@ -64,8 +64,7 @@ SimStatus buildSimStatus(const core::World& world, const ros::Time& stamp, const
     {
       const auto& spring_body = static_cast<const core::SpringNetworkBody&>(*body);
       b.type = core::toString(spring_body.shape());
-      b.model = spring_body.definition().baraff_witkin.empty() ? core::toString(core::ClothModel::Springs)
-                                                               : core::toString(core::ClothModel::BaraffWitkin);
+      b.model = core::toString(spring_body.clothModel());
       b.integrator = core::toString(spring_body.integrator().type);
       b.last_integrator = core::toString(integratorThatRan(spring_body));
       b.auto_choice = spring_body.autoChoice();

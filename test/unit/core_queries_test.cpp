@@ -1,6 +1,6 @@
 // What the front-ends show, asked of the core: the plan of the next step (substeps, auto's
-// choice) and the energies of every body kind. Each answer is checked against an independent
-// truth: what the step then does, analytic energies.
+// choice), the energies of every body kind and a body's cloth model. Each answer is checked
+// against an independent truth: what the step then does, analytic energies, the builder's input.
 
 #include <gtest/gtest.h>
 
@@ -9,6 +9,7 @@
 #include <optional>
 #include <string>
 
+#include "particle_sim/core/cloth.h"
 #include "particle_sim/core/emitter.h"
 #include "particle_sim/core/integrators/stability_guard.h"
 #include "particle_sim/core/spring_network.h"
@@ -178,4 +179,20 @@ TEST(CoreQueries, SpringBodyEnergiesThroughTheBodyInterface)
   const Environment env = gravityOnly();
   EXPECT_NEAR(body.kineticEnergy(), 9.0, 1e-12);
   EXPECT_NEAR(body.potentialEnergy(env.gravity), 2.0 * 9.81 * 3.0, 1e-12);
+}
+
+TEST(CoreQueries, ClothModelIsTheOneTheBuilderWasAskedFor)
+{
+  for (const ClothModel model : {ClothModel::Springs, ClothModel::BaraffWitkin})
+  {
+    ClothGridDef def(model);
+    def.name = "sheet";
+    def.nu = 4;
+    def.nv = 4;
+    ASSERT_TRUE(validate(def, 100).ok) << validate(def, 100).message;
+    const SpringNetworkBody cloth(buildClothGrid(def));
+    EXPECT_EQ(cloth.clothModel(), model) << toString(model);
+  }
+  // A rope is made of springs.
+  EXPECT_EQ(makeRope(50.0, IntegratorType::Verlet).clothModel(), ClothModel::Springs);
 }

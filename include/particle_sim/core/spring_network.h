@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "particle_sim/core/body.h"
+#include "particle_sim/core/cloth_model.h"
 #include "particle_sim/core/constraints/strain_limit.h"
 #include "particle_sim/core/forces/baraff_witkin_model.h"
 #include "particle_sim/core/forces/force_set.h"
@@ -111,6 +112,9 @@ public:
   /// spring-only body).
   const std::vector<Spring>& springs() const;
   const BaraffWitkinModel* baraffWitkin() const { return forces_.find<BaraffWitkinModel>(); }
+  /// Baraff–Witkin when the body was built with Baraff–Witkin energies, else springs (ropes,
+  /// jelly and networks too).
+  ClothModel clothModel() const;
   bool hasSpringClass(SpringClass spring_class) const { return forces_.hasClass(spring_class); }
   /// Sets stiffness [N/m] and damping [N·s/m] of `spring_class` (every class when empty) in every
   /// force element that has it (springs, Baraff–Witkin conditions). Takes effect at the next step;
