@@ -185,6 +185,22 @@ void EmitterBody::emit(int count)
   }
 }
 
+double EmitterBody::kineticEnergy() const
+{
+  double energy = 0.0;
+  for (int i = 0; i < particles_.size(); ++i)
+    energy += 0.5 * def_.particle_mass * particles_.velocity.col(i).squaredNorm();
+  return energy;
+}
+
+double EmitterBody::potentialEnergy(const Eigen::Vector3d& gravity) const
+{
+  double energy = 0.0;
+  for (int i = 0; i < particles_.size(); ++i)
+    energy -= def_.particle_mass * gravity.dot(particles_.position.col(i));
+  return energy;
+}
+
 void EmitterBody::step(double dt, const Environment& env)
 {
   ParticlePool& p = particles_;

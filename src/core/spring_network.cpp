@@ -242,9 +242,19 @@ const std::vector<Spring>& SpringNetworkBody::springs() const
   return forces_.find<SpringForces>()->springs();  // makeSpringBodyForces() always adds one
 }
 
+ClothModel SpringNetworkBody::clothModel() const
+{
+  return def_.baraff_witkin.empty() ? ClothModel::Springs : ClothModel::BaraffWitkin;
+}
+
 double SpringNetworkBody::dampingBound() const
 {
-  return damping_bound_ + forces_.uniformDampingRate(forceContext(Eigen::Vector3d::Zero()));  // no gravity in it
+  return dampingBound(air_, damping_);
+}
+
+double SpringNetworkBody::dampingBound(const AirDef& air, double damping) const
+{
+  return damping_bound_ + forces_.uniformDampingRate({mass_, pinned_, Eigen::Vector3d::Zero(), air, damping});
 }
 
 Status SpringNetworkBody::setSpringConstants(std::optional<SpringClass> spring_class, double stiffness, double damping)
@@ -307,6 +317,16 @@ Eigen::Vector3d SpringNetworkBody::momentum() const
 
 // ---------------------------------------------------------------------------------------------
 // The step
+
+SubstepPlan SpringNetworkBody::planStep(double dt, const Environment& env) const
+{
+  // The step's own decisions below, with the bounds it will see once it has taken env's air and
+  // global damping.
+  const double c_max = dampingBound(env.air, env.damping);
+  const IntegratorType type =
+      integrator_.type == IntegratorType::Auto ? StabilityGuard::chooseAuto(dt, omega_bound_, c_max) : integrator_.type;
+  return StabilityGuard::planSubsteps(type, dt, omega_bound_, c_max, integrator_.max_substeps);
+}
 
 void SpringNetworkBody::step(double dt, const Environment& env)
 {

@@ -19,7 +19,7 @@ core::Status applySpringConstants(core::World& world, const std::string& body_na
   std::optional<core::SpringClass> spring_class;
   if (core::Status s = parseSpringClassSelection(class_name, spring_class); !s) return s;
   core::Status status = body->setSpringConstants(spring_class, stiffness, damping);
-  if (status) status.message = springConstantsReport(*body, body_name, class_name, stiffness, damping, world.dt());
+  if (status) status.message = springConstantsReport(*body, body_name, class_name, stiffness, damping, world);
   return status;
 }
 

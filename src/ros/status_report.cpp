@@ -3,12 +3,11 @@
 #include <diagnostic_msgs/DiagnosticStatus.h>
 
 #include <algorithm>
-#include <cmath>
 #include <cstdio>
 #include <sstream>
 #include <vector>
 
-#include "particle_sim/core/cloth.h"
+#include "particle_sim/core/cloth_model.h"
 #include "particle_sim/core/emitter.h"
 #include "particle_sim/ros/message_text.h"
 
@@ -53,34 +52,25 @@ SimStatus buildSimStatus(const core::World& world, const ros::Time& stamp, const
     BodyStatus b;
     b.name = body->name();
     b.particle_count = static_cast<std::uint32_t>(body->particles().size());
+    b.kinetic_energy = body->kineticEnergy();
+    b.potential_energy = body->potentialEnergy(env.gravity);
     if (body->kind() == core::BodyKind::Emitter)
     {
       const auto& emitter = static_cast<const core::EmitterBody&>(*body);
       b.type = "emitter";
       b.model = core::toString(emitter.definition().type);
-      // Free particles of equal mass: kinetic and gravitational potential energy.
-      const core::ParticlePool& p = emitter.particles();
-      const double m = emitter.definition().particle_mass;
-      for (int i = 0; i < p.size(); ++i)
-      {
-        b.kinetic_energy += 0.5 * m * p.velocity.col(i).squaredNorm();
-        b.potential_energy -= m * env.gravity.dot(p.position.col(i));
-      }
     }
     else if (body->kind() == core::BodyKind::SpringNetwork)
     {
       const auto& spring_body = static_cast<const core::SpringNetworkBody&>(*body);
       b.type = core::toString(spring_body.shape());
-      b.model = spring_body.definition().baraff_witkin.empty() ? core::toString(core::ClothModel::Springs)
-                                                               : core::toString(core::ClothModel::BaraffWitkin);
+      b.model = core::toString(spring_body.clothModel());
       b.integrator = core::toString(spring_body.integrator().type);
       b.last_integrator = core::toString(integratorThatRan(spring_body));
       b.auto_choice = spring_body.autoChoice();
       b.substeps = static_cast<std::uint32_t>(spring_body.lastSubsteps());
       b.stability_events = static_cast<std::uint64_t>(spring_body.stabilityEvents());
       b.last_stability_event = spring_body.lastStabilityEvent();
-      b.kinetic_energy = spring_body.kineticEnergy();
-      b.potential_energy = spring_body.potentialEnergy(env.gravity);
       b.max_strain = spring_body.maxStrain();
       b.pinned_count = static_cast<std::uint32_t>(spring_body.pinnedCount());
       b.solver_iterations = static_cast<std::uint32_t>(std::max(0, spring_body.lastSolve().iterations));
@@ -232,28 +222,27 @@ std::string stepReport(const core::World& world, std::uint64_t requested, long l
 }
 
 std::string springConstantsReport(const core::SpringNetworkBody& body, const std::string& body_name,
-                                  const std::string& class_name, double stiffness, double damping, double dt)
+                                  const std::string& class_name, double stiffness, double damping,
+                                  const core::World& world)
 {
-  // Say what the change means for stability: the new frequency bound and, for an explicit
-  // integrator, how many substeps a step of dt will take (auto re-decides at the next step).
+  // Say what the change means for stability: the new frequency bound and what the core plans for
+  // the next step: the substeps of an explicit integrator, or the method auto will use.
   std::ostringstream message;
   message << "set " << class_name << " springs of '" << body_name << "' to " << stiffness << " N/m, " << damping
           << " N·s/m; omega_max <= " << body.frequencyBound() << " 1/s";
+  const double dt = world.dt();
+  const core::SubstepPlan plan = body.planStep(dt, world.environment());
   const core::IntegratorType type = body.integrator().type;
-  const double limit = core::stabilityLimit(type);
-  if (std::isfinite(limit) && type != core::IntegratorType::Auto)
+  if (type == core::IntegratorType::Auto)
   {
-    const double product = dt * (body.frequencyBound() + body.dampingBound());
-    const int substeps = std::max(1, static_cast<int>(std::ceil(product / (0.9 * limit))));
-    message << ", so " << core::toString(type) << " takes " << std::min(substeps, body.integrator().max_substeps)
-            << " substep(s) per step of " << dt << " s";
-    if (substeps > body.integrator().max_substeps)
-      message << " (it would need " << substeps << ", above max_substeps: expect it to freeze)";
+    message << ", so auto will use " << core::toString(plan.method);
   }
-  else if (type == core::IntegratorType::Auto)
+  else if (!core::isImplicit(type))
   {
-    const double product = dt * (body.frequencyBound() + body.dampingBound());
-    message << ", so auto will use " << (product <= 1.0 ? "verlet" : "implicit_euler");
+    message << ", so " << core::toString(type) << " takes " << plan.substeps << " substep(s) per step of " << dt
+            << " s";
+    if (plan.needed_substeps > plan.substeps)
+      message << " (it would need " << plan.needed_substeps << ", above max_substeps: expect it to freeze)";
   }
   return message.str();
 }

@@ -214,20 +214,20 @@ TEST(StatusConversions, SpringConstantsReportSaysWhatTheChangeMeansForStability)
   core::World world = makeWorld(core::IntegratorType::Verlet);
   core::SpringNetworkBody& rope = *world.findSpringBody("taut");
   ASSERT_TRUE(rope.setSpringConstants(core::SpringClass::Stretch, 100.0, 0.1).ok);
-  std::string report = springConstantsReport(rope, "taut", "stretch", 100.0, 0.1, world.dt());
+  std::string report = springConstantsReport(rope, "taut", "stretch", 100.0, 0.1, world);
   EXPECT_EQ(report.rfind("set stretch springs of 'taut' to 100 N/m, 0.1 N·s/m; omega_max <= ", 0), 0u) << report;
   EXPECT_NE(report.find(" 1/s, so verlet takes 1 substep(s) per step of 0.001 s"), std::string::npos) << report;
 
   // So stiff that even max_substeps (64) cannot keep h ω below the limit: it says it will freeze.
   ASSERT_TRUE(rope.setSpringConstants(core::SpringClass::Stretch, 1e9, 0.1).ok);
-  report = springConstantsReport(rope, "taut", "stretch", 1e9, 0.1, world.dt());
+  report = springConstantsReport(rope, "taut", "stretch", 1e9, 0.1, world);
   EXPECT_NE(report.find("verlet takes 64 substep(s)"), std::string::npos) << report;
   EXPECT_NE(report.find("above max_substeps: expect it to freeze)"), std::string::npos) << report;
 
   // Implicit Euler has no stability limit: nothing about substeps.
   core::World implicit_world = makeWorld(core::IntegratorType::ImplicitEuler);
   const core::SpringNetworkBody& implicit_rope = *implicit_world.findSpringBody("taut");
-  report = springConstantsReport(implicit_rope, "taut", "all", 500.0, 0.5, implicit_world.dt());
+  report = springConstantsReport(implicit_rope, "taut", "all", 500.0, 0.5, implicit_world);
   EXPECT_EQ(report.find("substep"), std::string::npos) << report;
   EXPECT_EQ(report.find("auto"), std::string::npos) << report;
 }

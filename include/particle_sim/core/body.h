@@ -37,6 +37,12 @@ public:
   /// Puts the body back in the state it was built in.
   virtual void reset() = 0;
 
+  /// Kinetic energy Σ ½ m |v|² of the free (not pinned) live particles [J].
+  virtual double kineticEnergy() const = 0;
+  /// Potential energy under `gravity` [m/s²] (height 0 at z = 0) plus the body's internal energy
+  /// (springs, Baraff–Witkin conditions) [J].
+  virtual double potentialEnergy(const Eigen::Vector3d& gravity) const = 0;
+
 protected:
   ParticlePool particles_;
 

@@ -4,6 +4,7 @@
 #include <string>
 #include <vector>
 
+#include "particle_sim/core/cloth_model.h"
 #include "particle_sim/core/spring_network.h"
 #include "particle_sim/core/status.h"
 
@@ -11,17 +12,6 @@ namespace particle_sim
 {
 namespace core
 {
-/// How a cloth resists deformation.
-enum class ClothModel
-{
-  Springs,       ///< Provot's stretch, shear and bend springs
-  BaraffWitkin,  ///< Baraff & Witkin's stretch and shear per triangle, bend per interior edge
-};
-
-const char* toString(ClothModel model);
-/// Parses "springs" or "baraff_witkin"; false when unknown.
-bool parseClothModel(const std::string& text, ClothModel& model);
-
 /// Default constants of a spring cloth (Provot's springs) [N/m], [N·s/m]. Those of a Baraff–Witkin
 /// cloth are kBaraffWitkinStretch, kBaraffWitkinShear and kBaraffWitkinBend (forces/baraff_witkin_model.h).
 constexpr SpringConstants kSpringClothStretch{1000.0, 0.5};

@@ -73,6 +73,10 @@ public:
   /// x += v dt + g dt^2 / 2, v += g dt, and resolves collisions.
   void step(double dt, const Environment& env) override;
   void reset() override;
+  /// Σ ½ m |v|² over the live particles [J].
+  double kineticEnergy() const override;
+  /// Σ −m g · x over the live particles [J]; free particles store no other energy.
+  double potentialEnergy(const Eigen::Vector3d& gravity) const override;
 
   long long emittedCount() const { return emitted_; }
   long long droppedCount() const { return dropped_; }

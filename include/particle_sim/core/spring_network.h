@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "particle_sim/core/body.h"
+#include "particle_sim/core/cloth_model.h"
 #include "particle_sim/core/constraints/strain_limit.h"
 #include "particle_sim/core/forces/baraff_witkin_model.h"
 #include "particle_sim/core/forces/force_set.h"
@@ -111,6 +112,9 @@ public:
   /// spring-only body).
   const std::vector<Spring>& springs() const;
   const BaraffWitkinModel* baraffWitkin() const { return forces_.find<BaraffWitkinModel>(); }
+  /// Baraff–Witkin when the body was built with Baraff–Witkin energies, else springs (ropes,
+  /// jelly and networks too).
+  ClothModel clothModel() const;
   bool hasSpringClass(SpringClass spring_class) const { return forces_.hasClass(spring_class); }
   /// Sets stiffness [N/m] and damping [N·s/m] of `spring_class` (every class when empty) in every
   /// force element that has it (springs, Baraff–Witkin conditions). Takes effect at the next step;
@@ -125,6 +129,9 @@ public:
   IntegratorType lastIntegrator() const { return last_integrator_; }
   /// Substeps the last step was split into (1 = none).
   int lastSubsteps() const { return last_substeps_; }
+  /// How the next step(dt, env) will run, asked before it: the method (`auto` resolved) and its
+  /// substeps, by the rules the step itself follows (a blow-up retry may add substeps after).
+  SubstepPlan planStep(double dt, const Environment& env) const;
   /// For `auto`: what it picked and why, e.g. "verlet: h (ω + c) = 0.31 <= 1 (ω_max = 41.2 1/s)".
   const std::string& autoChoice() const { return guard_.autoChoice(); }
   /// Upper bounds of the highest frequency ω_max [1/s] and damping rate c_max [1/s] of the body
@@ -138,9 +145,9 @@ public:
   // Measurements -------------------------------------------------------------------------------
   /// Largest (|x_j − x_i| − L) / L over the stretch and shear springs [-].
   double maxStrain() const;
-  double kineticEnergy() const;                                  ///< [J], free particles
-  double potentialEnergy(const Eigen::Vector3d& gravity) const;  ///< [J], springs + gravity (z = 0 at 0)
-  Eigen::Vector3d momentum() const;                              ///< [kg·m/s], free particles
+  double kineticEnergy() const override;                                  ///< [J], free particles
+  double potentialEnergy(const Eigen::Vector3d& gravity) const override;  ///< [J], springs + gravity (z = 0 at 0)
+  Eigen::Vector3d momentum() const;                                       ///< [kg·m/s], free particles
   bool frozen() const { return !frozen_reason_.empty(); }
   const std::string& frozenReason() const { return frozen_reason_; }
 
@@ -152,6 +159,8 @@ public:
 private:
   // One (sub)step of length h with `type`: pins, integrator, pin targets, collisions, strain limit.
   void substep(double h, IntegratorType type, const Environment& env);
+  // c_max [1/s] under the air and global damping [1/s] of a step.
+  double dampingBound(const AirDef& air, double damping) const;
   // Recomputes omega_bound_ and damping_bound_ from the current constants.
   void updateStabilityBound();
   // Kinetic plus potential energy of the current state [J].

@@ -63,11 +63,12 @@ long long stabilityEventCount(const core::World& world);
 /// last event and every frozen body with its reason.
 std::string stepReport(const core::World& world, std::uint64_t requested, long long events);
 
-/// ~set_spring_constants' answer once `body`'s `class_name` springs were set: the new frequency
-/// bound and what it means for a step of `dt` [s] (substeps of an explicit integrator, or auto's
-/// choice).
+/// ~set_spring_constants' answer once `body` (of `world`)'s `class_name` springs were set: the new
+/// frequency bound and what it means for the next step of the world's dt [s], as the core plans it
+/// (SpringNetworkBody::planStep(): substeps of an explicit integrator, or auto's choice).
 std::string springConstantsReport(const core::SpringNetworkBody& body, const std::string& body_name,
-                                  const std::string& class_name, double stiffness, double damping, double dt);
+                                  const std::string& class_name, double stiffness, double damping,
+                                  const core::World& world);
 
 }  // namespace ros_interface
 }  // namespace particle_sim

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "particle_sim/core/validation.h"
 
@@ -9,15 +10,38 @@ namespace particle_sim
 {
 namespace core
 {
+IntegratorType StabilityGuard::chooseAuto(double dt, double omega_max, double c_max)
+{
+  // Verlet where one step is stable with a factor 2 of margin; implicit Euler otherwise.
+  const double product = dt * (omega_max + c_max);
+  const double limit = 0.5 * stabilityLimit(IntegratorType::Verlet);
+  return product <= limit ? IntegratorType::Verlet : IntegratorType::ImplicitEuler;
+}
+
+SubstepPlan StabilityGuard::planSubsteps(IntegratorType type, double dt, double omega_max, double c_max,
+                                         int max_substeps)
+{
+  SubstepPlan plan;
+  plan.method = type;
+  if (isImplicit(type)) return plan;
+  // See instability coming: enough substeps for h (ω_max + c_max) to stay within 90 % of the limit.
+  const double needed = std::ceil(dt * (omega_max + c_max) / (0.9 * stabilityLimit(type)));
+  // Compared before any conversion: a count beyond int (or NaN) is capped, never cast.
+  plan.substeps = std::max(needed < max_substeps ? static_cast<int>(needed) : max_substeps, 1);
+  constexpr double kSaturated = 9.2e18;  // below the largest long long, 2^63 − 1
+  plan.needed_substeps =
+      needed < kSaturated ? std::max(static_cast<long long>(needed), 1LL) : std::numeric_limits<long long>::max();
+  return plan;
+}
+
 IntegratorType StabilityGuard::resolve(IntegratorType requested, double dt, double omega_max, double c_max,
                                        IntegratorType last, bool& switched)
 {
   switched = false;
   if (requested != IntegratorType::Auto) return requested;
-  // Verlet where one step is stable with a factor 2 of margin; implicit Euler otherwise.
+  const IntegratorType choice = chooseAuto(dt, omega_max, c_max);
   const double product = dt * (omega_max + c_max);
   const double limit = 0.5 * stabilityLimit(IntegratorType::Verlet);
-  const IntegratorType choice = product <= limit ? IntegratorType::Verlet : IntegratorType::ImplicitEuler;
   if (auto_choice_.empty() || choice != last)
   {
     switched = choice != last;
@@ -32,11 +56,7 @@ IntegratorType StabilityGuard::resolve(IntegratorType requested, double dt, doub
 int StabilityGuard::substeps(IntegratorType type, double dt, double omega_max, double c_max, int max_substeps,
                              int last_substeps)
 {
-  if (isImplicit(type)) return 1;
-  // See instability coming: enough substeps for h (ω_max + c_max) to stay within 90 % of the limit.
-  const double needed = dt * (omega_max + c_max) / (0.9 * stabilityLimit(type));
-  int substeps = static_cast<int>(std::min<double>(std::ceil(needed), max_substeps));
-  substeps = std::max(substeps, 1);
+  const int substeps = planSubsteps(type, dt, omega_max, c_max, max_substeps).substeps;
   if (substeps > 1 && substeps != last_substeps)
     record(std::string(toString(type)) + " needs h (omega + c) <= " + formatValue(stabilityLimit(type)) +
            ": dt = " + formatValue(dt) + " s split into " + std::to_string(substeps) +

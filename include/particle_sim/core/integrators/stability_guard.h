@@ -8,6 +8,16 @@ namespace particle_sim
 {
 namespace core
 {
+/// How one step will be taken, decided before it is: the method that runs and its substeps.
+struct SubstepPlan
+{
+  IntegratorType method = IntegratorType::ImplicitEuler;  ///< the method that runs (never auto)
+  int substeps = 1;  ///< substeps of the step, 1 ≤ substeps ≤ max_substeps (1 for an implicit method)
+  /// Substeps the method's stability limit asks for before the max_substeps cap (saturated at the
+  /// largest long long); above `substeps` when the cap cuts them, and the step may then blow up.
+  long long needed_substeps = 1;
+};
+
 /// The stability guard of a body's time integration, `auto` included: the policy and its
 /// explanations, while the body keeps the state it saves and restores.
 ///
@@ -25,6 +35,13 @@ namespace core
 class StabilityGuard
 {
 public:
+  /// What `auto` runs at step dt [s] with the bounds ω_max and c_max [1/s]: Verlet when
+  /// h (ω_max + c_max) is at most half Verlet's limit, else implicit Euler.
+  static IntegratorType chooseAuto(double dt, double omega_max, double c_max);
+  /// The substeps of a step of dt [s] with the method `type` (not auto) and the bounds ω_max and
+  /// c_max [1/s]: what substeps() will answer, without recording anything.
+  static SubstepPlan planSubsteps(IntegratorType type, double dt, double omega_max, double c_max, int max_substeps);
+
   /// The method to run for `requested` at step dt [s], with the body's bounds ω_max and c_max
   /// [1/s]; `last` is the method of the previous step. Sets `switched` when `auto` picks another
   /// method than `last` (the caller then restarts the methods' histories).
