@@ -40,6 +40,7 @@
 #include <variant>
 #include <vector>
 
+#include "particle_sim/core/integrators/registry.h"
 #include "particle_sim/scene/scene.h"
 
 namespace
@@ -154,12 +155,13 @@ template <class D>
 void oneSubstep(D&, long)
 {}
 
-// The integrators to compare: the four methods, and `auto` once the core knows it.
+// The integrators to compare: every method of the core's registry, then `auto`.
 std::vector<std::string> integratorNames()
 {
-  std::vector<std::string> names = {"symplectic_euler", "verlet", "implicit_euler", "rk4"};
-  core::IntegratorType type;
-  if (core::parseIntegratorType("auto", type)) names.push_back("auto");
+  std::vector<std::string> names;
+  for (const core::IntegratorInfo& info : core::integratorRegistry())
+    names.push_back(info.name);
+  names.push_back(core::toString(core::IntegratorType::Auto));
   return names;
 }
 
@@ -587,8 +589,10 @@ std::vector<StabilityPoint> stabilityMap(const scene::SceneDef& oscillator, cons
     for (const std::string& name : integrators)
     {
       StabilityPoint point{k, name, 0.0, "measured", 0.0};
-      if (name == "symplectic_euler" || name == "verlet") point.theory = 2.0 / omega;
-      if (name == "rk4") point.theory = 2.0 * std::sqrt(2.0) / omega;
+      // The limit h·ω the method declares (none for implicit methods and `auto`).
+      core::IntegratorType type = core::IntegratorType::Auto;
+      core::parseIntegratorType(name, type);
+      if (std::isfinite(core::stabilityLimit(type))) point.theory = core::stabilityLimit(type) / omega;
       if (stableAt(def, name, hi))
       {
         point.dt_max = hi;
@@ -783,9 +787,12 @@ std::string markdownTables(const std::vector<Case>& cases, const std::vector<std
   // Orders.
   md << "### Observed orders\n\n"
         "Slope of log(error) against log(dt) over the finest (up to four) stable steps whose error is above the "
-        "floor (10 times the reference check, and 1e-12 m). Expected: symplectic Euler 1, Verlet 2 (1 with "
-        "damped springs), implicit Euler 1, RK4 4; contacts make every method first order at best. `auto` "
-        "switches method with the step, so it has no single order.\n\n| scene |";
+        "floor (10 times the reference check, and 1e-12 m). Expected, as each method declares:";
+  for (const core::IntegratorInfo& info : core::integratorRegistry())
+    md << (&info == &core::integratorRegistry().front() ? " " : ", ") << info.name << " " << info.order
+       << (info.type == core::IntegratorType::Verlet ? " (1 with damped springs)" : "");
+  md << "; contacts make every method first order at best. `auto` switches method with the step, so it has no "
+        "single order.\n\n| scene |";
   for (const std::string& name : integrators)
     md << " " << name << " |";
   md << "\n|---|";

@@ -234,10 +234,11 @@ int main(int argc, char** argv)
   for (const SolverStats& stats : solver_stats)
   {
     std::printf(
-        "body '%s' implicit_euler: CG iterations mean %.1f, max %d; worst relative residual %.2e; %lld "
+        "body '%s' %s: CG iterations mean %.1f, max %d; worst relative residual %.2e; %lld "
         "steps not converged\n",
-        stats.body->name().c_str(), steps ? static_cast<double>(stats.iterations) / steps : 0.0, stats.max_iterations,
-        stats.worst_residual, stats.unconverged);
+        stats.body->name().c_str(), particle_sim::core::toString(stats.body->integrator().type),
+        steps ? static_cast<double>(stats.iterations) / steps : 0.0, stats.max_iterations, stats.worst_residual,
+        stats.unconverged);
   }
   return exit_code;
 }

@@ -1,6 +1,6 @@
 // The spring-body integrators: each converges to the analytic harmonic oscillator at its stated
-// order, symplectic Euler keeps the energy bounded, implicit Euler never gains energy and stays
-// stable where explicit methods blow up, internal forces conserve momentum, pins hold or follow
+// order, symplectic Euler keeps the energy bounded, implicit Euler and BDF2 never gain energy and
+// stay stable where explicit methods blow up, internal forces conserve momentum, pins hold or follow
 // their targets exactly, and a new spring constant gives the predicted frequency.
 
 #include <gtest/gtest.h>
@@ -17,7 +17,7 @@ using namespace particle_sim::core;
 namespace
 {
 const IntegratorType kAllIntegrators[] = {IntegratorType::SymplecticEuler, IntegratorType::Verlet,
-                                          IntegratorType::ImplicitEuler, IntegratorType::Rk4};
+                                          IntegratorType::ImplicitEuler, IntegratorType::Rk4, IntegratorType::Bdf2};
 
 Environment noGravity()
 {
@@ -164,6 +164,7 @@ TEST(Integrator, ConvergenceOrdersOnTheHarmonicOscillator)
       {IntegratorType::ImplicitEuler, 1.0, 1.0 / 100.0},
       {IntegratorType::Verlet, 2.0, 1.0 / 50.0},
       {IntegratorType::Rk4, 4.0, 1.0 / 40.0},
+      {IntegratorType::Bdf2, 2.0, 1.0 / 50.0},
   };
   const Oscillator osc;
   const double duration = 2.0;  // two periods
@@ -218,19 +219,22 @@ TEST(Integrator, SymplecticEulerKeepsTheEnergyBounded)
       << "first tenth " << first_tenth << " last tenth " << last_tenth;
 }
 
-TEST(Integrator, ImplicitEulerNeverGainsEnergy)
+TEST(Integrator, ImplicitMethodsNeverGainEnergy)
 {
   // Undamped hanging rope released horizontally, at the usual stiffness, a stiff one, and a slack
   // one (rest length 1.5 times the span: every spring starts compressed, where the exact Jacobian
-  // would make the system indefinite).
+  // would make the system indefinite), with implicit Euler and with BDF2.
   struct Case
   {
     double stiffness, rest_length;
+    IntegratorType type;
   };
-  for (const Case& c : {Case{500.0, 0.0}, Case{1e5, 0.0}, Case{500.0, 3.0}})
+  for (const Case& c : {Case{500.0, 0.0, IntegratorType::ImplicitEuler}, Case{1e5, 0.0, IntegratorType::ImplicitEuler},
+                        Case{500.0, 3.0, IntegratorType::ImplicitEuler}, Case{500.0, 0.0, IntegratorType::Bdf2},
+                        Case{1e5, 0.0, IntegratorType::Bdf2}, Case{500.0, 3.0, IntegratorType::Bdf2}})
   {
     const double stiffness = c.stiffness;
-    RopeDef def = rope(20, IntegratorType::ImplicitEuler);
+    RopeDef def = rope(20, c.type);
     def.rest_length = c.rest_length;
     def.stretch_stiffness = stiffness;
     def.stretch_damping = 0.0;
@@ -250,13 +254,14 @@ TEST(Integrator, ImplicitEulerNeverGainsEnergy)
       body.step(1.0 / 60.0, env);
       const double after = totalEnergy(body, env);
       ASSERT_LE(after, before + 1e-9 * std::max(std::abs(before), scale))
-          << "k = " << stiffness << " rest_length " << c.rest_length << " step " << n << " gained " << after - before
-          << " J";
+          << toString(c.type) << " k = " << stiffness << " rest_length " << c.rest_length << " step " << n << " gained "
+          << after - before << " J";
       before = after;
     }
     ASSERT_FALSE(body.frozen()) << body.frozenReason();
     // It did move: the rope fell and lost energy.
-    EXPECT_LT(before, initial - 0.1 * scale) << "k = " << stiffness << " rest_length " << c.rest_length;
+    EXPECT_LT(before, initial - 0.1 * scale)
+        << toString(c.type) << " k = " << stiffness << " rest_length " << c.rest_length;
   }
 }
 
@@ -486,16 +491,21 @@ TEST(Integrator, ImplicitEulerStaysStableWhereSymplecticEulerBlowsUp)
   const Environment env = gravityOnly();
   const double dt = 1.0 / 60.0;
 
-  const RopeDef implicit_def = stiffRope(IntegratorType::ImplicitEuler);
-  SpringNetworkBody implicit_body(buildRope(implicit_def));
-  const double rope_length = (implicit_def.end - implicit_def.start).norm();
-  for (int n = 0; n < 300; ++n)
-    implicit_body.step(dt, env);
-  EXPECT_FALSE(implicit_body.frozen()) << implicit_body.frozenReason();
-  EXPECT_TRUE(allFinite(implicit_body));
-  const ParticlePool& p = implicit_body.particles();
-  for (int i = 0; i < p.size(); ++i)
-    EXPECT_LT((p.position.col(i) - implicit_def.start).norm(), 1.5 * rope_length) << "particle " << i;
+  // Both implicit methods: implicit Euler and BDF2.
+  for (IntegratorType type : {IntegratorType::ImplicitEuler, IntegratorType::Bdf2})
+  {
+    const RopeDef implicit_def = stiffRope(type);
+    SpringNetworkBody implicit_body(buildRope(implicit_def));
+    const double rope_length = (implicit_def.end - implicit_def.start).norm();
+    for (int n = 0; n < 300; ++n)
+      implicit_body.step(dt, env);
+    EXPECT_FALSE(implicit_body.frozen()) << toString(type) << " " << implicit_body.frozenReason();
+    EXPECT_TRUE(allFinite(implicit_body)) << toString(type);
+    const ParticlePool& p = implicit_body.particles();
+    for (int i = 0; i < p.size(); ++i)
+      EXPECT_LT((p.position.col(i) - implicit_def.start).norm(), 1.5 * rope_length)
+          << toString(type) << " particle " << i;
+  }
 
   // Symplectic Euler allowed no substeps (max_substeps = 1) blows up; it is frozen, not NaN.
   RopeDef single_step_def = stiffRope(IntegratorType::SymplecticEuler);

@@ -19,13 +19,15 @@ enum class IntegratorType
                     ///< for position-only forces; first order once forces depend on velocity)
   ImplicitEuler,    ///< linearised backward Euler solved by modified preconditioned CG (first order, stable)
   Rk4,              ///< classical Runge–Kutta, the accuracy reference (fourth order)
+  Bdf2,             ///< linearised BDF2 (Choi & Ko 2002), solved as implicit Euler is (second order, stable)
   Auto,             ///< per body and step: Verlet where its stability bound holds with margin, else implicit Euler
 };
 
 const char* toString(IntegratorType type);
-/// Parses "symplectic_euler", "verlet", "implicit_euler", "rk4" or "auto"; false when unknown.
+/// Parses a registered name ("symplectic_euler", "verlet", "implicit_euler", "rk4", "bdf2") or "auto";
+/// false when unknown.
 bool parseIntegratorType(const std::string& text, IntegratorType& type);
-/// "symplectic_euler, verlet, implicit_euler, rk4, auto", for error messages.
+/// "symplectic_euler, verlet, implicit_euler, rk4, bdf2, auto", for error messages.
 const char* integratorTypeNames();
 
 /// An integrator and its settings, with defaults.

@@ -1,5 +1,6 @@
 #include "particle_sim/core/integrators/registry.h"
 
+#include "particle_sim/core/integrators/bdf2.h"
 #include "particle_sim/core/integrators/implicit_euler.h"
 #include "particle_sim/core/integrators/rk4.h"
 #include "particle_sim/core/integrators/symplectic_euler.h"
@@ -34,6 +35,7 @@ const std::vector<IntegratorInfo>& integratorRegistry()
       entry<VerletMethod>(IntegratorType::Verlet),
       entry<ImplicitEulerMethod>(IntegratorType::ImplicitEuler),
       entry<Rk4Method>(IntegratorType::Rk4),
+      entry<Bdf2Method>(IntegratorType::Bdf2),
   };
   return registry;
 }
