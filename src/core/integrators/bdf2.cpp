@@ -53,9 +53,7 @@ SolverReport Bdf2Method::step(double h, DynamicSystem& system, const IntegratorD
   const int n = static_cast<int>(x.cols());
 
   // Without moving pins or wind nothing does work on the body, so its energy must not grow.
-  bool conservative = !system.suppliesEnergy();
-  for (int i = 0; i < n && conservative; ++i)
-    conservative = !pinned[i] || v.col(i).isZero();
+  const bool conservative = system.nothingDoesWork();
   const double energy_before = conservative ? system.mechanicalEnergy() : 0.0;
   x0_ = x;
   v0_ = v;

@@ -37,6 +37,17 @@ public:
   virtual void coupledPairs(std::vector<std::pair<int, int>>& pairs) const = 0;
   /// True when an outside force (wind) may rightly add energy in a step.
   virtual bool suppliesEnergy() const = 0;
+  /// True when nothing does work on the body in this step (no wind, no pinned particle moving), so
+  /// that an implicit step must not gain energy.
+  bool nothingDoesWork()
+  {
+    if (suppliesEnergy()) return false;
+    const std::vector<char>& is_pinned = pinned();
+    const Eigen::Matrix3Xd& v = velocities();
+    for (int i = 0; i < static_cast<int>(v.cols()); ++i)
+      if (is_pinned[i] && !v.col(i).isZero()) return false;
+    return true;
+  }
   virtual double kineticEnergy() const = 0;     ///< [J] of the current state, free particles
   virtual double mechanicalEnergy() const = 0;  ///< [J] kinetic + potential of the current state
   /// Counts and describes a stability event (e.g. energy taken out by the implicit step).
