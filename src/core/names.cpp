@@ -12,11 +12,11 @@ namespace core
 Status validateBodyName(const std::string& name)
 {
   if (name.empty()) return Status::failure("name is empty: every body needs a unique name");
-  // The length first, so that a long name is refused without echoing it whole.
-  const std::size_t length = characterCount(name);
-  if (length > limits::kMaxNameLength)
-    return Status::failure("name = " + quoteReceived(name) + " is " + std::to_string(length) +
-                           " characters long: at most " + std::to_string(limits::kMaxNameLength) + " allowed");
+  // The length first, so that a long name is refused without echoing it whole: the quote is cut
+  // at the longest name allowed and followed by the length, e.g. 'aaa...' (65 characters).
+  if (characterCount(name) > limits::kMaxNameLength)
+    return Status::failure("name = " + quoteReceived(name, limits::kMaxNameLength) + " is too long: must be 1 to " +
+                           std::to_string(limits::kMaxNameLength) + " characters");
   if (name[0] == '_') return Status::failure("name = " + quoteReceived(name) + " starts with '_', which is reserved");
   for (std::size_t at = 0; at < name.size(); ++at)
   {

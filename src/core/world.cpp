@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "particle_sim/core/fnv1a.h"
 #include "particle_sim/core/validation.h"
 
 namespace particle_sim
@@ -168,13 +169,7 @@ int World::particleCount() const
 
 std::uint64_t deriveSeed(std::uint64_t world_seed, const std::string& body_name)
 {
-  std::uint64_t hash = 1469598103934665603ULL;  // FNV-1a offset basis
-  for (unsigned char c : body_name)
-  {
-    hash ^= c;
-    hash *= 1099511628211ULL;  // FNV prime
-  }
-  return hash ^ world_seed;
+  return fnv1a64(body_name.data(), body_name.size()) ^ world_seed;
 }
 
 }  // namespace core

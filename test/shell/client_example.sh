@@ -7,15 +7,13 @@ set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/helpers.bash"
 : "${PARTICLE_SIM_ROOT:?run me through scripts/test}"
 
-work="$(mktemp -d)"
-trap '_helpers_cleanup; rm -rf "$work"' EXIT
 mkdir -p "$work/ws/src"
 cp -a "$PARTICLE_SIM_ROOT/docs/examples/particle_sim_client" "$work/ws/src/"
 
 # Build it as the README says, in a shell where only particle_sim's devel space is sourced.
 echo "== catkin_make in $work/ws"
 (cd "$work/ws" && catkin_make -DPYTHON_EXECUTABLE=/usr/bin/python3 -j2 >"$work/catkin_make.log" 2>&1) ||
-  { tail -n 40 "$work/catkin_make.log"; fail "catkin_make of the client example failed"; }
+  fail "catkin_make of the client example failed"
 set +u
 # shellcheck disable=SC1091
 source "$work/ws/devel/setup.bash"
@@ -27,7 +25,7 @@ rospack find particle_sim >/dev/null || fail "particle_sim is no longer found on
 # A live node with an empty world, on a master of our own.
 start_roscore
 background rosrun particle_sim particle_sim_node _status_period:=0 >"$work/node.log" 2>&1
-wait_for_service /particle_sim/spawn_rope 30
+wait_for_service /particle_sim/spawn_rope 30 || fail "the node's services did not appear"
 
 echo "== C++ client"
 out="$(rosrun particle_sim_client spawn_rope_client _name:=cpp_rope 2>&1)" || { echo "$out"; fail "C++ client failed"; }

@@ -1,58 +1,110 @@
 # Helpers for the shell tests of test/shell/ (sourced, never run: scripts/test runs only *.sh).
 #
-#   source "$(dirname "$0")/helpers.bash"
-#   start_roscore            # a master of its own on a free port; ROS_MASTER_URI exported;
-#                            # stopped (with every child) when the script exits
-#   fail "message"           # prints "FAIL: message" and exits 1
+#   source "$(dirname "${BASH_SOURCE[0]}")/helpers.bash"
+#
+# Sourcing it puts /usr/bin first on PATH (Debian's python3 and ROS tools), makes a scratch folder
+# $work, and on exit stops everything started with `background` or `start_roscore` (SIGINT, then
+# SIGKILL after 5 s) and removes $work. ROS_HOME (unless set) and ROS_LOG_DIR are inside $work;
+# ROS_HOSTNAME is 127.0.0.1.
+#
+#   use_devel_space          sources $PARTICLE_SIM_BUILD/devel/setup.bash (default: the workspace
+#                            scripts/common.sh uses, ../<checkout>_ws) and sets $node_binary; for a
+#                            test also run by hand (scripts/test has sourced it already)
+#   start_roscore [NAME]     a master of its own (log $work/roscore[_NAME].log) on a free port,
+#                            ROS_MASTER_URI exported; called again after stop_roscore, the same port
+#   stop_roscore             stops the master started last and waits until it is gone
+#   background CMD...        runs CMD in the background (pid in $background_pid), stopped on exit
+#   free_port                prints a TCP port nobody listens on now
+#   wait_for_service NAME [SECONDS]   until the master lists service NAME (default 30 s); 1 if not
+#   wait_for_log SECONDS FILE REGEX   until FILE matches the extended REGEX; 1 if not
+#   contains TEXT REGEX      true if a line of TEXT matches the extended REGEX
+#   fail "message"           prints "FAIL: message" and the last lines of $work/*.log, exits 1
+
+export PATH="/usr/bin:$PATH"
+_helpers_dir="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
+
+work="$(mktemp -d)"
+export ROS_HOME="${ROS_HOME:-$work}" ROS_LOG_DIR="$work/log" ROS_HOSTNAME=127.0.0.1
+unset ROS_IP
+
+started=()  # pids of everything started here, stopped on exit
+_helpers_cleanup() {
+  local pid
+  for pid in "${started[@]}"; do kill -INT "$pid" 2>/dev/null || true; done
+  for pid in "${started[@]}"; do
+    for _ in $(seq 50); do kill -0 "$pid" 2>/dev/null || break; sleep 0.1; done
+    kill -KILL "$pid" 2>/dev/null || true
+    wait "$pid" 2>/dev/null || true
+  done
+  rm -rf "$work"
+}
+trap _helpers_cleanup EXIT
 
 fail() {
   echo "FAIL: $*" >&2
+  local log
+  for log in "$work"/*.log; do [ -f "$log" ] && { echo "--- $log" >&2; tail -n 30 "$log" >&2; }; done
   exit 1
 }
 
-# A TCP port nobody listens on now.
+use_devel_space() {
+  local root
+  root="$(cd "$_helpers_dir/../.." && pwd)"
+  PARTICLE_SIM_ROOT="${PARTICLE_SIM_ROOT:-$root}"
+  PARTICLE_SIM_BUILD="${PARTICLE_SIM_BUILD:-$(dirname "$root")/$(basename "$root")_ws}"
+  set +u  # ROS's setup files read unset variables
+  # shellcheck disable=SC1091
+  source "$PARTICLE_SIM_BUILD/devel/setup.bash"
+  set -u
+  node_binary="$PARTICLE_SIM_BUILD/devel/lib/particle_sim/particle_sim_node"
+}
+
 free_port() {
   /usr/bin/python3 -c 'import socket; s = socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])'
 }
 
-_helpers_pids=()
-_helpers_cleanup() {
-  local pid
-  for pid in "${_helpers_pids[@]}"; do
-    kill -INT "$pid" 2>/dev/null || true
-  done
-  for pid in "${_helpers_pids[@]}"; do
-    wait "$pid" 2>/dev/null || true
-  done
-}
-trap _helpers_cleanup EXIT
-
-# Runs "$@" in the background and stops it (SIGINT) when the script exits.
 background() {
   "$@" &
-  _helpers_pids+=("$!")
+  background_pid=$!
+  started+=("$background_pid")
 }
 
-# Starts roscore on a free port with its logs under a temporary ROS_HOME, and waits until it answers.
+# True if text $1 has a line matching the extended regex $2 (no pipe: under pipefail, grep -q
+# ending a pipe early fails the writer).
+contains() { grep -Eq -- "$2" <<<"$1"; }
+
 start_roscore() {
-  local port
-  port="$(free_port)"
-  export ROS_MASTER_URI="http://127.0.0.1:$port"
-  export ROS_HOME="${ROS_HOME:-$(mktemp -d)}"
-  background roscore -p "$port" >"$ROS_HOME/roscore.out" 2>&1
-  local tries=0
-  until rosparam get /run_id >/dev/null 2>&1; do
-    tries=$((tries + 1))
-    [ "$tries" -lt 150 ] || fail "roscore on port $port did not answer within 30 s"
-    sleep 0.2
+  local nodes
+  roscore_port="${roscore_port:-$(free_port)}"
+  export ROS_MASTER_URI="http://127.0.0.1:$roscore_port"
+  background roscore -p "$roscore_port" >"$work/roscore${1:+_$1}.log" 2>&1
+  roscore_pid=$background_pid
+  for _ in $(seq 300); do
+    nodes="$(timeout 5 rosnode list 2>/dev/null)" || true
+    contains "$nodes" '^/rosout$' && return 0
+    sleep 0.1
   done
+  fail "roscore did not start on port $roscore_port"
 }
 
-# Waits (up to $2 seconds, default 30) until the service $1 is advertised.
+stop_roscore() {
+  kill -INT "$roscore_pid"
+  for _ in $(seq 100); do kill -0 "$roscore_pid" 2>/dev/null || break; sleep 0.1; done
+  kill -KILL "$roscore_pid" 2>/dev/null || true
+  wait "$roscore_pid" 2>/dev/null || true
+}
+
+wait_for_log() {
+  for _ in $(seq $(($1 * 10))); do grep -Eq "$3" "$2" && return 0; sleep 0.1; done
+  return 1
+}
+
 wait_for_service() {
-  local deadline=$((SECONDS + ${2:-30}))
-  until rosservice list 2>/dev/null | grep -qx "$1"; do
-    [ "$SECONDS" -lt "$deadline" ] || fail "service $1 did not appear within ${2:-30} s"
+  local services
+  for _ in $(seq $((${2:-30} * 5))); do
+    services="$(timeout 5 rosservice list 2>/dev/null)" || true
+    contains "$services" "^$1\$" && return 0
     sleep 0.2
   done
+  return 1
 }

@@ -14,8 +14,6 @@ cmake --build "$PARTICLE_SIM_BUILD/build" --target install -- -j2 >/dev/null
 
 # Everything below runs in a clean environment with only the install space sourced, from a folder
 # outside the source tree.
-work="$(mktemp -d)"
-trap '_helpers_cleanup; rm -rf "$work"' EXIT
 cat >"$work/check.bash" <<'CHECK'
 set -euo pipefail
 source "$(dirname "$0")/helpers.bash"
@@ -39,10 +37,11 @@ grep -q "scenes from $INSTALL/share/particle_sim/config/scenes/bench" <<<"$out" 
 # The installed node with an installed scene answers a service.
 start_roscore
 background roslaunch particle_sim particle_sim.launch scene:=rope status_period:=0 >"$WORK/launch.log" 2>&1
-wait_for_service /particle_sim/pause_physics 30
+wait_for_service /particle_sim/pause_physics 30 || fail "the installed node's services did not appear"
 rosservice call /particle_sim/pause_physics | grep -q "success: True" || fail "pause_physics on the installed node"
 echo "installed node answers"
 CHECK
 cp "$(dirname "${BASH_SOURCE[0]}")/helpers.bash" "$work/"
-env -i HOME="$HOME" PATH=/usr/bin:/bin INSTALL="$install" WORK="$work" /bin/bash "$work/check.bash"
+env -i HOME="$HOME" PATH=/usr/bin:/bin INSTALL="$install" WORK="$work" /bin/bash "$work/check.bash" ||
+  fail "a check in the shell with only the install space sourced failed"
 echo "PASS"

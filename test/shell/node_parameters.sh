@@ -2,8 +2,9 @@
 # Shell test: the node refuses unusable private parameters at start, naming the parameter, the value
 # as given and the allowed range with its unit (core/limits.h), and exits with status 1.
 set -euo pipefail
-source "$(dirname "${BASH_SOURCE[0]}")/ros_test_env.bash"
-start_roscore 1
+source "$(dirname "${BASH_SOURCE[0]}")/helpers.bash"
+use_devel_space
+start_roscore
 
 # Runs the node with the given parameters; it must exit 1 within 30 s and log $1 (a fixed string).
 expect_refused() {

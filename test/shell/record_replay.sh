@@ -6,8 +6,6 @@
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/helpers.bash"
 
-work="$(mktemp -d)"
-trap 'rm -rf "$work"' EXIT
 export ROS_HOME="$work/ros_home"
 unset DISPLAY
 
@@ -17,8 +15,8 @@ export ROS_MASTER_URI="http://127.0.0.1:$port"
 code=0
 timeout 120 roslaunch -p "$port" particle_sim record.launch scene:=rope bag:="$work/rope.bag" duration:=3 \
   >"$work/record.log" 2>&1 || code=$?
-[ "$code" -ne 124 ] || { tail -n 30 "$work/record.log"; fail "record.launch duration:=3 still ran after 120 s"; }
-[ "$code" -eq 0 ] || { tail -n 30 "$work/record.log"; fail "record.launch exited with $code"; }
+[ "$code" -ne 124 ] || fail "record.launch duration:=3 still ran after 120 s"
+[ "$code" -eq 0 ] || fail "record.launch exited with $code"
 grep -q "REQUIRED process \[record-[0-9]*\] has died" "$work/record.log" ||
   fail "record.launch did not end because the recorder finished"
 grep -q "process has finished cleanly" "$work/record.log" || fail "the recorder did not finish cleanly"
@@ -42,5 +40,5 @@ port="$(free_port)"
 export ROS_MASTER_URI="http://127.0.0.1:$port"
 code=0
 timeout 60 roslaunch -p "$port" particle_sim replay.launch bag:="$work/rope.bag" >"$work/replay.log" 2>&1 || code=$?
-[ "$code" -eq 0 ] || { tail -n 30 "$work/replay.log"; fail "replay.launch exited with $code"; }
+[ "$code" -eq 0 ] || fail "replay.launch exited with $code"
 echo "PASS"

@@ -3,16 +3,16 @@
 # master is gone; when roscore is back on the same URI, the node registers its topics, services and
 # subscriptions again (roscpp does not), so that the usual tools find it. Exits 0 on pass.
 set -euo pipefail
-source "$(dirname "${BASH_SOURCE[0]}")/ros_test_env.bash"
+source "$(dirname "${BASH_SOURCE[0]}")/helpers.bash"
+use_devel_space
 
 start_roscore 1
-"$node_binary" __name:=particle_sim _scene:="$PARTICLE_SIM_ROOT/config/scenes/test_services.yaml" \
-  _status_period:=0 >"$work/node.log" 2>&1 &
-node_pid=$!
-started+=("$node_pid")
+background "$node_binary" __name:=particle_sim _scene:="$PARTICLE_SIM_ROOT/config/scenes/test_services.yaml" \
+  _status_period:=0 >"$work/node.log" 2>&1
+node_pid=$background_pid
 
 # Up: it answers and publishes.
-wait_for_service 30 /particle_sim/pause_physics || fail "the node's services did not appear"
+wait_for_service /particle_sim/pause_physics 30 || fail "the node's services did not appear"
 answer="$(timeout 30 rosservice call /particle_sim/pause_physics 2>&1)" || fail "pause_physics before: $answer"
 contains "$answer" 'success: True' || fail "pause_physics before: $answer"
 timeout 15 rostopic echo -n 1 /particle_sim/status >/dev/null || fail "no ~status before the restart"

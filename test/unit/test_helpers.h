@@ -9,6 +9,7 @@
 #include <type_traits>
 #include <vector>
 
+#include "particle_sim/core/fnv1a.h"
 #include "particle_sim/core/spring.h"
 #include "particle_sim/core/status.h"
 #include "particle_sim/core/world.h"
@@ -31,17 +32,12 @@ inline int countClass(const std::vector<particle_sim::core::Spring>& springs,
       std::count_if(springs.begin(), springs.end(), [&](const auto& s) { return s.spring_class == spring_class; }));
 }
 
-// FNV-1a, 64 bits (Fowler, Noll, Vo), over raw bytes: doubles are hashed bit for bit, so any
-// change of any bit of the state (even 0.0 against -0.0) changes the hash.
+// FNV-1a, 64 bits (core/fnv1a.h), over raw bytes added piece by piece: doubles are hashed bit for
+// bit, so any change of any bit of the state (even 0.0 against -0.0) changes the hash.
 class Fnv1a64
 {
 public:
-  void addBytes(const void* data, std::size_t size)
-  {
-    const auto* bytes = static_cast<const unsigned char*>(data);
-    for (std::size_t i = 0; i < size; ++i)
-      hash_ = (hash_ ^ bytes[i]) * 1099511628211ULL;
-  }
+  void addBytes(const void* data, std::size_t size) { hash_ = particle_sim::core::fnv1a64(data, size, hash_); }
   void addDoubles(const double* data, std::size_t count) { addBytes(data, count * sizeof(double)); }
   template <typename T>
   void addValue(const T& value)
@@ -57,7 +53,7 @@ public:
   std::uint64_t value() const { return hash_; }
 
 private:
-  std::uint64_t hash_ = 14695981039346656037ULL;  // the FNV-1a 64 offset basis
+  std::uint64_t hash_ = particle_sim::core::kFnv1a64OffsetBasis;
 };
 
 // The full state of `world`, hashed bit for bit: the step count, then per body in world order its

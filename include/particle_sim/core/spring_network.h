@@ -173,7 +173,6 @@ private:
   // What the integrators see (DynamicSystem), with the gravity of the current step.
   Eigen::Matrix3Xd& positions() override { return particles_.position; }
   Eigen::Matrix3Xd& velocities() override { return particles_.velocity; }
-  const Eigen::Matrix3Xd& stepStartPositions() const override { return saved_position_; }
   const Eigen::VectorXd& masses() const override { return mass_; }
   const std::vector<char>& pinned() const override { return pinned_; }
   void computeForces(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v, Eigen::Matrix3Xd& force) const override

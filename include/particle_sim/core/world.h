@@ -38,8 +38,8 @@ constexpr double kMaxDt = 0.1;
 
 Status validate(const WorldDef& def);
 
-/// A deterministic per-body seed from the world seed and the body name (FNV-1a hash), for
-/// bodies that do not set their own seed.
+/// A deterministic per-body seed from the world seed and the body name, for bodies that do not set
+/// their own seed: fnv1a64(body_name) XOR world_seed.
 std::uint64_t deriveSeed(std::uint64_t world_seed, const std::string& body_name);
 
 /// The simulated world: an environment (gravity, colliders) and named bodies, advanced by a fixed

@@ -22,6 +22,8 @@ Bdf2Method::Bdf2Method(int particles, const std::vector<std::pair<int, int>>& co
   x_hat_.setZero(3, particles);
   x_predicted_.setZero(3, particles);
   w_.setZero(3, particles);
+  x_left_.setZero(3, particles);
+  v_left_.setZero(3, particles);
 }
 
 void Bdf2Method::restart()
@@ -32,6 +34,37 @@ void Bdf2Method::restart()
 }
 
 SolverReport Bdf2Method::step(double h, DynamicSystem& system, const IntegratorDef& settings)
+{
+  if (has_history_ && h == previous_h_) restartEditedParticles(h, system);
+  const SolverReport report = advance(h, system, settings);
+  x_left_ = system.positions();
+  v_left_ = system.velocities();
+  return report;
+}
+
+void Bdf2Method::restartEditedParticles(double h, DynamicSystem& system)
+{
+  // A free particle whose state is not the one the last step left (a collision, Provot's strain
+  // limit or a caller changed it) had its history (x_{n−1}, v_{n−1}) taken before that change,
+  // and BDF2 would carry the old motion on (into the surface it touched). Its history restarts
+  // from the changed state (x', v') so that the next step is a consistent first-order step:
+  //  - the velocity history keeps the last step's change of velocity, since the forces did not
+  //    change, only the state: v_{n−1} = v' − (v_n − v_{n−1}), so v̂ = v' + (v_n − v_{n−1}) / 3;
+  //  - the position history is that of a particle arriving at x' with v': x_{n−1} = x' − h v',
+  //    so x̂ = x' + h v' / 3.
+  // No force is evaluated (an explicit one would cost BDF2 its stability at large steps).
+  const Eigen::Matrix3Xd& x = system.positions();
+  const Eigen::Matrix3Xd& v = system.velocities();
+  const std::vector<char>& pinned = system.pinned();
+  for (int i = 0; i < static_cast<int>(x.cols()); ++i)
+  {
+    if (pinned[i] || (x.col(i) == x_left_.col(i) && v.col(i) == v_left_.col(i))) continue;
+    v_previous_.col(i) = v.col(i) - (v_left_.col(i) - v_previous_.col(i));
+    x_previous_.col(i) = x.col(i) - h * v.col(i);
+  }
+}
+
+SolverReport Bdf2Method::advance(double h, DynamicSystem& system, const IntegratorDef& settings)
 {
   Eigen::Matrix3Xd& x = system.positions();
   Eigen::Matrix3Xd& v = system.velocities();

@@ -29,6 +29,11 @@ namespace core
 ///
 ///  - The first step has no history (after build, reset, a switch of method, or a change of step
 ///    length, for which the constant-step formula does not hold): it is taken with implicit Euler.
+///  - A free particle whose state was changed after the last step (collision response, Provot's
+///    strain limit, a caller) restarts its history from the changed state (x', v'): v_{n−1} =
+///    v' − (v_n − v_{n−1}) (the last change of velocity is kept), x_{n−1} = x' − h v'. Its next
+///    step is then a consistent first-order one instead of carrying the motion from before the
+///    change on (into the ground or sphere it touched), so BDF2 converges in contact.
 ///  - When nothing does work on the body (no wind, no moving pin) and the step gained energy, the
 ///    excess is taken out of the kinetic energy when that suffices (an O(h³) change on smooth
 ///    motion, so the order stays 2), else the step is redone with implicit Euler; either is
@@ -49,11 +54,17 @@ public:
   bool hasHistory() const override { return has_history_; }
 
 private:
+  // The step itself, from the history as it stands.
+  SolverReport advance(double h, DynamicSystem& system, const IntegratorDef& settings);
+  // Restarts the history of the free particles whose state differs from (x_left_, v_left_).
+  void restartEditedParticles(double h, DynamicSystem& system);
+
   ImplicitEulerMethod first_step_;  // the step without history, and the fallback
   ImplicitEulerSolver solver_;
   bool has_history_ = false;
   double previous_h_ = 0.0;                                     // [s] the step length the history was taken with
   Eigen::Matrix3Xd x_previous_, v_previous_;                    // (x_{n−1}, v_{n−1}) [m], [m/s]
+  Eigen::Matrix3Xd x_left_, v_left_;                            // the state the last step left [m], [m/s]
   Eigen::Matrix3Xd force_, x0_, v0_, x_hat_, x_predicted_, w_;  // work arrays; (x0, v0) = (x_n, v_n)
 };
 

@@ -22,8 +22,6 @@ public:
   /// Positions x [m] and velocities v [m/s], advanced in place.
   virtual Eigen::Matrix3Xd& positions() = 0;
   virtual Eigen::Matrix3Xd& velocities() = 0;
-  /// Positions at the start of the whole step (before its first substep) [m].
-  virtual const Eigen::Matrix3Xd& stepStartPositions() const = 0;
   virtual const Eigen::VectorXd& masses() const = 0;  ///< [kg], also of pinned particles
   virtual const std::vector<char>& pinned() const = 0;
 

@@ -7,11 +7,8 @@ namespace particle_sim
 namespace core
 {
 /// Classical fourth-order Runge–Kutta on (x, v) with derivative (v, a(x, v)), the accuracy
-/// reference. Fourth order; stable for h ω <= 2√2.
-///
-/// Its stages start from DynamicSystem::stepStartPositions(), the positions at the start of the
-/// whole step, as the golden hashes were recorded; within a step split into substeps that is
-/// not the substep's own start (see the issue-12 engine report).
+/// reference. Fourth order; stable for h ω <= 2√2. Its stages start from the state it is given,
+/// so a step that the stability guard splits into n substeps is n RK4 steps of h / n.
 class Rk4Method : public IntegrationMethod
 {
 public:
