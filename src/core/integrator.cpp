@@ -3,6 +3,7 @@
 #include <limits>
 #include <string>
 
+#include "particle_sim/core/integrators/implicit_euler.h"
 #include "particle_sim/core/integrators/registry.h"
 #include "particle_sim/core/validation.h"
 
@@ -10,11 +11,11 @@ namespace particle_sim
 {
 namespace core
 {
+IntegratorType::IntegratorType() : IntegratorType(kImplicitEulerIntegrator) {}
+
 const char* toString(IntegratorType type)
 {
-  if (type == IntegratorType::Auto) return "auto";
-  const IntegratorInfo* info = findIntegrator(type);
-  return info ? info->name : "unknown";
+  return type.name();
 }
 
 double stabilityLimit(IntegratorType type)
@@ -29,15 +30,12 @@ bool isImplicit(IntegratorType type)
   return info && info->implicit;
 }
 
-const char* integratorTypeNames()
+std::string integratorTypeNames()
 {
-  static const std::string names = [] {
-    std::string list;
-    for (const IntegratorInfo& info : integratorRegistry())
-      list += std::string(info.name) + ", ";
-    return list + toString(IntegratorType::Auto);
-  }();
-  return names.c_str();
+  std::string list;
+  for (const IntegratorInfo& info : integratorRegistry())
+    list += std::string(info.name) + ", ";
+  return list + toString(kAutoIntegrator);
 }
 
 bool parseIntegratorType(const std::string& text, IntegratorType& type)
@@ -50,8 +48,8 @@ bool parseIntegratorType(const std::string& text, IntegratorType& type)
       return true;
     }
   }
-  if (text != toString(IntegratorType::Auto)) return false;
-  type = IntegratorType::Auto;
+  if (text != toString(kAutoIntegrator)) return false;
+  type = kAutoIntegrator;
   return true;
 }
 

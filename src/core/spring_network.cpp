@@ -134,7 +134,7 @@ SpringNetworkBody::SpringNetworkBody(const SpringNetworkDef& def)
   pattern.setPattern(n, pairs);
   forces_.bindPattern(pattern);
   for (const IntegratorInfo& info : integratorRegistry())
-    methods_.push_back(info.make(n, pairs));
+    methods_.emplace_back(info.type, info.make(n, pairs));
   step_target_.setZero(3, n);
 
   // The size of the body's energy, for the blow-up check: total mass · extent.
@@ -324,7 +324,7 @@ SubstepPlan SpringNetworkBody::planStep(double dt, const Environment& env) const
   // global damping.
   const double c_max = dampingBound(env.air, env.damping);
   const IntegratorType type =
-      integrator_.type == IntegratorType::Auto ? StabilityGuard::chooseAuto(dt, omega_bound_, c_max) : integrator_.type;
+      integrator_.type == kAutoIntegrator ? StabilityGuard::chooseAuto(dt, omega_bound_, c_max) : integrator_.type;
   return StabilityGuard::planSubsteps(type, dt, omega_bound_, c_max, integrator_.max_substeps);
 }
 
@@ -430,18 +430,19 @@ void SpringNetworkBody::substep(double h, IntegratorType type, const Environment
 
 IntegrationMethod& SpringNetworkBody::method(IntegratorType type)
 {
-  const std::vector<IntegratorInfo>& registry = integratorRegistry();
-  for (std::size_t k = 0; k < registry.size(); ++k)
+  for (const auto& [method_type, method] : methods_)
   {
-    if (registry[k].type == type) return *methods_[k];
+    if (method_type == type) return *method;
   }
-  return *methods_[0];  // unreachable: `auto` is resolved before and every other type is registered
+  // Unreachable: `auto` is resolved before, and the body has a method for every type registered
+  // before it was built (ScopedIntegratorRegistration says to register before building).
+  return *methods_.front().second;
 }
 
 void SpringNetworkBody::restartMethods()
 {
-  for (const std::unique_ptr<IntegrationMethod>& m : methods_)
-    m->restart();
+  for (const auto& entry : methods_)
+    entry.second->restart();
 }
 
 void SpringNetworkBody::accelerations(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v, Eigen::Matrix3Xd& a) const

@@ -13,6 +13,8 @@
 #include <utility>
 #include <vector>
 
+#include "particle_sim/core/integrators/rk4.h"
+#include "particle_sim/core/integrators/verlet.h"
 #include "particle_sim/scene/obj_mesh.h"
 
 using namespace particle_sim;
@@ -190,10 +192,10 @@ TEST(SceneFiles, ReadsRopesWithWorldIntegratorDefaultsAndOverrides)
   EXPECT_EQ(a.stretch_stiffness, 300.0);
   EXPECT_EQ(a.bend_stiffness, 5.0);
   EXPECT_EQ(a.pins, (std::vector<int>{0, -1}));
-  EXPECT_EQ(a.integrator.type, core::IntegratorType::Rk4);  // the world's default
+  EXPECT_EQ(a.integrator.type, core::kRk4Integrator);  // the world's default
   EXPECT_EQ(a.integrator.cg_tolerance, 1.0e-5);
   const auto& b = std::get<core::RopeDef>(def.bodies[1]);
-  EXPECT_EQ(b.integrator.type, core::IntegratorType::Verlet);
+  EXPECT_EQ(b.integrator.type, core::kVerletIntegrator);
   EXPECT_EQ(b.integrator.verlet_damping, 0.99);
 }
 
@@ -319,17 +321,17 @@ TEST(SceneStep, EditIntegratorsReachesTheWorldAndEverySpringBody)
       "  - {name: j, kind: jelly}\n");
   int edited = 0;
   scene::editIntegrators(def, [&](core::IntegratorDef& integrator) {
-    integrator.type = core::IntegratorType::Rk4;
+    integrator.type = core::kRk4Integrator;
     ++edited;
   });
   EXPECT_EQ(edited, 6);  // the world and five spring bodies; the emitter has no integrator
-  EXPECT_EQ(def.world.integrator.type, core::IntegratorType::Rk4);
+  EXPECT_EQ(def.world.integrator.type, core::kRk4Integrator);
   std::unique_ptr<core::World> world;
   ASSERT_TRUE(scene::buildWorld(def, world).ok);
   for (const char* name : {"r", "n", "g", "m", "j"})
   {
     ASSERT_NE(world->findSpringBody(name), nullptr) << name;
-    EXPECT_EQ(world->findSpringBody(name)->integrator().type, core::IntegratorType::Rk4) << name;
+    EXPECT_EQ(world->findSpringBody(name)->integrator().type, core::kRk4Integrator) << name;
   }
 }
 

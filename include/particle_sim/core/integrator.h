@@ -8,32 +8,57 @@ namespace particle_sim
 {
 namespace core
 {
-/// The time integrators a spring body can use (chosen per body). Each is a unit of its own in
-/// core/integrators/ and declares its name, order, stability limit and whether it is implicit in
-/// the registry (integrators/registry.h), which toString(), parseIntegratorType(),
-/// integratorTypeNames() and stabilityLimit() read.
-enum class IntegratorType
+/// Which time integrator a spring body uses (chosen per body): one of the methods registered in
+/// integrators/registry.cpp, or `auto`. A method is named by the address of its `kName`, an inline
+/// static constexpr member and so one object in the whole program: the registry is the one
+/// source of integrator identity, and a new method needs no constant here. The built-in methods'
+/// constants live with each method (e.g. kVerletIntegrator in integrators/verlet.h); `auto` is
+/// kAutoIntegrator below. toString(), parseIntegratorType(), integratorTypeNames(),
+/// stabilityLimit() and isImplicit() read the registry.
+class IntegratorType
 {
-  SymplecticEuler,  ///< the lecture's loop: v += h f/m, then x += h v (first order)
-  Verlet,           ///< the lecture's x' = x + k_d (x − x_prev) + h² f/m, second-order start (second order
-                    ///< for position-only forces; first order once forces depend on velocity)
-  ImplicitEuler,    ///< linearised backward Euler solved by modified preconditioned CG (first order, stable)
-  Rk4,              ///< classical Runge–Kutta, the accuracy reference (fourth order)
-  Bdf2,             ///< linearised BDF2 (Choi & Ko 2002), solved as implicit Euler is (second order, stable)
-  Auto,             ///< per body and step: Verlet where its stability bound holds with margin, else implicit Euler
+public:
+  /// The built-in default method of a body that sets none in a world that sets none: implicit Euler.
+  IntegratorType();
+
+  /// The method `Method` (a class declaring `static constexpr const char* kName`).
+  template <class Method>
+  static constexpr IntegratorType of()
+  {
+    return IntegratorType(&Method::kName);
+  }
+
+  /// The method's registered name ("verlet", ...), or "auto".
+  const char* name() const { return *name_; }
+
+  friend constexpr bool operator==(IntegratorType a, IntegratorType b) { return a.name_ == b.name_; }
+  friend constexpr bool operator!=(IntegratorType a, IntegratorType b) { return a.name_ != b.name_; }
+
+private:
+  constexpr explicit IntegratorType(const char* const* name) : name_(name) {}
+  const char* const* name_;  // &Method::kName
 };
 
+/// `auto`: not a method but a policy that picks one per body and step: Verlet where its stability
+/// bound holds with margin, else implicit Euler (integrators/stability_guard.h).
+struct AutoIntegratorPolicy
+{
+  static constexpr const char* kName = "auto";
+};
+inline constexpr IntegratorType kAutoIntegrator = IntegratorType::of<AutoIntegratorPolicy>();
+
 const char* toString(IntegratorType type);
-/// Parses a registered name ("symplectic_euler", "verlet", "implicit_euler", "rk4", "bdf2") or "auto";
-/// false when unknown.
+/// Parses a registered name ("symplectic_euler", "verlet", "implicit_euler", "rk4", "bdf2", ...)
+/// or "auto"; false when unknown.
 bool parseIntegratorType(const std::string& text, IntegratorType& type);
-/// "symplectic_euler, verlet, implicit_euler, rk4, bdf2, auto", for error messages.
-const char* integratorTypeNames();
+/// "symplectic_euler, verlet, implicit_euler, rk4, bdf2, auto" (every registered name, then auto),
+/// for error messages.
+std::string integratorTypeNames();
 
 /// An integrator and its settings, with defaults.
 struct IntegratorDef
 {
-  IntegratorType type = IntegratorType::ImplicitEuler;
+  IntegratorType type;          ///< default: implicit Euler
   double verlet_damping = 1.0;  ///< the lecture's Verlet k_d in [0, 1]: 1 = no damping, below 1 damps
   double cg_tolerance = 1e-8;   ///< implicit Euler: stop when |r| <= tolerance |b| (filtered residuals), > 0
   int cg_max_iterations = 500;  ///< implicit Euler: iteration cap, >= 1

@@ -12,6 +12,7 @@
 #include "particle_sim/core/forces/baraff_witkin_model.h"
 #include "particle_sim/core/forces/force_set.h"
 #include "particle_sim/core/integrator.h"
+#include "particle_sim/core/integrators/implicit_euler.h"
 #include "particle_sim/core/integrators/integration_method.h"
 #include "particle_sim/core/integrators/stability_guard.h"
 #include "particle_sim/core/spring.h"
@@ -198,7 +199,7 @@ private:
   Eigen::VectorXd mass_;                               // [kg], kept for pinned particles too
   std::vector<char> pinned_;
   Eigen::Matrix3Xd pin_target_;
-  IntegratorType last_integrator_ = IntegratorType::ImplicitEuler;
+  IntegratorType last_integrator_ = kImplicitEulerIntegrator;
   int last_substeps_ = 1;
   double omega_bound_ = 0.0;    // [1/s]
   double damping_bound_ = 0.0;  // [1/s], springs and conditions (global damping added at use)
@@ -208,8 +209,8 @@ private:
   std::string frozen_reason_;
 
   // Work arrays, sized once.
-  std::vector<std::unique_ptr<IntegrationMethod>> methods_;  // one per registered integrator, in its order
-  StrainLimit strain_limit_;                                 // Provot's constraint, applied after the integrator
+  std::vector<std::pair<IntegratorType, std::unique_ptr<IntegrationMethod>>> methods_;  // one per registered integrator
+  StrainLimit strain_limit_;  // Provot's constraint, applied after the integrator
   Eigen::Matrix3Xd saved_position_, saved_velocity_;
   Eigen::Matrix3Xd step_target_;  // pin targets at the end of the whole step (substeps approach them)
 };
