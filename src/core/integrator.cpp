@@ -53,6 +53,28 @@ bool parseIntegratorType(const std::string& text, IntegratorType& type)
   return true;
 }
 
+IntegratorDef resolve(const BodyIntegratorDef& body, const IntegratorDef& defaults)
+{
+  IntegratorDef def = defaults;
+  def.type = body.type.value_or(defaults.type);
+  def.verlet_damping = body.verlet_damping.value_or(defaults.verlet_damping);
+  def.cg_tolerance = body.cg_tolerance.value_or(defaults.cg_tolerance);
+  def.cg_max_iterations = body.cg_max_iterations.value_or(defaults.cg_max_iterations);
+  def.max_substeps = body.max_substeps.value_or(defaults.max_substeps);
+  return def;
+}
+
+BodyIntegratorDef settingEveryField(const IntegratorDef& def)
+{
+  return {def.type, def.verlet_damping, def.cg_tolerance, def.cg_max_iterations, def.max_substeps};
+}
+
+Status validate(const BodyIntegratorDef& def)
+{
+  // The built-in defaults pass, so only a field the body sets can be refused.
+  return validate(resolve(def));
+}
+
 Status validate(const IntegratorDef& def)
 {
   if (Status s = checkRange("verlet_damping", def.verlet_damping, 0.0, 1.0); !s) return s;

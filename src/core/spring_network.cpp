@@ -112,10 +112,11 @@ Status validate(const SpringNetworkDef& def, int max_particles)
   return validate(def.integrator);
 }
 
-SpringNetworkBody::SpringNetworkBody(const SpringNetworkDef& def)
+SpringNetworkBody::SpringNetworkBody(const SpringNetworkDef& def, const IntegratorDef& integrator_defaults)
     : Body(def.name),
       def_(def),
       forces_(makeSpringBodyForces(def_.springs, def_.baraff_witkin, def_.triangles)),
+      built_integrator_(resolve(def.integrator, integrator_defaults)),
       strain_limit_(def_.strain_limit, def_.springs, static_cast<int>(def_.positions.size()))
 {
   const int n = static_cast<int>(def_.positions.size());
@@ -171,7 +172,7 @@ void SpringNetworkBody::reset()
     pin_target_.col(index) = def_.positions[index];
   }
   forces_.resetConstants();
-  integrator_ = def_.integrator;
+  integrator_ = built_integrator_;
   guard_.clear();
   updateStabilityBound();
   last_substeps_ = 1;

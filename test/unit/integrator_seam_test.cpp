@@ -158,7 +158,7 @@ TEST(IntegratorSeam, ARegisteredMethodStepsASpringBody)
   EXPECT_EQ(body.planStep(0.5, env).substeps, symplectic.planStep(0.5, env).substeps);
 }
 
-TEST(IntegratorSeam, AWorldStepsABodyWithARegisteredMethod)
+TEST(IntegratorSeam, AWorldStepsABodyWithARegisteredMethodAsItsOwnOrAsTheWorldsDefault)
 {
   const ScopedIntegratorRegistration registration(integratorEntry<DriftKickMethod>());
   ASSERT_TRUE(registration.status().ok) << registration.status().message;
@@ -170,8 +170,11 @@ TEST(IntegratorSeam, AWorldStepsABodyWithARegisteredMethod)
   ASSERT_TRUE(validate(world_def).ok);
   World world(world_def);
   ASSERT_TRUE(world.addSpringNetwork(oscillator(kDriftKickIntegrator)).ok);
+  RopeDef rope;  // sets no method: the world's
+  rope.name = "rope";
+  ASSERT_TRUE(world.addRope(rope).ok);
   world.step();
-  for (const char* name : {"oscillator"})
+  for (const char* name : {"oscillator", "rope"})
   {
     const SpringNetworkBody* body = world.findSpringBody(name);
     ASSERT_NE(body, nullptr) << name;

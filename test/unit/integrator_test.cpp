@@ -445,8 +445,8 @@ TEST(Integrator, ImplicitSolveConvergesAndReportsIt)
     body.step(1.0 / 60.0, env);
     const SolverReport& report = body.lastSolve();
     EXPECT_GT(report.iterations, 0) << "step " << n;
-    EXPECT_LE(report.iterations, def.integrator.cg_max_iterations);
-    EXPECT_LE(report.relative_residual, def.integrator.cg_tolerance) << "step " << n;
+    EXPECT_LE(report.iterations, body.integrator().cg_max_iterations);
+    EXPECT_LE(report.relative_residual, body.integrator().cg_tolerance) << "step " << n;
     EXPECT_TRUE(report.converged) << "step " << n;
   }
 
@@ -460,11 +460,11 @@ TEST(Integrator, ImplicitSolveConvergesAndReportsIt)
   {
     slack.step(1.0 / 60.0, env);
     EXPECT_TRUE(slack.lastSolve().converged) << "slack rope step " << n;
-    EXPECT_LE(slack.lastSolve().relative_residual, def.integrator.cg_tolerance) << "slack rope step " << n;
+    EXPECT_LE(slack.lastSolve().relative_residual, slack.integrator().cg_tolerance) << "slack rope step " << n;
   }
 
   // Capped at one iteration, the report says it did not converge.
-  IntegratorDef capped = def.integrator;
+  IntegratorDef capped = body.integrator();
   capped.cg_tolerance = 1e-12;
   capped.cg_max_iterations = 1;
   ASSERT_TRUE(body.setIntegrator(capped).ok);

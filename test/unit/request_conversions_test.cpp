@@ -52,7 +52,7 @@ core::IntegratorDef worldDefaultIntegrator()
   return integrator;
 }
 
-void expectSameSettings(const core::IntegratorDef& a, const core::IntegratorDef& b)
+void expectSameSettings(const core::BodyIntegratorDef& a, const core::IntegratorDef& b)
 {
   EXPECT_EQ(a.verlet_damping, b.verlet_damping);
   EXPECT_EQ(a.cg_tolerance, b.cg_tolerance);

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <optional>
 #include <string>
 
 #include "particle_sim/core/status.h"
@@ -65,6 +66,25 @@ struct IntegratorDef
   int max_substeps = 64;        ///< explicit methods: most substeps a step may be split into to stay stable, >= 1
 };
 
+/// The integrator settings of a body definition (RopeDef, ClothGridDef, MeshClothDef, JellyDef,
+/// SpringNetworkDef): only what the body sets. Every field left empty comes from the world's
+/// default (WorldDef::integrator) when the body is added to a World, or from IntegratorDef's
+/// built-in defaults for a body built without one; so `rope.integrator.type = kVerletIntegrator;`
+/// keeps the world's cg_tolerance. The fields' meaning and ranges are IntegratorDef's.
+struct BodyIntegratorDef
+{
+  std::optional<IntegratorType> type;
+  std::optional<double> verlet_damping;
+  std::optional<double> cg_tolerance;
+  std::optional<int> cg_max_iterations;
+  std::optional<int> max_substeps;
+};
+
+/// `defaults` with every field that `body` sets taken from `body`.
+IntegratorDef resolve(const BodyIntegratorDef& body, const IntegratorDef& defaults = IntegratorDef());
+/// Settings that set every field to `def`'s.
+BodyIntegratorDef settingEveryField(const IntegratorDef& def);
+
 /// The stability limit h·ω of a method on an undamped oscillator of frequency ω, as the method
 /// declares it (integrators/registry.h): 2 for symplectic Euler and Verlet, 2√2 for RK4, infinite
 /// for implicit Euler (and for `auto`, which picks a stable method).
@@ -74,6 +94,8 @@ double stabilityLimit(IntegratorType type);
 bool isImplicit(IntegratorType type);
 
 Status validate(const IntegratorDef& def);
+/// Checks the fields `def` sets, with validate(IntegratorDef)'s messages.
+Status validate(const BodyIntegratorDef& def);
 
 /// What the last implicit solve did (zero iterations for the explicit methods).
 struct SolverReport

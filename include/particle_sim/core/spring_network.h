@@ -47,7 +47,7 @@ struct SpringNetworkDef
   std::vector<Eigen::Vector3i> triangles;  ///< surface triangles (cloth, jelly): drawn, published, feel the air
   BaraffWitkinDef baraff_witkin;           ///< Baraff–Witkin energies (cloth model baraff_witkin); empty = none
   StrainLimitDef strain_limit;
-  IntegratorDef integrator;
+  BodyIntegratorDef integrator;    ///< what the body sets; the rest is the world's default
   double contact_thickness = 0.0;  ///< [m] in limits::kContactThickness: kept from ground and spheres (0 = touch)
 };
 
@@ -84,7 +84,9 @@ class SpringNetworkBody : public Body, private DynamicSystem
 {
 public:
   /// `def` must have passed validate().
-  explicit SpringNetworkBody(const SpringNetworkDef& def);
+  /// `integrator_defaults`: the settings of every integrator field `def` does not set (a World
+  /// passes its WorldDef::integrator).
+  explicit SpringNetworkBody(const SpringNetworkDef& def, const IntegratorDef& integrator_defaults = IntegratorDef());
 
   BodyKind kind() const override { return BodyKind::SpringNetwork; }
   NetworkShape shape() const { return def_.shape; }
@@ -123,8 +125,11 @@ public:
   Status setSpringConstants(std::optional<SpringClass> spring_class, double stiffness, double damping);
 
   // Integrator ---------------------------------------------------------------------------------
+  /// The settings it integrates with: its definition's over the defaults it was built with.
   const IntegratorDef& integrator() const { return integrator_; }
   Status setIntegrator(const IntegratorDef& integrator);
+  /// Sets the fields `settings` sets and keeps the others.
+  Status setIntegrator(const BodyIntegratorDef& settings) { return setIntegrator(resolve(settings, integrator_)); }
   const SolverReport& lastSolve() const { return last_solve_; }
   /// The method the last step used (auto resolved).
   IntegratorType lastIntegrator() const { return last_integrator_; }
@@ -192,6 +197,7 @@ private:
 
   SpringNetworkDef def_;
   ForceSet forces_;
+  IntegratorDef built_integrator_;  // def_.integrator over the defaults it was built with (reset() restores it)
   IntegratorDef integrator_;
   AirDef air_;            // the air of the current step
   double damping_ = 0.0;  // [1/s] global damping of the current step (Environment::damping)
@@ -231,8 +237,8 @@ struct RopeDef
   double bend_stiffness = 0.0;       ///< [N/m]; 0 = no bend springs
   double bend_damping = 0.0;         ///< [N·s/m]
   std::vector<int> pins;             ///< indices pinned where they start; negative counts from the end (-1 = last)
-  IntegratorDef integrator;
-  double contact_thickness = 0.0;  ///< [m] in limits::kContactThickness: kept from ground and spheres (0 = touch)
+  BodyIntegratorDef integrator;      ///< what the body sets; the rest is the world's default
+  double contact_thickness = 0.0;    ///< [m] in limits::kContactThickness: kept from ground and spheres (0 = touch)
 };
 
 Status validate(const RopeDef& def, int max_particles);
