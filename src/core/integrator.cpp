@@ -77,6 +77,10 @@ Status validate(const BodyIntegratorDef& def)
 
 Status validate(const IntegratorDef& def)
 {
+  // A method whose registration has ended (ScopedIntegratorRegistration) is no longer one.
+  if (def.type != kAutoIntegrator && !findIntegrator(def.type))
+    return Status::failure("integrator = " + quoteReceived(toString(def.type)) +
+                           " is not registered; allowed: " + integratorTypeNames());
   if (Status s = checkRange("verlet_damping", def.verlet_damping, 0.0, 1.0); !s) return s;
   if (Status s = checkPositive("cg_tolerance", def.cg_tolerance); !s) return s;
   if (Status s = checkIntRange("cg_max_iterations", def.cg_max_iterations, 1, 1000000); !s) return s;

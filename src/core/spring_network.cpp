@@ -272,6 +272,11 @@ Status SpringNetworkBody::setSpringConstants(std::optional<SpringClass> spring_c
 Status SpringNetworkBody::setIntegrator(const IntegratorDef& integrator)
 {
   if (Status s = validate(integrator); !s) return s;
+  const bool has_method =
+      std::any_of(methods_.begin(), methods_.end(), [&](const auto& entry) { return entry.first == integrator.type; });
+  if (integrator.type != kAutoIntegrator && !has_method)
+    return Status::failure("integrator = " + quoteReceived(toString(integrator.type)) + " was registered after body " +
+                           quoteReceived(name()) + " was built");
   if (integrator.type != integrator_.type) restartMethods();
   integrator_ = integrator;
   return Status::success();
@@ -435,8 +440,8 @@ IntegrationMethod& SpringNetworkBody::method(IntegratorType type)
   {
     if (method_type == type) return *method;
   }
-  // Unreachable: `auto` is resolved before, and the body has a method for every type registered
-  // before it was built (ScopedIntegratorRegistration says to register before building).
+  // Unreachable: `auto` is resolved before, validate() refuses an unregistered type and
+  // setIntegrator() a type registered after the body was built.
   return *methods_.front().second;
 }
 

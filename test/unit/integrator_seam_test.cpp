@@ -112,6 +112,26 @@ TEST(IntegratorSeam, AMethodRegisteredByItsEntryIsNamedListedAndDeclared)
   EXPECT_FALSE(parseIntegratorType("drift_kick", parsed));
   EXPECT_EQ(findIntegrator(kDriftKickIntegrator), nullptr);
   EXPECT_EQ(integratorTypeNames(), built_in_names);
+  // A definition naming it is refused again.
+  IntegratorDef gone;
+  gone.type = kDriftKickIntegrator;
+  EXPECT_EQ(validate(gone).message, "integrator = 'drift_kick' is not registered; allowed: " + built_in_names);
+}
+
+TEST(IntegratorSeam, ABodyBuiltBeforeARegistrationRefusesTheNewMethod)
+{
+  SpringNetworkBody before(oscillator(kSymplecticEulerIntegrator));
+  const ScopedIntegratorRegistration registration(integratorEntry<DriftKickMethod>());
+  ASSERT_TRUE(registration.status().ok) << registration.status().message;
+  IntegratorDef settings = before.integrator();
+  settings.type = kDriftKickIntegrator;
+  const Status refused = before.setIntegrator(settings);
+  EXPECT_FALSE(refused.ok);
+  EXPECT_EQ(refused.message, "integrator = 'drift_kick' was registered after body 'oscillator' was built");
+  EXPECT_EQ(before.integrator().type, kSymplecticEulerIntegrator);  // unchanged
+  SpringNetworkBody after(oscillator(kSymplecticEulerIntegrator));
+  EXPECT_TRUE(after.setIntegrator(settings).ok);
+  EXPECT_EQ(after.integrator().type, kDriftKickIntegrator);
 }
 
 TEST(IntegratorSeam, ARegisteredMethodStepsASpringBody)

@@ -47,7 +47,8 @@ IntegratorInfo integratorEntry()
 /// (see StabilityGuard).
 const std::vector<IntegratorInfo>& integratorRegistry();
 
-/// The entry of `type`, or null (for kAutoIntegrator).
+/// The entry of `type`, or null (for kAutoIntegrator). Entries, and references to them, stay valid
+/// until a ScopedIntegratorRegistration is made or ends.
 const IntegratorInfo* findIntegrator(IntegratorType type);
 
 /// Adds a method to the registry for as long as this object lives, after the built-in ones (for a
