@@ -22,7 +22,7 @@ Spring makeSpring(const std::vector<Eigen::Vector3d>& x, int i, int j, const Spr
 }
 
 Status checkCommon(const std::string& name, const SpringConstants& stretch, const SpringConstants& bend, double mass,
-                   const StrainLimitDef& strain_limit, const IntegratorDef& integrator, double contact_thickness)
+                   const StrainLimitDef& strain_limit, const BodyIntegratorDef& integrator, double contact_thickness)
 {
   if (Status s = checkRange("contact_thickness", contact_thickness, limits::kContactThickness); !s) return s;
   if (Status s = validateBodyName(name); !s) return s;
@@ -68,7 +68,7 @@ void addBaraffWitkin(const std::vector<Eigen::Vector2d>& uvs, const SpringConsta
 }
 
 // A cloth network with nothing in it yet.
-SpringNetworkDef emptyCloth(const std::string& name, const IntegratorDef& integrator, const StrainLimitDef& limit,
+SpringNetworkDef emptyCloth(const std::string& name, const BodyIntegratorDef& integrator, const StrainLimitDef& limit,
                             double contact_thickness)
 {
   SpringNetworkDef net;

@@ -3,6 +3,7 @@
 #include <limits>
 #include <string>
 
+#include "particle_sim/core/integrators/implicit_euler.h"
 #include "particle_sim/core/integrators/registry.h"
 #include "particle_sim/core/validation.h"
 
@@ -10,11 +11,11 @@ namespace particle_sim
 {
 namespace core
 {
+IntegratorType::IntegratorType() : IntegratorType(kImplicitEulerIntegrator) {}
+
 const char* toString(IntegratorType type)
 {
-  if (type == IntegratorType::Auto) return "auto";
-  const IntegratorInfo* info = findIntegrator(type);
-  return info ? info->name : "unknown";
+  return type.name();
 }
 
 double stabilityLimit(IntegratorType type)
@@ -29,15 +30,12 @@ bool isImplicit(IntegratorType type)
   return info && info->implicit;
 }
 
-const char* integratorTypeNames()
+std::string integratorTypeNames()
 {
-  static const std::string names = [] {
-    std::string list;
-    for (const IntegratorInfo& info : integratorRegistry())
-      list += std::string(info.name) + ", ";
-    return list + toString(IntegratorType::Auto);
-  }();
-  return names.c_str();
+  std::string list;
+  for (const IntegratorInfo& info : integratorRegistry())
+    list += std::string(info.name) + ", ";
+  return list + toString(kAutoIntegrator);
 }
 
 bool parseIntegratorType(const std::string& text, IntegratorType& type)
@@ -50,13 +48,39 @@ bool parseIntegratorType(const std::string& text, IntegratorType& type)
       return true;
     }
   }
-  if (text != toString(IntegratorType::Auto)) return false;
-  type = IntegratorType::Auto;
+  if (text != toString(kAutoIntegrator)) return false;
+  type = kAutoIntegrator;
   return true;
+}
+
+IntegratorDef resolve(const BodyIntegratorDef& body, const IntegratorDef& defaults)
+{
+  IntegratorDef def = defaults;
+  def.type = body.type.value_or(defaults.type);
+  def.verlet_damping = body.verlet_damping.value_or(defaults.verlet_damping);
+  def.cg_tolerance = body.cg_tolerance.value_or(defaults.cg_tolerance);
+  def.cg_max_iterations = body.cg_max_iterations.value_or(defaults.cg_max_iterations);
+  def.max_substeps = body.max_substeps.value_or(defaults.max_substeps);
+  return def;
+}
+
+BodyIntegratorDef settingEveryField(const IntegratorDef& def)
+{
+  return {def.type, def.verlet_damping, def.cg_tolerance, def.cg_max_iterations, def.max_substeps};
+}
+
+Status validate(const BodyIntegratorDef& def)
+{
+  // The built-in defaults pass, so only a field the body sets can be refused.
+  return validate(resolve(def));
 }
 
 Status validate(const IntegratorDef& def)
 {
+  // A method whose registration has ended (ScopedIntegratorRegistration) is no longer one.
+  if (def.type != kAutoIntegrator && !findIntegrator(def.type))
+    return Status::failure("integrator = " + quoteReceived(toString(def.type)) +
+                           " is not registered; allowed: " + integratorTypeNames());
   if (Status s = checkRange("verlet_damping", def.verlet_damping, 0.0, 1.0); !s) return s;
   if (Status s = checkPositive("cg_tolerance", def.cg_tolerance); !s) return s;
   if (Status s = checkIntRange("cg_max_iterations", def.cg_max_iterations, 1, 1000000); !s) return s;

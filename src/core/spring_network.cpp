@@ -112,10 +112,11 @@ Status validate(const SpringNetworkDef& def, int max_particles)
   return validate(def.integrator);
 }
 
-SpringNetworkBody::SpringNetworkBody(const SpringNetworkDef& def)
+SpringNetworkBody::SpringNetworkBody(const SpringNetworkDef& def, const IntegratorDef& integrator_defaults)
     : Body(def.name),
       def_(def),
       forces_(makeSpringBodyForces(def_.springs, def_.baraff_witkin, def_.triangles)),
+      built_integrator_(resolve(def.integrator, integrator_defaults)),
       strain_limit_(def_.strain_limit, def_.springs, static_cast<int>(def_.positions.size()))
 {
   const int n = static_cast<int>(def_.positions.size());
@@ -134,7 +135,7 @@ SpringNetworkBody::SpringNetworkBody(const SpringNetworkDef& def)
   pattern.setPattern(n, pairs);
   forces_.bindPattern(pattern);
   for (const IntegratorInfo& info : integratorRegistry())
-    methods_.push_back(info.make(n, pairs));
+    methods_.emplace_back(info.type, info.make(n, pairs));
   step_target_.setZero(3, n);
 
   // The size of the body's energy, for the blow-up check: total mass · extent.
@@ -171,7 +172,7 @@ void SpringNetworkBody::reset()
     pin_target_.col(index) = def_.positions[index];
   }
   forces_.resetConstants();
-  integrator_ = def_.integrator;
+  integrator_ = built_integrator_;
   guard_.clear();
   updateStabilityBound();
   last_substeps_ = 1;
@@ -271,6 +272,11 @@ Status SpringNetworkBody::setSpringConstants(std::optional<SpringClass> spring_c
 Status SpringNetworkBody::setIntegrator(const IntegratorDef& integrator)
 {
   if (Status s = validate(integrator); !s) return s;
+  const bool has_method =
+      std::any_of(methods_.begin(), methods_.end(), [&](const auto& entry) { return entry.first == integrator.type; });
+  if (integrator.type != kAutoIntegrator && !has_method)
+    return Status::failure("integrator = " + quoteReceived(toString(integrator.type)) + " was registered after body " +
+                           quoteReceived(name()) + " was built");
   if (integrator.type != integrator_.type) restartMethods();
   integrator_ = integrator;
   return Status::success();
@@ -324,7 +330,7 @@ SubstepPlan SpringNetworkBody::planStep(double dt, const Environment& env) const
   // global damping.
   const double c_max = dampingBound(env.air, env.damping);
   const IntegratorType type =
-      integrator_.type == IntegratorType::Auto ? StabilityGuard::chooseAuto(dt, omega_bound_, c_max) : integrator_.type;
+      integrator_.type == kAutoIntegrator ? StabilityGuard::chooseAuto(dt, omega_bound_, c_max) : integrator_.type;
   return StabilityGuard::planSubsteps(type, dt, omega_bound_, c_max, integrator_.max_substeps);
 }
 
@@ -430,18 +436,19 @@ void SpringNetworkBody::substep(double h, IntegratorType type, const Environment
 
 IntegrationMethod& SpringNetworkBody::method(IntegratorType type)
 {
-  const std::vector<IntegratorInfo>& registry = integratorRegistry();
-  for (std::size_t k = 0; k < registry.size(); ++k)
+  for (const auto& [method_type, method] : methods_)
   {
-    if (registry[k].type == type) return *methods_[k];
+    if (method_type == type) return *method;
   }
-  return *methods_[0];  // unreachable: `auto` is resolved before and every other type is registered
+  // Unreachable: `auto` is resolved before, validate() refuses an unregistered type and
+  // setIntegrator() a type registered after the body was built.
+  return *methods_.front().second;
 }
 
 void SpringNetworkBody::restartMethods()
 {
-  for (const std::unique_ptr<IntegrationMethod>& m : methods_)
-    m->restart();
+  for (const auto& entry : methods_)
+    entry.second->restart();
 }
 
 void SpringNetworkBody::accelerations(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v, Eigen::Matrix3Xd& a) const

@@ -90,7 +90,8 @@ Status World::addEmitter(const EmitterDef& def)
 Status World::addSpringNetwork(const SpringNetworkDef& def)
 {
   if (Status s = validate(def, def_.max_particles_per_body); !s) return s;
-  return addBody(std::make_unique<SpringNetworkBody>(def));
+  // Every integrator field the body does not set is the world's default.
+  return addBody(std::make_unique<SpringNetworkBody>(def, def_.integrator));
 }
 
 Status World::addRope(const RopeDef& def)

@@ -47,9 +47,15 @@ std::string formatVector(const Eigen::Vector3d& v)
 }
 }  // namespace
 
-core::Status parseIntegratorField(const std::string& name, core::IntegratorDef& integrator)
+core::Status parseIntegratorField(const std::string& name, core::BodyIntegratorDef& integrator)
 {
-  if (name.empty() || core::parseIntegratorType(name, integrator.type)) return core::Status::success();
+  if (name.empty()) return core::Status::success();
+  core::IntegratorType type;
+  if (core::parseIntegratorType(name, type))
+  {
+    integrator.type = type;
+    return core::Status::success();
+  }
   return core::Status::failure("integrator = " + quoteName(name) +
                                " is not an integrator; allowed: " + core::integratorTypeNames());
 }
@@ -85,7 +91,7 @@ core::Status toRopeDef(const SpawnRope::Request& req, const core::IntegratorDef&
   def.bend_stiffness = req.bend_stiffness;
   def.bend_damping = req.bend_damping;
   def.pins.assign(req.pins.begin(), req.pins.end());
-  def.integrator = default_integrator;
+  def.integrator = core::settingEveryField(default_integrator);
   return parseIntegratorField(req.integrator, def.integrator);
 }
 
@@ -110,7 +116,7 @@ core::Status toClothGridDef(const SpawnCloth::Request& req, const core::Integrat
   def.pins.assign(req.pins.begin(), req.pins.end());
   def.named_pins = req.named_pins;
   def.strain_limit.max_strain = req.max_strain;
-  def.integrator = default_integrator;
+  def.integrator = core::settingEveryField(default_integrator);
   return parseIntegratorField(req.integrator, def.integrator);
 }
 
@@ -130,7 +136,7 @@ core::Status toJellyDef(const SpawnJelly::Request& req, const core::IntegratorDe
   def.velocity = toEigen(req.velocity);
   def.pins.assign(req.pins.begin(), req.pins.end());
   def.strain_limit.max_strain = req.max_strain;
-  def.integrator = default_integrator;
+  def.integrator = core::settingEveryField(default_integrator);
   return parseIntegratorField(req.integrator, def.integrator);
 }
 

@@ -407,7 +407,7 @@ bool SimNode::spawnRope(SpawnRope::Request& req, SpawnRope::Response& res)
   core::Status status = inRequestTerms(SpawnRequest::Rope, world_->addRope(def));
   if (status)
     status.message = "spawned rope " + quoteName(def.name) + " with " + std::to_string(def.particles) + " particles, " +
-                     core::toString(def.integrator.type);
+                     core::toString(world_->findSpringBody(def.name)->integrator().type);
   else
     ROS_WARN_NAMED("services", "spawn_rope refused: %s", toMessageText(status.message).c_str());
   return answer(res, status);

@@ -29,7 +29,7 @@ geometry_msgs::Vector3 toVector3(const Eigen::Vector3d& v)
 
 core::IntegratorType integratorThatRan(const core::SpringNetworkBody& body)
 {
-  return body.integrator().type == core::IntegratorType::Auto ? body.lastIntegrator() : body.integrator().type;
+  return body.integrator().type == core::kAutoIntegrator ? body.lastIntegrator() : body.integrator().type;
 }
 
 SimStatus buildSimStatus(const core::World& world, const ros::Time& stamp, const std::string& frame_id, bool paused,
@@ -233,7 +233,7 @@ std::string springConstantsReport(const core::SpringNetworkBody& body, const std
   const double dt = world.dt();
   const core::SubstepPlan plan = body.planStep(dt, world.environment());
   const core::IntegratorType type = body.integrator().type;
-  if (type == core::IntegratorType::Auto)
+  if (type == core::kAutoIntegrator)
   {
     message << ", so auto will use " << core::toString(plan.method);
   }

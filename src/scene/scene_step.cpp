@@ -52,6 +52,24 @@ core::Status stepScene(const SceneDef& scene, core::World& world)
   return moved;
 }
 
+namespace
+{
+// Makes `body` give `wanted` over `defaults`: it sets each field where they differ, and keeps
+// what it set already (equal fields it does not set stay the world's).
+void setWhereDifferent(core::BodyIntegratorDef& body, const core::IntegratorDef& wanted,
+                       const core::IntegratorDef& defaults)
+{
+  auto set = [](auto& field, const auto& want, const auto& fallback) {
+    if (field || want != fallback) field = want;
+  };
+  set(body.type, wanted.type, defaults.type);
+  set(body.verlet_damping, wanted.verlet_damping, defaults.verlet_damping);
+  set(body.cg_tolerance, wanted.cg_tolerance, defaults.cg_tolerance);
+  set(body.cg_max_iterations, wanted.cg_max_iterations, defaults.cg_max_iterations);
+  set(body.max_substeps, wanted.max_substeps, defaults.max_substeps);
+}
+}  // namespace
+
 void editIntegrators(SceneDef& scene, const std::function<void(core::IntegratorDef&)>& edit)
 {
   edit(scene.world.integrator);
@@ -59,7 +77,13 @@ void editIntegrators(SceneDef& scene, const std::function<void(core::IntegratorD
   {
     std::visit(
         [&](auto& def) {
-          if constexpr (!std::is_same_v<std::decay_t<decltype(def)>, core::EmitterDef>) edit(def.integrator);
+          if constexpr (!std::is_same_v<std::decay_t<decltype(def)>, core::EmitterDef>)
+          {
+            // The body's settings as the world will give them, edited.
+            core::IntegratorDef settings = core::resolve(def.integrator, scene.world.integrator);
+            edit(settings);
+            setWhereDifferent(def.integrator, settings, scene.world.integrator);
+          }
         },
         body);
   }

@@ -41,6 +41,7 @@
 #include <vector>
 
 #include "particle_sim/core/integrators/registry.h"
+#include "particle_sim/core/integrators/verlet.h"
 #include "particle_sim/scene/scene.h"
 
 namespace
@@ -161,7 +162,7 @@ std::vector<std::string> integratorNames()
   std::vector<std::string> names;
   for (const core::IntegratorInfo& info : core::integratorRegistry())
     names.push_back(info.name);
-  names.push_back(core::toString(core::IntegratorType::Auto));
+  names.push_back(core::toString(core::kAutoIntegrator));
   return names;
 }
 
@@ -590,7 +591,7 @@ std::vector<StabilityPoint> stabilityMap(const scene::SceneDef& oscillator, cons
     {
       StabilityPoint point{k, name, 0.0, "measured", 0.0};
       // The limit h·ω the method declares (none for implicit methods and `auto`).
-      core::IntegratorType type = core::IntegratorType::Auto;
+      core::IntegratorType type = core::kAutoIntegrator;
       core::parseIntegratorType(name, type);
       if (std::isfinite(core::stabilityLimit(type))) point.theory = core::stabilityLimit(type) / omega;
       if (stableAt(def, name, hi))
@@ -790,7 +791,7 @@ std::string markdownTables(const std::vector<Case>& cases, const std::vector<std
         "floor (10 times the reference check, and 1e-12 m). Expected, as each method declares:";
   for (const core::IntegratorInfo& info : core::integratorRegistry())
     md << (&info == &core::integratorRegistry().front() ? " " : ", ") << info.name << " " << info.order
-       << (info.type == core::IntegratorType::Verlet ? " (1 with damped springs)" : "");
+       << (info.type == core::kVerletIntegrator ? " (1 with damped springs)" : "");
   md << "; contacts make every method first order at best. `auto` switches method with the step, so it has no "
         "single order.\n\n| scene |";
   for (const std::string& name : integrators)

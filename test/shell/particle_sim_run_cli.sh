@@ -3,7 +3,10 @@
 #  - a dt or duration that gives zero steps, or more steps than fit in 64 bits, is refused (exit 2,
 #    message naming --duration, dt and the step count) instead of printing "steps 0" and exiting 0;
 #  - --integrator NAME applies to every spring body: rope, spring network, grid cloth, mesh cloth
-#    and jelly (it used to reach ropes and networks only).
+#    and jelly (it used to reach ropes and networks only);
+#  - the solver summary names the implicit method that ran (bdf2 too), and for an `auto` body each
+#    method auto ran with its step count (auto bodies used to be left out);
+#  - a world's integrator reaches every spring body that sets none.
 # Exits 0 when every check passes, 1 with a message per failed check otherwise.
 #
 # The binary is $PARTICLE_SIM_RUN, else $PARTICLE_SIM_BUILD/devel/lib/particle_sim/particle_sim_run
@@ -44,6 +47,17 @@ expect_refusal() {
   case "$err" in *"$message"*) ;; *) fail "$what: stderr does not say '$message': $err" ;; esac
 }
 
+# expect_every_spring_body WHAT TEXT: stdout says "body 'NAME' TEXT" for each spring body.
+expect_every_spring_body() {
+  local what="$1" text="$2" body
+  for body in rope network grid mesh jelly; do
+    case "$out" in
+      *"body '$body' $text"*) ;;
+      *) fail "$what did not reach body '$body':"$'\n'"$out" ;;
+    esac
+  done
+}
+
 # A scene with one body of each spring kind, each asking for symplectic Euler itself.
 cat >"$work/bodies.yaml" <<'EOF'
 world:
@@ -80,21 +94,36 @@ case "$out" in "steps 1,"*) ;; *) fail "--duration 0.001 should run exactly 1 st
 # 2. --integrator reaches every spring body (implicit_euler bodies print their CG figures).
 invoke "$work/bodies.yaml" --duration 0.01 --integrator implicit_euler
 [ "$status" -eq 0 ] || fail "--integrator implicit_euler: exit status $status: $err"
-for body in rope network grid mesh jelly; do
-  case "$out" in
-    *"body '$body' implicit_euler: CG iterations"*) ;;
-    *) fail "--integrator implicit_euler did not reach body '$body':"$'\n'"$out" ;;
-  esac
-done
+expect_every_spring_body "--integrator implicit_euler" "implicit_euler: CG iterations"
 # And with auto, every spring body says what auto picked.
 invoke "$work/bodies.yaml" --duration 0.01 --integrator auto
 [ "$status" -eq 0 ] || fail "--integrator auto: exit status $status: $err"
-for body in rope network grid mesh jelly; do
-  case "$out" in
-    *"body '$body' auto: "*) ;;
-    *) fail "--integrator auto did not reach body '$body':"$'\n'"$out" ;;
-  esac
-done
+expect_every_spring_body "--integrator auto" "auto: "
+
+# 3. The summary names the method that ran: bdf2 bodies say bdf2.
+invoke "$work/bodies.yaml" --duration 0.01 --integrator bdf2
+[ "$status" -eq 0 ] || fail "--integrator bdf2: exit status $status: $err"
+expect_every_spring_body "--integrator bdf2" "bdf2: CG iterations"
+# An auto body reports each method auto ran, with its steps: at dt = 0.02 s the two-particle
+# network (omega_max = 31.6 1/s) stays within Verlet's bound, the jelly does not.
+invoke "$work/bodies.yaml" --duration 0.1 --dt 0.02 --integrator auto
+[ "$status" -eq 0 ] || fail "--integrator auto --dt 0.02: exit status $status: $err"
+case "$out" in
+  *"body 'network' auto ran verlet for 5 of 5 steps"*) ;;
+  *) fail "auto: the network's verlet steps are not reported:"$'\n'"$out" ;;
+esac
+case "$out" in
+  *"body 'jelly' auto ran implicit_euler for 5 of 5 steps: CG iterations"*) ;;
+  *) fail "auto: the jelly's implicit_euler steps and CG figures are not reported:"$'\n'"$out" ;;
+esac
+
+# 4. The world's integrator reaches every spring body that sets none.
+sed -e 's/integrator: symplectic_euler/integrator: bdf2/' -e 's/, integrator: bdf2}/}/' \
+  -e '/^    integrator: bdf2$/d' "$work/bodies.yaml" >"$work/world_default.yaml"
+grep -c "integrator" "$work/world_default.yaml" | grep -qx 1 || fail "world_default.yaml should name only the world's integrator"
+invoke "$work/world_default.yaml" --duration 0.01
+[ "$status" -eq 0 ] || fail "world default bdf2: exit status $status: $err"
+expect_every_spring_body "the world's bdf2" "bdf2: CG iterations"
 
 if [ "$failures" -ne 0 ]; then
   echo "particle_sim_run_cli: $failures check(s) failed" >&2

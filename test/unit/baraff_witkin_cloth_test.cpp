@@ -9,6 +9,7 @@
 #include <cmath>
 #include <random>
 
+#include "particle_sim/core/integrators/implicit_euler.h"
 #include "particle_sim/core/world.h"
 #include "particle_sim/scene/scene.h"
 
@@ -122,7 +123,7 @@ TEST(BaraffWitkinCloth, RigidMotionChangesNoEnergyAndRotatesTheForces)
 TEST(BaraffWitkinCloth, StretchedSheetRelaxesToItsRestSize)
 {
   ClothGridDef def = bwSheet(6);
-  def.integrator.type = IntegratorType::ImplicitEuler;
+  def.integrator.type = kImplicitEulerIntegrator;
   SpringNetworkDef net = buildClothGrid(def);
   const double rest_area = sheetArea(SpringNetworkBody(net).particles(), net.triangles);
   for (Eigen::Vector3d& x : net.positions)

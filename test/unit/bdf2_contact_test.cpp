@@ -8,6 +8,9 @@
 #include <vector>
 
 #include "particle_sim/core/cloth.h"
+#include "particle_sim/core/integrators/bdf2.h"
+#include "particle_sim/core/integrators/implicit_euler.h"
+#include "particle_sim/core/integrators/rk4.h"
 #include "particle_sim/core/spring_network.h"
 
 using namespace particle_sim::core;
@@ -64,9 +67,9 @@ TEST(Bdf2Contact, ClothOnASphereConvergesAndIsNoWorseThanImplicitEuler)
   env.spheres.push_back(ball);
   const double duration = 0.3;
 
-  const Eigen::Matrix3Xd reference = finalPositions(def, IntegratorType::Rk4, env, 1e-5, duration);
+  const Eigen::Matrix3Xd reference = finalPositions(def, kRk4Integrator, env, 1e-5, duration);
   // The reference is good to well below the errors compared (first order in contact: about 1.5e-6 m).
-  EXPECT_LT(rmsError(finalPositions(def, IntegratorType::Rk4, env, 2e-5, duration), reference), 1e-5);
+  EXPECT_LT(rmsError(finalPositions(def, kRk4Integrator, env, 2e-5, duration), reference), 1e-5);
   // It is a contact scene: the middle of the cloth lies on the sphere.
   int touching = 0;
   for (int i = 0; i < reference.cols(); ++i)
@@ -77,9 +80,8 @@ TEST(Bdf2Contact, ClothOnASphereConvergesAndIsNoWorseThanImplicitEuler)
   for (double steps_per_second : {320.0, 640.0, 1280.0, 2560.0, 5120.0})
   {
     const double dt = 1.0 / steps_per_second;
-    const double bdf2 = rmsError(finalPositions(def, IntegratorType::Bdf2, env, dt, duration), reference);
-    const double implicit_euler =
-        rmsError(finalPositions(def, IntegratorType::ImplicitEuler, env, dt, duration), reference);
+    const double bdf2 = rmsError(finalPositions(def, kBdf2Integrator, env, dt, duration), reference);
+    const double implicit_euler = rmsError(finalPositions(def, kImplicitEulerIntegrator, env, dt, duration), reference);
     EXPECT_LE(bdf2, implicit_euler) << "dt = " << dt;
     bdf2_errors.push_back(bdf2);
   }

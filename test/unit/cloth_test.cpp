@@ -20,6 +20,9 @@
 #include <utility>
 #include <vector>
 
+#include "particle_sim/core/integrators/implicit_euler.h"
+#include "particle_sim/core/integrators/rk4.h"
+#include "particle_sim/core/integrators/symplectic_euler.h"
 #include "particle_sim/core/world.h"
 #include "test_helpers.h"
 
@@ -137,14 +140,14 @@ std::set<std::pair<int, int>> meshEdges(const std::vector<Eigen::Vector3i>& tria
 TEST(ClothGrid, BuildPlacesParticlesOnTheGridWithEqualMasses)
 {
   ClothGridDef def = tiltedGrid(5, 4);
-  def.integrator.type = IntegratorType::Rk4;
+  def.integrator.type = kRk4Integrator;
   def.strain_limit.max_strain = 0.07;
   def.strain_limit.iterations = 33;
   ASSERT_TRUE(validate(def, 100).ok) << validate(def, 100).message;
   const SpringNetworkDef net = buildClothGrid(def);
   EXPECT_EQ(net.name, "cloth");
   EXPECT_EQ(net.shape, NetworkShape::Cloth);
-  EXPECT_EQ(net.integrator.type, IntegratorType::Rk4);
+  EXPECT_EQ(net.integrator.type, kRk4Integrator);
   EXPECT_EQ(net.strain_limit.max_strain, 0.07);
   EXPECT_EQ(net.strain_limit.iterations, 33);
   ASSERT_EQ(net.positions.size(), 20u);
@@ -635,11 +638,11 @@ StrainRun runSoftCloth(IntegratorType type, double max_strain, double dt, double
 TEST(ClothStrainLimit, ProvotKeepsEveryStepWithinTheLimitUnderSymplecticEuler)
 {
   const double dt = 5e-4, duration = 1.0;
-  const StrainRun unlimited = runSoftCloth(IntegratorType::SymplecticEuler, 0.0, dt, duration);
+  const StrainRun unlimited = runSoftCloth(kSymplecticEulerIntegrator, 0.0, dt, duration);
   ASSERT_FALSE(unlimited.frozen);
   EXPECT_GT(unlimited.largest_strain, 0.3) << "the test cloth must stretch well past the limit without it";
 
-  const StrainRun limited = runSoftCloth(IntegratorType::SymplecticEuler, 0.1, dt, duration);
+  const StrainRun limited = runSoftCloth(kSymplecticEulerIntegrator, 0.1, dt, duration);
   EXPECT_FALSE(limited.frozen);
   EXPECT_LE(limited.largest_strain, 0.1 * (1.0 + 1e-6));
   EXPECT_GT(limited.largest_strain, 0.09) << "the limit should be reached, not avoided";
@@ -649,11 +652,11 @@ TEST(ClothStrainLimit, ProvotKeepsEveryStepWithinTheLimitUnderSymplecticEuler)
 TEST(ClothStrainLimit, ProvotKeepsEveryStepWithinTheLimitUnderImplicitEuler)
 {
   const double dt = 1.0 / 60.0, duration = 2.0;
-  const StrainRun unlimited = runSoftCloth(IntegratorType::ImplicitEuler, 0.0, dt, duration);
+  const StrainRun unlimited = runSoftCloth(kImplicitEulerIntegrator, 0.0, dt, duration);
   ASSERT_FALSE(unlimited.frozen);
   EXPECT_GT(unlimited.largest_strain, 0.3) << "the test cloth must stretch well past the limit without it";
 
-  const StrainRun limited = runSoftCloth(IntegratorType::ImplicitEuler, 0.1, dt, duration);
+  const StrainRun limited = runSoftCloth(kImplicitEulerIntegrator, 0.1, dt, duration);
   EXPECT_FALSE(limited.frozen);
   EXPECT_LE(limited.largest_strain, 0.1 * (1.0 + 1e-6));
   EXPECT_GT(limited.largest_strain, 0.09) << "the limit should be reached, not avoided";
@@ -700,7 +703,7 @@ struct Drape
     def.edge_v = {0.0, 2.0, 0.0};
     def.nu = 11;
     def.nv = 11;
-    def.integrator.type = IntegratorType::ImplicitEuler;
+    def.integrator.type = kImplicitEulerIntegrator;
     EXPECT_TRUE(world.addClothGrid(def).ok);
     body = world.findSpringBody("sheet");
   }
@@ -861,7 +864,7 @@ struct AirWorld
     def.nu = 6;
     def.nv = 6;
     def.mass = 0.5;
-    def.integrator.type = IntegratorType::SymplecticEuler;
+    def.integrator.type = kSymplecticEulerIntegrator;
     EXPECT_TRUE(world.addClothGrid(def).ok);
     body = world.findSpringBody("sail");
     area = edge_u.cross(edge_v).norm();
@@ -1018,11 +1021,11 @@ TEST(ClothHanging, ImplicitEulerApproachesTheFineStepMotionAtFirstOrder)
 {
   // The sheet mid-fall at t = 0.25 s, against RK4 at a step 16 times finer than the finest here.
   const double t = 0.25;
-  const Eigen::Matrix3Xd reference = hang(IntegratorType::Rk4, 1.0 / 25600.0, t);
+  const Eigen::Matrix3Xd reference = hang(kRk4Integrator, 1.0 / 25600.0, t);
   std::vector<double> errors;
   for (double dt : {1.0 / 400.0, 1.0 / 800.0, 1.0 / 1600.0})
   {
-    const Eigen::Matrix3Xd x = hang(IntegratorType::ImplicitEuler, dt, t);
+    const Eigen::Matrix3Xd x = hang(kImplicitEulerIntegrator, dt, t);
     errors.push_back((x.col(kBottomCentre) - reference.col(kBottomCentre)).norm());
   }
   for (std::size_t k = 0; k + 1 < errors.size(); ++k)
@@ -1043,19 +1046,19 @@ TEST(ClothHanging, StaticEquilibriumDoesNotDependOnTheStep)
   for (double dt : {1.0 / 100.0, 1.0 / 200.0, 1.0 / 400.0})
   {
     double speed = 0.0, residual = 0.0;
-    const Eigen::Matrix3Xd x = hang(IntegratorType::ImplicitEuler, dt, 8.0, &speed, &residual);
+    const Eigen::Matrix3Xd x = hang(kImplicitEulerIntegrator, dt, 8.0, &speed, &residual);
     EXPECT_LT(speed, 1e-4) << "dt " << dt;
     EXPECT_LT(residual, 1e-3) << "dt " << dt;
     bottoms.push_back(x.col(kBottomCentre));
   }
   double speed = 0.0, residual = 0.0;
-  const Eigen::Matrix3Xd explicit_x = hang(IntegratorType::SymplecticEuler, 1.0 / 2000.0, 8.0, &speed, &residual);
+  const Eigen::Matrix3Xd explicit_x = hang(kSymplecticEulerIntegrator, 1.0 / 2000.0, 8.0, &speed, &residual);
   EXPECT_LT(speed, 1e-4);
   EXPECT_LT(residual, 1e-3);
   bottoms.push_back(explicit_x.col(kBottomCentre));
 
   // The sheet sags: its bottom centre is below where it started, in the plane, on the axis.
-  const Eigen::Vector3d start = buildClothGrid(hangingCloth(IntegratorType::ImplicitEuler)).positions[kBottomCentre];
+  const Eigen::Vector3d start = buildClothGrid(hangingCloth(kImplicitEulerIntegrator)).positions[kBottomCentre];
   EXPECT_LT(bottoms[0].z(), start.z() - 1e-3);
   EXPECT_NEAR(bottoms[0].x(), 0.0, 1e-6);
   EXPECT_EQ(bottoms[0].y(), 0.0);

@@ -9,6 +9,7 @@
 #include <cmath>
 
 #include "particle_sim/core/cloth.h"
+#include "particle_sim/core/integrators/implicit_euler.h"
 #include "particle_sim/core/world.h"
 #include "particle_sim/scene/scene.h"
 
@@ -39,7 +40,7 @@ ClothGridDef sheet(double contact_thickness)
   def.mass = 0.3;
   def.bend = {3.0, 0.01};
   def.strain_limit.max_strain = 0.1;
-  def.integrator.type = IntegratorType::ImplicitEuler;
+  def.integrator.type = kImplicitEulerIntegrator;
   def.contact_thickness = contact_thickness;
   return def;
 }

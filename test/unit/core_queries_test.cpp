@@ -11,7 +11,11 @@
 
 #include "particle_sim/core/cloth.h"
 #include "particle_sim/core/emitter.h"
+#include "particle_sim/core/integrators/implicit_euler.h"
+#include "particle_sim/core/integrators/rk4.h"
 #include "particle_sim/core/integrators/stability_guard.h"
+#include "particle_sim/core/integrators/symplectic_euler.h"
+#include "particle_sim/core/integrators/verlet.h"
 #include "particle_sim/core/spring_network.h"
 
 using namespace particle_sim::core;
@@ -46,7 +50,7 @@ TEST(CoreQueries, SubstepPlanBeforeAStepIsWhatTheStepDoes)
   Environment env = gravityOnly();
   env.damping = 0.5;  // global damping counts in c_max: the plan must take it from env, as the step does
   const double dt = 1.0 / 60.0;
-  for (const IntegratorType type : {IntegratorType::SymplecticEuler, IntegratorType::Verlet, IntegratorType::Rk4})
+  for (const IntegratorType type : {kSymplecticEulerIntegrator, kVerletIntegrator, kRk4Integrator})
   {
     for (const double stiffness : {50.0, 5e3, 5e5})
     {
@@ -64,11 +68,11 @@ TEST(CoreQueries, SubstepPlanBeforeAStepIsWhatTheStepDoes)
     }
   }
   // The stiffest rope really needs substeps: the comparison above is not between ones.
-  SpringNetworkBody stiff = makeRope(5e5, IntegratorType::Verlet);
+  SpringNetworkBody stiff = makeRope(5e5, kVerletIntegrator);
   EXPECT_GT(stiff.planStep(dt, env).substeps, 1);
 
   // An implicit method takes the whole step at once.
-  SpringNetworkBody implicit_body = makeRope(5e5, IntegratorType::ImplicitEuler);
+  SpringNetworkBody implicit_body = makeRope(5e5, kImplicitEulerIntegrator);
   EXPECT_EQ(implicit_body.planStep(dt, env).substeps, 1);
   implicit_body.step(dt, env);
   EXPECT_EQ(implicit_body.lastSubsteps(), 1);
@@ -78,27 +82,27 @@ TEST(CoreQueries, SubstepPlanCapsAtMaxSubstepsAndSaysWhatWasNeeded)
 {
   // Verlet's limit is 2, with the 10 % margin 1.8: h (ω + c) = 1e-3 s · 1e13 1/s = 1e10 needs
   // ceil(1e10 / 1.8) = 5555555556 substeps, more than an int holds; the cap is 64.
-  SubstepPlan plan = StabilityGuard::planSubsteps(IntegratorType::Verlet, 1e-3, 1e13, 0.0, 64);
+  SubstepPlan plan = StabilityGuard::planSubsteps(kVerletIntegrator, 1e-3, 1e13, 0.0, 64);
   EXPECT_EQ(plan.substeps, 64);
   EXPECT_EQ(plan.needed_substeps, 5555555556LL);
 
   // Exactly at 90 % of the limit one substep is enough; just above, two.
-  const double margin = 0.9 * stabilityLimit(IntegratorType::Verlet);
-  plan = StabilityGuard::planSubsteps(IntegratorType::Verlet, 1.0, margin, 0.0, 64);
+  const double margin = 0.9 * stabilityLimit(kVerletIntegrator);
+  plan = StabilityGuard::planSubsteps(kVerletIntegrator, 1.0, margin, 0.0, 64);
   EXPECT_EQ(plan.substeps, 1);
-  plan = StabilityGuard::planSubsteps(IntegratorType::Verlet, 1.0, std::nextafter(margin, 2.0), 0.0, 64);
+  plan = StabilityGuard::planSubsteps(kVerletIntegrator, 1.0, std::nextafter(margin, 2.0), 0.0, 64);
   EXPECT_EQ(plan.substeps, 2);
   EXPECT_EQ(plan.needed_substeps, 2);
 
   // A bound beyond every count saturates instead of overflowing.
-  plan = StabilityGuard::planSubsteps(IntegratorType::SymplecticEuler, 1.0, std::numeric_limits<double>::infinity(),
-                                      0.0, 64);
+  plan =
+      StabilityGuard::planSubsteps(kSymplecticEulerIntegrator, 1.0, std::numeric_limits<double>::infinity(), 0.0, 64);
   EXPECT_EQ(plan.substeps, 64);
   EXPECT_EQ(plan.needed_substeps, std::numeric_limits<long long>::max());
 
   // A body so stiff that max_substeps cannot hold it: the plan says so before its step, and the
   // step runs the capped count (then freezes, as it blows up).
-  SpringNetworkBody body = makeRope(1e9, IntegratorType::Verlet);
+  SpringNetworkBody body = makeRope(1e9, kVerletIntegrator);
   const Environment env = gravityOnly();
   plan = body.planStep(0.1, env);
   EXPECT_EQ(plan.substeps, body.integrator().max_substeps);
@@ -110,16 +114,16 @@ TEST(CoreQueries, SubstepPlanCapsAtMaxSubstepsAndSaysWhatWasNeeded)
 TEST(CoreQueries, AutoChoiceBeforeAStepIsTheMethodTheStepRuns)
 {
   // The rule: Verlet while h (ω_max + c_max) <= half Verlet's limit 2, else implicit Euler.
-  EXPECT_EQ(StabilityGuard::chooseAuto(1.0, 0.75, 0.25), IntegratorType::Verlet);
-  EXPECT_EQ(StabilityGuard::chooseAuto(1.0, std::nextafter(1.0, 2.0), 0.0), IntegratorType::ImplicitEuler);
+  EXPECT_EQ(StabilityGuard::chooseAuto(1.0, 0.75, 0.25), kVerletIntegrator);
+  EXPECT_EQ(StabilityGuard::chooseAuto(1.0, std::nextafter(1.0, 2.0), 0.0), kImplicitEulerIntegrator);
 
   const Environment env = gravityOnly();
   const double dt = 1.0 / 60.0;
   for (const double stiffness : {20.0, 5e5})
   {
-    SpringNetworkBody body = makeRope(stiffness, IntegratorType::Auto);
+    SpringNetworkBody body = makeRope(stiffness, kAutoIntegrator);
     const SubstepPlan plan = body.planStep(dt, env);
-    EXPECT_EQ(plan.method, stiffness < 1e3 ? IntegratorType::Verlet : IntegratorType::ImplicitEuler);
+    EXPECT_EQ(plan.method, stiffness < 1e3 ? kVerletIntegrator : kImplicitEulerIntegrator);
     body.step(dt, env);
     EXPECT_EQ(body.lastIntegrator(), plan.method);
     EXPECT_EQ(body.lastSubsteps(), plan.substeps);
@@ -194,5 +198,5 @@ TEST(CoreQueries, ClothModelIsTheOneTheBuilderWasAskedFor)
     EXPECT_EQ(cloth.clothModel(), model) << toString(model);
   }
   // A rope is made of springs.
-  EXPECT_EQ(makeRope(50.0, IntegratorType::Verlet).clothModel(), ClothModel::Springs);
+  EXPECT_EQ(makeRope(50.0, kVerletIntegrator).clothModel(), ClothModel::Springs);
 }

@@ -7,6 +7,10 @@
 
 #include <cmath>
 
+#include "particle_sim/core/integrators/implicit_euler.h"
+#include "particle_sim/core/integrators/rk4.h"
+#include "particle_sim/core/integrators/symplectic_euler.h"
+#include "particle_sim/core/integrators/verlet.h"
 #include "particle_sim/scene/scene.h"
 
 using namespace particle_sim;
@@ -72,13 +76,13 @@ void run(core::World& world, const std::string& body_name, double seconds, bool 
 TEST(HardCases, VeryStiffSpringsUnderImplicitEulerStayFiniteLoseEnergyAndConverge)
 {
   const scene::SceneDef def = loadHard("stiff_springs");
-  auto world = build(def, IntegratorType::ImplicitEuler);
+  auto world = build(def, core::kImplicitEulerIntegrator);
   run(*world, "rope", 2.0, true);
   EXPECT_FALSE(world->findSpringBody("rope")->frozen());
 
   // The rope's free end after 0.5 s approaches the fine-step answer as dt shrinks.
   auto freeEnd = [&](double dt) {
-    auto w = build(def, IntegratorType::ImplicitEuler, dt);
+    auto w = build(def, core::kImplicitEulerIntegrator, dt);
     const int steps = static_cast<int>(std::lround(0.5 / dt));
     for (int k = 0; k < steps; ++k)
       w->step();
@@ -95,7 +99,7 @@ TEST(HardCases, VeryStiffSpringsUnderImplicitEulerStayFiniteLoseEnergyAndConverg
 TEST(HardCases, VeryStiffSpringsUnderExplicitMethodsAreSubsteppedOrFrozenButNeverNaN)
 {
   const scene::SceneDef def = loadHard("stiff_springs");
-  for (IntegratorType type : {IntegratorType::SymplecticEuler, IntegratorType::Verlet, IntegratorType::Rk4})
+  for (IntegratorType type : {core::kSymplecticEulerIntegrator, core::kVerletIntegrator, core::kRk4Integrator})
   {
     auto world = build(def, type);
     run(*world, "rope", 0.5, false);
@@ -115,9 +119,9 @@ TEST(HardCases, VeryStiffSpringsUnderExplicitMethodsAreSubsteppedOrFrozenButNeve
   core::RopeDef other = rope;
   other.name = "other";
   other.stretch_stiffness = 100.0;
-  other.integrator.type = IntegratorType::ImplicitEuler;
+  other.integrator.type = core::kImplicitEulerIntegrator;
   capped.bodies.push_back(other);
-  auto world = build(capped, IntegratorType::SymplecticEuler);
+  auto world = build(capped, core::kSymplecticEulerIntegrator);
   ASSERT_TRUE(world->findSpringBody("other")->setIntegrator(other.integrator).ok);
   for (int k = 0; k < 60; ++k)
     world->step();
@@ -133,18 +137,18 @@ TEST(HardCases, VeryStiffSpringsUnderExplicitMethodsAreSubsteppedOrFrozenButNeve
 
 TEST(HardCases, ThousandToOneMassRatioStaysFiniteAndLosesNoEnergy)
 {
-  auto world = build(loadHard("mass_ratio"), IntegratorType::ImplicitEuler);
+  auto world = build(loadHard("mass_ratio"), core::kImplicitEulerIntegrator);
   run(*world, "weight", 3.0, true);
   // The heavy end hangs below the pin (it swung down).
   EXPECT_LT(world->findSpringBody("weight")->particles().position(2, 5), 2.5);
-  auto explicit_world = build(loadHard("mass_ratio"), IntegratorType::Verlet);
+  auto explicit_world = build(loadHard("mass_ratio"), core::kVerletIntegrator);
   run(*explicit_world, "weight", 1.0, false);
   EXPECT_FALSE(explicit_world->findSpringBody("weight")->frozen());
 }
 
 TEST(HardCases, ThousandSegmentRopeStaysFiniteAndLosesNoEnergy)
 {
-  auto world = build(loadHard("long_rope"), IntegratorType::ImplicitEuler);
+  auto world = build(loadHard("long_rope"), core::kImplicitEulerIntegrator);
   run(*world, "rope", 0.25, true);
   const SpringNetworkBody& rope = *world->findSpringBody("rope");
   EXPECT_EQ(rope.particles().size(), 1001);
@@ -154,7 +158,7 @@ TEST(HardCases, ThousandSegmentRopeStaysFiniteAndLosesNoEnergy)
 TEST(HardCases, ClothStruckByAFastSphereNeverEndsInsideIt)
 {
   const scene::SceneDef def = loadHard("cloth_struck");
-  auto world = build(def, IntegratorType::ImplicitEuler);
+  auto world = build(def, core::kImplicitEulerIntegrator);
   const SpringNetworkBody& cloth = *world->findSpringBody("cloth");
   bool struck = false;
   for (int k = 0; k < 600; ++k)
@@ -175,7 +179,7 @@ TEST(HardCases, ClothStruckByAFastSphereNeverEndsInsideIt)
 
 TEST(HardCases, ThousandMetrePerSecondExplosionNeverTunnelsThroughTheSphere)
 {
-  auto world = build(loadHard("fast_explosion"), IntegratorType::ImplicitEuler);
+  auto world = build(loadHard("fast_explosion"), core::kImplicitEulerIntegrator);
   const core::Body& blast = *world->findBody("blast");
   const auto& sphere = world->environment().spheres[0];
   const Eigen::Vector3d origin(0, 0, 2);
@@ -206,17 +210,17 @@ TEST(HardCases, ThousandMetrePerSecondExplosionNeverTunnelsThroughTheSphere)
 TEST(HardCases, StiffnessJumpOfTenThousandIsTakenByAutoAndImplicitEuler)
 {
   const scene::SceneDef def = loadHard("stiffness_jump");
-  auto world = build(def, IntegratorType::Auto);
+  auto world = build(def, core::kAutoIntegrator);
   SpringNetworkBody& rope = *world->findSpringBody("rope");
   run(*world, "rope", 0.5, false);
-  EXPECT_EQ(rope.lastIntegrator(), IntegratorType::Verlet) << rope.autoChoice();
+  EXPECT_EQ(rope.lastIntegrator(), core::kVerletIntegrator) << rope.autoChoice();
   ASSERT_TRUE(rope.setSpringConstants(std::nullopt, 100.0 * 1e4, 0.0).ok);
   run(*world, "rope", 0.5, true);  // implicit Euler after the jump: no energy gained
-  EXPECT_EQ(rope.lastIntegrator(), IntegratorType::ImplicitEuler) << rope.autoChoice();
+  EXPECT_EQ(rope.lastIntegrator(), core::kImplicitEulerIntegrator) << rope.autoChoice();
   EXPECT_NE(rope.autoChoice().find("implicit_euler"), std::string::npos) << rope.autoChoice();
 
   // Explicit Verlet through the same jump: more substeps after it, never NaN.
-  auto explicit_world = build(def, IntegratorType::Verlet);
+  auto explicit_world = build(def, core::kVerletIntegrator);
   SpringNetworkBody& verlet = *explicit_world->findSpringBody("rope");
   run(*explicit_world, "rope", 0.5, false);
   const int before = verlet.lastSubsteps();
@@ -228,7 +232,7 @@ TEST(HardCases, StiffnessJumpOfTenThousandIsTakenByAutoAndImplicitEuler)
 
 TEST(HardCases, PinTargetJumpingOneMetreInOneStepStaysFinite)
 {
-  for (IntegratorType type : {IntegratorType::ImplicitEuler, IntegratorType::SymplecticEuler, IntegratorType::Rk4})
+  for (IntegratorType type : {core::kImplicitEulerIntegrator, core::kSymplecticEulerIntegrator, core::kRk4Integrator})
   {
     auto world = build(loadHard("pin_jump"), type);
     SpringNetworkBody& rope = *world->findSpringBody("rope");
@@ -251,16 +255,16 @@ TEST(AutoIntegrator, PicksVerletForSoftBodiesAndImplicitForStiffOnesAndSaysWhy)
   def.stretch_stiffness = 100.0;  // omega_max = sqrt(4 k / m) = 63 1/s
   def.stretch_damping = 0.0;
   def.pins = {0};
-  def.integrator.type = IntegratorType::Auto;
+  def.integrator.type = core::kAutoIntegrator;
   SpringNetworkBody body(core::buildRope(def));
   EXPECT_NEAR(body.frequencyBound(), std::sqrt(4.0 * 100.0 / 0.1), 1e-9);
   core::Environment env;
   body.step(0.01, env);  // dt omega = 0.63 <= 1
-  EXPECT_EQ(body.lastIntegrator(), IntegratorType::Verlet);
+  EXPECT_EQ(body.lastIntegrator(), core::kVerletIntegrator);
   EXPECT_NE(body.autoChoice().find("verlet"), std::string::npos) << body.autoChoice();
   body.step(0.02, env);  // 1.26 > 1
-  EXPECT_EQ(body.lastIntegrator(), IntegratorType::ImplicitEuler);
+  EXPECT_EQ(body.lastIntegrator(), core::kImplicitEulerIntegrator);
   ASSERT_TRUE(body.setSpringConstants(std::nullopt, 1.0, 0.0).ok);  // softer: re-decided
   body.step(0.02, env);
-  EXPECT_EQ(body.lastIntegrator(), IntegratorType::Verlet) << body.autoChoice();
+  EXPECT_EQ(body.lastIntegrator(), core::kVerletIntegrator) << body.autoChoice();
 }

@@ -8,7 +8,11 @@
 #include <string>
 #include <vector>
 
+#include "particle_sim/core/integrators/implicit_euler.h"
 #include "particle_sim/core/integrators/registry.h"
+#include "particle_sim/core/integrators/rk4.h"
+#include "particle_sim/core/integrators/symplectic_euler.h"
+#include "particle_sim/core/integrators/verlet.h"
 #include "particle_sim/core/spring_network.h"
 
 using namespace particle_sim::core;
@@ -55,7 +59,7 @@ TEST(IntegratorRegistry, EveryMethodDeclaresWhatItIsAndTheNameFunctionsReadIt)
   {
     names += std::string(info.name) + ", ";
     EXPECT_STREQ(toString(info.type), info.name);
-    IntegratorType parsed = IntegratorType::Auto;
+    IntegratorType parsed = kAutoIntegrator;
     ASSERT_TRUE(parseIntegratorType(info.name, parsed)) << info.name;
     EXPECT_EQ(parsed, info.type) << info.name;
     EXPECT_EQ(findIntegrator(info.type), &info) << info.name;
@@ -69,15 +73,15 @@ TEST(IntegratorRegistry, EveryMethodDeclaresWhatItIsAndTheNameFunctionsReadIt)
   }
   // `auto` is a policy, not a method: listed last, parsed, neither implicit nor registered.
   EXPECT_EQ(std::string(integratorTypeNames()), names + "auto");
-  EXPECT_EQ(findIntegrator(IntegratorType::Auto), nullptr);
-  EXPECT_FALSE(isImplicit(IntegratorType::Auto));
-  EXPECT_TRUE(std::isinf(stabilityLimit(IntegratorType::Auto)));
+  EXPECT_EQ(findIntegrator(kAutoIntegrator), nullptr);
+  EXPECT_FALSE(isImplicit(kAutoIntegrator));
+  EXPECT_TRUE(std::isinf(stabilityLimit(kAutoIntegrator)));
   // The classical limits on the imaginary axis (leapfrog 2, classical RK4 2√2),
   // as the same doubles the substep counts were computed with.
-  EXPECT_EQ(stabilityLimit(IntegratorType::SymplecticEuler), 2.0);
-  EXPECT_EQ(stabilityLimit(IntegratorType::Verlet), 2.0);
-  EXPECT_EQ(stabilityLimit(IntegratorType::Rk4), 2.0 * std::sqrt(2.0));
-  EXPECT_TRUE(isImplicit(IntegratorType::ImplicitEuler));
+  EXPECT_EQ(stabilityLimit(kSymplecticEulerIntegrator), 2.0);
+  EXPECT_EQ(stabilityLimit(kVerletIntegrator), 2.0);
+  EXPECT_EQ(stabilityLimit(kRk4Integrator), 2.0 * std::sqrt(2.0));
+  EXPECT_TRUE(isImplicit(kImplicitEulerIntegrator));
 }
 
 TEST(IntegratorRegistry, DeclaredOrderIsTheOrderMeasuredOnTheOscillator)

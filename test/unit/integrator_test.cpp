@@ -10,14 +10,19 @@
 #include <random>
 #include <vector>
 
+#include "particle_sim/core/integrators/bdf2.h"
+#include "particle_sim/core/integrators/implicit_euler.h"
+#include "particle_sim/core/integrators/rk4.h"
+#include "particle_sim/core/integrators/symplectic_euler.h"
+#include "particle_sim/core/integrators/verlet.h"
 #include "particle_sim/core/spring_network.h"
 
 using namespace particle_sim::core;
 
 namespace
 {
-const IntegratorType kAllIntegrators[] = {IntegratorType::SymplecticEuler, IntegratorType::Verlet,
-                                          IntegratorType::ImplicitEuler, IntegratorType::Rk4, IntegratorType::Bdf2};
+const IntegratorType kAllIntegrators[] = {kSymplecticEulerIntegrator, kVerletIntegrator, kImplicitEulerIntegrator,
+                                          kRk4Integrator, kBdf2Integrator};
 
 Environment noGravity()
 {
@@ -124,12 +129,12 @@ TEST(Integrator, NamesRoundTripAndValidateRefusesBadSettings)
 {
   for (IntegratorType type : kAllIntegrators)
   {
-    IntegratorType parsed = IntegratorType::Rk4;
+    IntegratorType parsed = kRk4Integrator;
     ASSERT_TRUE(parseIntegratorType(toString(type), parsed));
     EXPECT_EQ(parsed, type);
     EXPECT_NE(std::string(integratorTypeNames()).find(toString(type)), std::string::npos);
   }
-  IntegratorType parsed = IntegratorType::Rk4;
+  IntegratorType parsed = kRk4Integrator;
   EXPECT_FALSE(parseIntegratorType("leapfrog", parsed));
 
   EXPECT_TRUE(validate(IntegratorDef{}).ok);
@@ -160,11 +165,11 @@ TEST(Integrator, ConvergenceOrdersOnTheHarmonicOscillator)
     double first_dt;
   };
   const Case cases[] = {
-      {IntegratorType::SymplecticEuler, 1.0, 1.0 / 100.0},
-      {IntegratorType::ImplicitEuler, 1.0, 1.0 / 100.0},
-      {IntegratorType::Verlet, 2.0, 1.0 / 50.0},
-      {IntegratorType::Rk4, 4.0, 1.0 / 40.0},
-      {IntegratorType::Bdf2, 2.0, 1.0 / 50.0},
+      {kSymplecticEulerIntegrator, 1.0, 1.0 / 100.0},
+      {kImplicitEulerIntegrator, 1.0, 1.0 / 100.0},
+      {kVerletIntegrator, 2.0, 1.0 / 50.0},
+      {kRk4Integrator, 4.0, 1.0 / 40.0},
+      {kBdf2Integrator, 2.0, 1.0 / 50.0},
   };
   const Oscillator osc;
   const double duration = 2.0;  // two periods
@@ -190,7 +195,7 @@ TEST(Integrator, SymplecticEulerKeepsTheEnergyBounded)
   // energy is 0); the energy error is measured against the largest kinetic energy reached.
   // Symplectic Euler's energy error is bounded and first order in dt (about 3.5% at dt = 1e-3
   // here, 0.6% at 2e-4), with no drift over ten swings.
-  RopeDef def = rope(6, IntegratorType::SymplecticEuler);
+  RopeDef def = rope(6, kSymplecticEulerIntegrator);
   def.start = {0, 0, 0};
   def.end = {1.5, 0, 0};
   def.stretch_damping = 0.0;
@@ -229,9 +234,9 @@ TEST(Integrator, ImplicitMethodsNeverGainEnergy)
     double stiffness, rest_length;
     IntegratorType type;
   };
-  for (const Case& c : {Case{500.0, 0.0, IntegratorType::ImplicitEuler}, Case{1e5, 0.0, IntegratorType::ImplicitEuler},
-                        Case{500.0, 3.0, IntegratorType::ImplicitEuler}, Case{500.0, 0.0, IntegratorType::Bdf2},
-                        Case{1e5, 0.0, IntegratorType::Bdf2}, Case{500.0, 3.0, IntegratorType::Bdf2}})
+  for (const Case& c : {Case{500.0, 0.0, kImplicitEulerIntegrator}, Case{1e5, 0.0, kImplicitEulerIntegrator},
+                        Case{500.0, 3.0, kImplicitEulerIntegrator}, Case{500.0, 0.0, kBdf2Integrator},
+                        Case{1e5, 0.0, kBdf2Integrator}, Case{500.0, 3.0, kBdf2Integrator}})
   {
     const double stiffness = c.stiffness;
     RopeDef def = rope(20, c.type);
@@ -392,12 +397,12 @@ TEST(Integrator, UnpinnedParticleIsReleasedAndFalls)
 TEST(Integrator, NewSpringConstantGivesThePredictedFrequency)
 {
   // Period 2 pi sqrt(m / k): 1 s, then 1/2 s at 4 k, then 1/3 s at 9 k.
-  for (IntegratorType type : {IntegratorType::Rk4, IntegratorType::ImplicitEuler})
+  for (IntegratorType type : {kRk4Integrator, kImplicitEulerIntegrator})
   {
     const Oscillator osc;
     SpringNetworkBody body(osc.def(type));
     const Environment env = noGravity();
-    const double dt = type == IntegratorType::Rk4 ? 1e-3 : 1e-4;
+    const double dt = type == kRk4Integrator ? 1e-3 : 1e-4;
     double t = 0.0;
     auto measure = [&](double duration) {
       CrossingRecorder crossings;
@@ -429,7 +434,7 @@ TEST(Integrator, NewSpringConstantGivesThePredictedFrequency)
 
 TEST(Integrator, ImplicitSolveConvergesAndReportsIt)
 {
-  RopeDef def = rope(20, IntegratorType::ImplicitEuler);
+  RopeDef def = rope(20, kImplicitEulerIntegrator);
   def.bend_stiffness = 50.0;
   def.pins = {0};
   ASSERT_TRUE(validate(def, 100).ok) << validate(def, 100).message;
@@ -440,8 +445,8 @@ TEST(Integrator, ImplicitSolveConvergesAndReportsIt)
     body.step(1.0 / 60.0, env);
     const SolverReport& report = body.lastSolve();
     EXPECT_GT(report.iterations, 0) << "step " << n;
-    EXPECT_LE(report.iterations, def.integrator.cg_max_iterations);
-    EXPECT_LE(report.relative_residual, def.integrator.cg_tolerance) << "step " << n;
+    EXPECT_LE(report.iterations, body.integrator().cg_max_iterations);
+    EXPECT_LE(report.relative_residual, body.integrator().cg_tolerance) << "step " << n;
     EXPECT_TRUE(report.converged) << "step " << n;
   }
 
@@ -455,11 +460,11 @@ TEST(Integrator, ImplicitSolveConvergesAndReportsIt)
   {
     slack.step(1.0 / 60.0, env);
     EXPECT_TRUE(slack.lastSolve().converged) << "slack rope step " << n;
-    EXPECT_LE(slack.lastSolve().relative_residual, def.integrator.cg_tolerance) << "slack rope step " << n;
+    EXPECT_LE(slack.lastSolve().relative_residual, slack.integrator().cg_tolerance) << "slack rope step " << n;
   }
 
   // Capped at one iteration, the report says it did not converge.
-  IntegratorDef capped = def.integrator;
+  IntegratorDef capped = body.integrator();
   capped.cg_tolerance = 1e-12;
   capped.cg_max_iterations = 1;
   ASSERT_TRUE(body.setIntegrator(capped).ok);
@@ -470,7 +475,7 @@ TEST(Integrator, ImplicitSolveConvergesAndReportsIt)
 
   // The explicit methods do no solve.
   IntegratorDef symplectic;
-  symplectic.type = IntegratorType::SymplecticEuler;
+  symplectic.type = kSymplecticEulerIntegrator;
   ASSERT_TRUE(body.setIntegrator(symplectic).ok);
   body.step(1.0 / 600.0, env);
   EXPECT_EQ(body.lastSolve().iterations, 0);
@@ -492,7 +497,7 @@ TEST(Integrator, ImplicitEulerStaysStableWhereSymplecticEulerBlowsUp)
   const double dt = 1.0 / 60.0;
 
   // Both implicit methods: implicit Euler and BDF2.
-  for (IntegratorType type : {IntegratorType::ImplicitEuler, IntegratorType::Bdf2})
+  for (IntegratorType type : {kImplicitEulerIntegrator, kBdf2Integrator})
   {
     const RopeDef implicit_def = stiffRope(type);
     SpringNetworkBody implicit_body(buildRope(implicit_def));
@@ -508,7 +513,7 @@ TEST(Integrator, ImplicitEulerStaysStableWhereSymplecticEulerBlowsUp)
   }
 
   // Symplectic Euler allowed no substeps (max_substeps = 1) blows up; it is frozen, not NaN.
-  RopeDef single_step_def = stiffRope(IntegratorType::SymplecticEuler);
+  RopeDef single_step_def = stiffRope(kSymplecticEulerIntegrator);
   single_step_def.integrator.max_substeps = 1;
   SpringNetworkBody explicit_body(buildRope(single_step_def));
   for (int n = 0; n < 300; ++n)
@@ -522,7 +527,7 @@ TEST(Integrator, ImplicitEulerStaysStableWhereSymplecticEulerBlowsUp)
   EXPECT_EQ(explicit_body.particles().position, frozen_at);
 
   // With its default cap it sees the instability coming, splits each step and stays finite.
-  SpringNetworkBody substepped(buildRope(stiffRope(IntegratorType::SymplecticEuler)));
+  SpringNetworkBody substepped(buildRope(stiffRope(kSymplecticEulerIntegrator)));
   for (int n = 0; n < 300; ++n)
     substepped.step(dt, env);
   EXPECT_FALSE(substepped.frozen()) << substepped.frozenReason();

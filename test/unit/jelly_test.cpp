@@ -18,6 +18,9 @@
 #include <string>
 #include <vector>
 
+#include "particle_sim/core/integrators/implicit_euler.h"
+#include "particle_sim/core/integrators/symplectic_euler.h"
+#include "particle_sim/core/integrators/verlet.h"
 #include "particle_sim/core/world.h"
 #include "test_helpers.h"
 
@@ -67,13 +70,13 @@ TEST(Jelly, BuildPlacesTheLatticeWithEqualMassesAndTheInitialVelocity)
   JellyDef def = boxJelly(4, 3, 5);
   def.velocity = {0.5, -0.25, 2.0};
   def.pins = {0, -1};
-  def.integrator.type = IntegratorType::Verlet;
+  def.integrator.type = kVerletIntegrator;
   def.strain_limit.max_strain = 0.2;
   ASSERT_TRUE(validate(def, 100).ok) << validate(def, 100).message;
   const SpringNetworkDef net = buildJelly(def);
   EXPECT_EQ(net.name, "jelly");
   EXPECT_EQ(net.shape, NetworkShape::Jelly);
-  EXPECT_EQ(net.integrator.type, IntegratorType::Verlet);
+  EXPECT_EQ(net.integrator.type, kVerletIntegrator);
   EXPECT_EQ(net.strain_limit.max_strain, 0.2);
   ASSERT_EQ(net.positions.size(), 60u);
   ASSERT_EQ(net.masses.size(), 60u);
@@ -353,17 +356,17 @@ void expectRestsOnTheGround(const DropResult& r, const std::string& where)
 
 TEST(JellyDrop, ImplicitEulerCubeFallsAndComesToRestOnTheGroundInShape)
 {
-  expectRestsOnTheGround(dropJelly(IntegratorType::ImplicitEuler, 1.0 / 200.0, 3.0), "implicit Euler dt = 1/200");
+  expectRestsOnTheGround(dropJelly(kImplicitEulerIntegrator, 1.0 / 200.0, 3.0), "implicit Euler dt = 1/200");
 }
 
 TEST(JellyDrop, SymplecticEulerCubeFallsAndComesToRestOnTheGroundInShape)
 {
-  expectRestsOnTheGround(dropJelly(IntegratorType::SymplecticEuler, 5e-4, 3.0), "symplectic Euler dt = 5e-4");
+  expectRestsOnTheGround(dropJelly(kSymplecticEulerIntegrator, 5e-4, 3.0), "symplectic Euler dt = 5e-4");
 }
 
 TEST(JellyFree, UniformVelocityIsARigidTranslationWithConstantMomentum)
 {
-  for (IntegratorType type : {IntegratorType::SymplecticEuler, IntegratorType::ImplicitEuler})
+  for (IntegratorType type : {kSymplecticEulerIntegrator, kImplicitEulerIntegrator})
   {
     JellyDef def = boxJelly(3, 4, 3);
     def.velocity = {1.0, -2.0, 0.5};
@@ -399,7 +402,7 @@ TEST(JellyFree, UniformVelocityIsARigidTranslationWithConstantMomentum)
 
 TEST(JellyFree, InternalForcesConserveMomentumUnderRandomVelocities)
 {
-  for (IntegratorType type : {IntegratorType::SymplecticEuler, IntegratorType::ImplicitEuler})
+  for (IntegratorType type : {kSymplecticEulerIntegrator, kImplicitEulerIntegrator})
   {
     const JellyDef def = boxJelly(4, 3, 3);
     SpringNetworkDef net = buildJelly(def);
@@ -442,13 +445,13 @@ TEST(JellyFrozen, ReportsTheIntegratorThatRanAndItsReason)
   def.stretch = {1e9, 0.0};
   def.velocity = {0.0, 0.0, -5.0};
   def.origin = {-0.25, -0.25, 0.01};
-  def.integrator.type = IntegratorType::SymplecticEuler;
+  def.integrator.type = kSymplecticEulerIntegrator;
   def.integrator.max_substeps = 1;
   ASSERT_TRUE(world.addJelly(def).ok);
   const SpringNetworkBody& body = *world.findSpringBody("cube");
   for (int k = 0; k < 50 && !body.frozen(); ++k)
     world.step();
   ASSERT_TRUE(body.frozen()) << "the guard should have frozen this jelly";
-  EXPECT_EQ(body.lastIntegrator(), IntegratorType::SymplecticEuler);
+  EXPECT_EQ(body.lastIntegrator(), kSymplecticEulerIntegrator);
   EXPECT_NE(body.frozenReason().find("symplectic_euler blew up"), std::string::npos) << body.frozenReason();
 }

@@ -11,6 +11,9 @@
 #include <cstdint>
 #include <limits>
 
+#include "particle_sim/core/integrators/implicit_euler.h"
+#include "particle_sim/core/integrators/rk4.h"
+#include "particle_sim/core/integrators/verlet.h"
 #include "particle_sim/core/spring_network.h"
 #include "test_helpers.h"
 
@@ -41,7 +44,7 @@ geometry_msgs::Vector3 vector(double x, double y, double z)
 core::IntegratorDef worldDefaultIntegrator()
 {
   core::IntegratorDef integrator;
-  integrator.type = core::IntegratorType::Verlet;
+  integrator.type = core::kVerletIntegrator;
   integrator.verlet_damping = 0.99;
   integrator.cg_tolerance = 1e-6;
   integrator.cg_max_iterations = 77;
@@ -49,7 +52,7 @@ core::IntegratorDef worldDefaultIntegrator()
   return integrator;
 }
 
-void expectSameSettings(const core::IntegratorDef& a, const core::IntegratorDef& b)
+void expectSameSettings(const core::BodyIntegratorDef& a, const core::IntegratorDef& b)
 {
   EXPECT_EQ(a.verlet_damping, b.verlet_damping);
   EXPECT_EQ(a.cg_tolerance, b.cg_tolerance);
@@ -191,7 +194,7 @@ TEST(RequestConversions, RopeRequestGivesItsDefinitionFieldByField)
   EXPECT_EQ(def.bend_damping, 0.1);
   EXPECT_EQ(def.pins, (std::vector<int>{0, -1}));
   // The named integrator, with the world default's other settings.
-  EXPECT_EQ(def.integrator.type, core::IntegratorType::Rk4);
+  EXPECT_EQ(def.integrator.type, core::kRk4Integrator);
   expectSameSettings(def.integrator, worldDefaultIntegrator());
   EXPECT_TRUE(core::validate(def, 1000).ok);
 }
@@ -207,7 +210,7 @@ TEST(RequestConversions, RopeFieldsLeftAtZeroKeepTheDefaultsAndTheWorldsIntegrat
   EXPECT_EQ(def.rest_length, 0.0);        // 0 = |end − start|, kept as 0
   EXPECT_EQ(def.stretch_stiffness, 0.0);  // a constant of 0 is a value
   EXPECT_TRUE(def.pins.empty());
-  EXPECT_EQ(def.integrator.type, core::IntegratorType::Verlet);  // empty: the world's default
+  EXPECT_EQ(def.integrator.type, core::kVerletIntegrator);  // empty: the world's default
   expectSameSettings(def.integrator, worldDefaultIntegrator());
 }
 
@@ -280,7 +283,7 @@ TEST(RequestConversions, ClothRequestGivesItsDefinitionFieldByField)
   EXPECT_EQ(def.b_u, 1.1);
   EXPECT_EQ(def.b_v, 0.9);
   EXPECT_EQ(def.strain_limit.max_strain, 0.1);
-  EXPECT_EQ(def.integrator.type, core::IntegratorType::ImplicitEuler);
+  EXPECT_EQ(def.integrator.type, core::kImplicitEulerIntegrator);
   expectSameSettings(def.integrator, worldDefaultIntegrator());
 }
 
@@ -297,7 +300,7 @@ TEST(RequestConversions, ClothFieldsLeftAtZeroKeepTheDefaults)
   EXPECT_EQ(def.b_u, 1.0);   // 0 = the default, 1
   EXPECT_EQ(def.b_v, 1.0);
   EXPECT_EQ(def.strain_limit.max_strain, 0.0);  // off
-  EXPECT_EQ(def.integrator.type, core::IntegratorType::Verlet);
+  EXPECT_EQ(def.integrator.type, core::kVerletIntegrator);
 }
 
 TEST(RequestConversions, ClothRefusesAnUnknownModelIntegratorOrCount)
@@ -359,7 +362,7 @@ TEST(RequestConversions, JellyRequestGivesItsDefinitionFieldByField)
   EXPECT_EQ(def.velocity, Eigen::Vector3d(1.0, 0.0, -0.5));  // [m/s]
   EXPECT_EQ(def.pins, (std::vector<int>{-1}));
   EXPECT_EQ(def.strain_limit.max_strain, 0.2);
-  EXPECT_EQ(def.integrator.type, core::IntegratorType::Verlet);
+  EXPECT_EQ(def.integrator.type, core::kVerletIntegrator);
   EXPECT_TRUE(core::validate(def, 1000).ok);
 }
 

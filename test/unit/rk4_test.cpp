@@ -48,7 +48,7 @@ struct SplitOscillator
     const double stiff = 0.5 * omega_max * omega_max;  // [N/m] with m = 1 kg
     d.springs = {{0, 1, kRest, kStiffness, 0.0, SpringClass::Stretch}, {2, 3, 1.0, stiff, 0.0, SpringClass::Stretch}};
     d.pins = {0, 2};
-    d.integrator.type = IntegratorType::Rk4;
+    d.integrator.type = kRk4Integrator;
     return d;
   }
   static double exact(double t) { return kRest + kAmplitude * std::cos(std::sqrt(kStiffness) * t); }
@@ -90,7 +90,7 @@ TEST(Rk4, StepSplitIntoSubstepsIsTheSameAsStepsOfTheSubstepLength)
   rope.stretch_stiffness = 5000.0;
   rope.stretch_damping = 0.0;
   rope.pins = {0};
-  rope.integrator.type = IntegratorType::Rk4;
+  rope.integrator.type = kRk4Integrator;
   ASSERT_TRUE(validate(rope, 100).ok) << validate(rope, 100).message;
   const Environment gravity = noGround(Eigen::Vector3d(0, 0, -9.81));
   const double frame = 1.0 / 60.0;

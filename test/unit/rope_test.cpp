@@ -11,6 +11,8 @@
 #include <string>
 #include <vector>
 
+#include "particle_sim/core/integrators/implicit_euler.h"
+#include "particle_sim/core/integrators/verlet.h"
 #include "particle_sim/core/spring_network.h"
 
 using namespace particle_sim::core;
@@ -77,12 +79,12 @@ TEST(Rope, BuildLaysOutEvenlySpacedParticlesWithEqualMasses)
   def.start = {1, -2, 3};
   def.end = {4, 2, 3};  // 5 m long
   def.mass = 2.2;
-  def.integrator.type = IntegratorType::Verlet;
+  def.integrator.type = kVerletIntegrator;
   ASSERT_TRUE(validate(def, 100).ok) << validate(def, 100).message;
   const SpringNetworkDef net = buildRope(def);
   EXPECT_EQ(net.name, "cable");
   EXPECT_EQ(net.shape, NetworkShape::Rope);
-  EXPECT_EQ(net.integrator.type, IntegratorType::Verlet);
+  EXPECT_EQ(net.integrator.type, kVerletIntegrator);
   ASSERT_EQ(net.positions.size(), 11u);
   ASSERT_EQ(net.masses.size(), 11u);
   EXPECT_TRUE(net.velocities.empty() || net.velocities.size() == 11u);
@@ -287,7 +289,7 @@ TEST(Rope, HangingRopeSettlesBelowItsPin)
   def.bend_stiffness = 20.0;
   def.bend_damping = 1.0;
   def.pins = {0};
-  def.integrator.type = IntegratorType::ImplicitEuler;
+  def.integrator.type = kImplicitEulerIntegrator;
   ASSERT_TRUE(validate(def, 100).ok) << validate(def, 100).message;
   SpringNetworkBody body(buildRope(def));
   Environment env;
@@ -320,7 +322,7 @@ TEST(Rope, HangingRopeReachesTheAnalyticStaticStretch)
   def.stretch_stiffness = 300.0;
   def.stretch_damping = 3.0;
   def.pins = {0};
-  def.integrator.type = IntegratorType::ImplicitEuler;
+  def.integrator.type = kImplicitEulerIntegrator;
   def.integrator.cg_tolerance = 1e-12;
   ASSERT_TRUE(validate(def, 100).ok) << validate(def, 100).message;
   SpringNetworkBody body(buildRope(def));

@@ -13,6 +13,8 @@
 #include <utility>
 #include <vector>
 
+#include "particle_sim/core/integrators/rk4.h"
+#include "particle_sim/core/integrators/verlet.h"
 #include "particle_sim/scene/obj_mesh.h"
 
 using namespace particle_sim;
@@ -190,11 +192,41 @@ TEST(SceneFiles, ReadsRopesWithWorldIntegratorDefaultsAndOverrides)
   EXPECT_EQ(a.stretch_stiffness, 300.0);
   EXPECT_EQ(a.bend_stiffness, 5.0);
   EXPECT_EQ(a.pins, (std::vector<int>{0, -1}));
-  EXPECT_EQ(a.integrator.type, core::IntegratorType::Rk4);  // the world's default
-  EXPECT_EQ(a.integrator.cg_tolerance, 1.0e-5);
+  // A body's definition holds only what it sets; the world gives it its default when it is added.
+  EXPECT_FALSE(a.integrator.type || a.integrator.cg_tolerance || a.integrator.verlet_damping);
   const auto& b = std::get<core::RopeDef>(def.bodies[1]);
-  EXPECT_EQ(b.integrator.type, core::IntegratorType::Verlet);
+  EXPECT_EQ(b.integrator.type, core::kVerletIntegrator);
   EXPECT_EQ(b.integrator.verlet_damping, 0.99);
+  EXPECT_FALSE(b.integrator.cg_tolerance);
+  std::unique_ptr<core::World> world;
+  ASSERT_TRUE(scene::buildWorld(def, world).ok);
+  EXPECT_EQ(world->findSpringBody("a")->integrator().type, core::kRk4Integrator);  // the world's default
+  EXPECT_EQ(world->findSpringBody("a")->integrator().cg_tolerance, 1.0e-5);
+  EXPECT_EQ(world->findSpringBody("b")->integrator().type, core::kVerletIntegrator);
+  EXPECT_EQ(world->findSpringBody("b")->integrator().verlet_damping, 0.99);
+  EXPECT_EQ(world->findSpringBody("b")->integrator().cg_tolerance, 1.0e-5);  // the world's
+}
+
+// Writing: a body writes only the integrator keys it sets, the world all of them.
+TEST(SceneFiles, WritesOnlyTheIntegratorKeysABodySets)
+{
+  const scene::SceneDef def = parseOk(
+      "world: {integrator: rk4, cg_tolerance: 1.0e-5}\n"
+      "bodies:\n  - {name: a, kind: rope}\n  - {name: b, kind: jelly, integrator: verlet}\n");
+  const std::string written = scene::toYaml(def);
+  auto count = [&](const std::string& key) {
+    int n = 0;
+    for (std::size_t at = written.find(key + ":"); at != std::string::npos; at = written.find(key + ":", at + 1))
+      ++n;
+    return n;
+  };
+  EXPECT_EQ(count("integrator"), 2) << written;  // the world's and b's
+  for (const char* key : {"verlet_damping", "cg_tolerance", "cg_max_iterations", "max_substeps"})
+    EXPECT_EQ(count(key), 1) << key << " in\n" << written;  // the world's only
+  scene::SceneDef again;
+  ASSERT_TRUE(scene::parseScene(written, "written", again).ok);
+  EXPECT_EQ(std::get<core::JellyDef>(again.bodies[1]).integrator.type, core::kVerletIntegrator);
+  EXPECT_EQ(again.world.integrator.cg_tolerance, 1.0e-5);
 }
 
 TEST(SceneFiles, ReadsSpringNetworksWithInitialAndGivenRestLengths)
@@ -319,17 +351,17 @@ TEST(SceneStep, EditIntegratorsReachesTheWorldAndEverySpringBody)
       "  - {name: j, kind: jelly}\n");
   int edited = 0;
   scene::editIntegrators(def, [&](core::IntegratorDef& integrator) {
-    integrator.type = core::IntegratorType::Rk4;
+    integrator.type = core::kRk4Integrator;
     ++edited;
   });
   EXPECT_EQ(edited, 6);  // the world and five spring bodies; the emitter has no integrator
-  EXPECT_EQ(def.world.integrator.type, core::IntegratorType::Rk4);
+  EXPECT_EQ(def.world.integrator.type, core::kRk4Integrator);
   std::unique_ptr<core::World> world;
   ASSERT_TRUE(scene::buildWorld(def, world).ok);
   for (const char* name : {"r", "n", "g", "m", "j"})
   {
     ASSERT_NE(world->findSpringBody(name), nullptr) << name;
-    EXPECT_EQ(world->findSpringBody(name)->integrator().type, core::IntegratorType::Rk4) << name;
+    EXPECT_EQ(world->findSpringBody(name)->integrator().type, core::kRk4Integrator) << name;
   }
 }
 

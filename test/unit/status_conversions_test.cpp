@@ -8,6 +8,8 @@
 
 #include <cmath>
 
+#include "particle_sim/core/integrators/implicit_euler.h"
+#include "particle_sim/core/integrators/verlet.h"
 #include "particle_sim/ros/status_report.h"
 #include "test_helpers.h"
 
@@ -20,7 +22,7 @@ namespace
 // A world without ground (free flight) holding a fountain that bursts 5 particles straight up at
 // 2 m/s from 1 m high, mass 0.01 kg each, and a rope of 10 particles pinned at both ends, 2 m long
 // at rest but stretched to 3 m (strain 0.5).
-core::World makeWorld(core::IntegratorType rope_integrator = core::IntegratorType::ImplicitEuler)
+core::World makeWorld(core::IntegratorType rope_integrator = core::kImplicitEulerIntegrator)
 {
   core::WorldDef def;
   def.ground.enabled = false;
@@ -194,7 +196,7 @@ TEST(StatusConversions, StatusLineShowsTimeRateParticlesStepAndTheImplicitSolves
   EXPECT_EQ(line.substr(line.size() - 9), " | paused");
 
   // Without an implicit body, no solver figures.
-  core::World explicit_world = makeWorld(core::IntegratorType::Verlet);
+  core::World explicit_world = makeWorld(core::kVerletIntegrator);
   explicit_world.step();
   EXPECT_EQ(statusLine(explicit_world, 1.0, 1.0, false),
             "sim time 0.001 s | real-time factor 1.00 | live particles 15 | step 1.0 us");
@@ -211,7 +213,7 @@ TEST(StatusConversions, StepReportCountsStepsAndEvents)
 TEST(StatusConversions, SpringConstantsReportSaysWhatTheChangeMeansForStability)
 {
   // Verlet at dt = 1 ms on a soft rope: one substep.
-  core::World world = makeWorld(core::IntegratorType::Verlet);
+  core::World world = makeWorld(core::kVerletIntegrator);
   core::SpringNetworkBody& rope = *world.findSpringBody("taut");
   ASSERT_TRUE(rope.setSpringConstants(core::SpringClass::Stretch, 100.0, 0.1).ok);
   std::string report = springConstantsReport(rope, "taut", "stretch", 100.0, 0.1, world);
@@ -225,7 +227,7 @@ TEST(StatusConversions, SpringConstantsReportSaysWhatTheChangeMeansForStability)
   EXPECT_NE(report.find("above max_substeps: expect it to freeze)"), std::string::npos) << report;
 
   // Implicit Euler has no stability limit: nothing about substeps.
-  core::World implicit_world = makeWorld(core::IntegratorType::ImplicitEuler);
+  core::World implicit_world = makeWorld(core::kImplicitEulerIntegrator);
   const core::SpringNetworkBody& implicit_rope = *implicit_world.findSpringBody("taut");
   report = springConstantsReport(implicit_rope, "taut", "all", 500.0, 0.5, implicit_world);
   EXPECT_EQ(report.find("substep"), std::string::npos) << report;

@@ -66,7 +66,7 @@ struct ClothGridDef
   std::vector<std::string>
       named_pins;  ///< corner_00, corner_10, corner_01, corner_11, edge_u0, edge_u1, edge_v0, edge_v1
   StrainLimitDef strain_limit;
-  IntegratorDef integrator;
+  BodyIntegratorDef integrator;    ///< what the body sets; the rest is the world's default
   double contact_thickness = 0.0;  ///< [m] in limits::kContactThickness: kept from ground and spheres (0 = touch)
 };
 
@@ -101,7 +101,7 @@ struct MeshClothDef
   double b_u = 1.0, b_v = 1.0;                ///< Baraff–Witkin rest stretch
   std::vector<int> pins;
   StrainLimitDef strain_limit;
-  IntegratorDef integrator;
+  BodyIntegratorDef integrator;    ///< what the body sets; the rest is the world's default
   double contact_thickness = 0.0;  ///< [m] in limits::kContactThickness: kept from ground and spheres (0 = touch)
 };
 

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <optional>
 #include <string>
 
 #include "particle_sim/core/status.h"
@@ -8,37 +9,81 @@ namespace particle_sim
 {
 namespace core
 {
-/// The time integrators a spring body can use (chosen per body). Each is a unit of its own in
-/// core/integrators/ and declares its name, order, stability limit and whether it is implicit in
-/// the registry (integrators/registry.h), which toString(), parseIntegratorType(),
-/// integratorTypeNames() and stabilityLimit() read.
-enum class IntegratorType
+/// Which time integrator a spring body uses (chosen per body): one of the methods registered in
+/// integrators/registry.cpp, or `auto`. A method is named by the address of its `kName`, an inline
+/// static constexpr member and so one object in the whole program: the registry is the one
+/// source of integrator identity, and a new method needs no constant here. The built-in methods'
+/// constants live with each method (e.g. kVerletIntegrator in integrators/verlet.h); `auto` is
+/// kAutoIntegrator below. toString(), parseIntegratorType(), integratorTypeNames(),
+/// stabilityLimit() and isImplicit() read the registry.
+class IntegratorType
 {
-  SymplecticEuler,  ///< the lecture's loop: v += h f/m, then x += h v (first order)
-  Verlet,           ///< the lecture's x' = x + k_d (x − x_prev) + h² f/m, second-order start (second order
-                    ///< for position-only forces; first order once forces depend on velocity)
-  ImplicitEuler,    ///< linearised backward Euler solved by modified preconditioned CG (first order, stable)
-  Rk4,              ///< classical Runge–Kutta, the accuracy reference (fourth order)
-  Bdf2,             ///< linearised BDF2 (Choi & Ko 2002), solved as implicit Euler is (second order, stable)
-  Auto,             ///< per body and step: Verlet where its stability bound holds with margin, else implicit Euler
+public:
+  /// The built-in default method of a body that sets none in a world that sets none: implicit Euler.
+  IntegratorType();
+
+  /// The method `Method` (a class declaring `static constexpr const char* kName`).
+  template <class Method>
+  static constexpr IntegratorType of()
+  {
+    return IntegratorType(&Method::kName);
+  }
+
+  /// The method's registered name ("verlet", ...), or "auto".
+  const char* name() const { return *name_; }
+
+  friend constexpr bool operator==(IntegratorType a, IntegratorType b) { return a.name_ == b.name_; }
+  friend constexpr bool operator!=(IntegratorType a, IntegratorType b) { return a.name_ != b.name_; }
+
+private:
+  constexpr explicit IntegratorType(const char* const* name) : name_(name) {}
+  const char* const* name_;  // &Method::kName
 };
 
+/// `auto`: not a method but a policy that picks one per body and step: Verlet where its stability
+/// bound holds with margin, else implicit Euler (integrators/stability_guard.h).
+struct AutoIntegratorPolicy
+{
+  static constexpr const char* kName = "auto";
+};
+inline constexpr IntegratorType kAutoIntegrator = IntegratorType::of<AutoIntegratorPolicy>();
+
 const char* toString(IntegratorType type);
-/// Parses a registered name ("symplectic_euler", "verlet", "implicit_euler", "rk4", "bdf2") or "auto";
-/// false when unknown.
+/// Parses a registered name ("symplectic_euler", "verlet", "implicit_euler", "rk4", "bdf2", ...)
+/// or "auto"; false when unknown.
 bool parseIntegratorType(const std::string& text, IntegratorType& type);
-/// "symplectic_euler, verlet, implicit_euler, rk4, bdf2, auto", for error messages.
-const char* integratorTypeNames();
+/// "symplectic_euler, verlet, implicit_euler, rk4, bdf2, auto" (every registered name, then auto),
+/// for error messages.
+std::string integratorTypeNames();
 
 /// An integrator and its settings, with defaults.
 struct IntegratorDef
 {
-  IntegratorType type = IntegratorType::ImplicitEuler;
+  IntegratorType type;          ///< default: implicit Euler
   double verlet_damping = 1.0;  ///< the lecture's Verlet k_d in [0, 1]: 1 = no damping, below 1 damps
   double cg_tolerance = 1e-8;   ///< implicit Euler: stop when |r| <= tolerance |b| (filtered residuals), > 0
   int cg_max_iterations = 500;  ///< implicit Euler: iteration cap, >= 1
   int max_substeps = 64;        ///< explicit methods: most substeps a step may be split into to stay stable, >= 1
 };
+
+/// The integrator settings of a body definition (RopeDef, ClothGridDef, MeshClothDef, JellyDef,
+/// SpringNetworkDef): only what the body sets. Every field left empty comes from the world's
+/// default (WorldDef::integrator) when the body is added to a World, or from IntegratorDef's
+/// built-in defaults for a body built without one; so `rope.integrator.type = kVerletIntegrator;`
+/// keeps the world's cg_tolerance. The fields' meaning and ranges are IntegratorDef's.
+struct BodyIntegratorDef
+{
+  std::optional<IntegratorType> type;
+  std::optional<double> verlet_damping;
+  std::optional<double> cg_tolerance;
+  std::optional<int> cg_max_iterations;
+  std::optional<int> max_substeps;
+};
+
+/// `defaults` with every field that `body` sets taken from `body`.
+IntegratorDef resolve(const BodyIntegratorDef& body, const IntegratorDef& defaults = IntegratorDef());
+/// Settings that set every field to `def`'s.
+BodyIntegratorDef settingEveryField(const IntegratorDef& def);
 
 /// The stability limit h·ω of a method on an undamped oscillator of frequency ω, as the method
 /// declares it (integrators/registry.h): 2 for symplectic Euler and Verlet, 2√2 for RK4, infinite
@@ -49,6 +94,8 @@ double stabilityLimit(IntegratorType type);
 bool isImplicit(IntegratorType type);
 
 Status validate(const IntegratorDef& def);
+/// Checks the fields `def` sets, with validate(IntegratorDef)'s messages.
+Status validate(const BodyIntegratorDef& def);
 
 /// What the last implicit solve did (zero iterations for the explicit methods).
 struct SolverReport

@@ -29,7 +29,7 @@ struct JellyDef
   std::vector<int> pins;
   Eigen::Vector3d velocity = Eigen::Vector3d::Zero();  ///< [m/s] initial velocity of every particle
   StrainLimitDef strain_limit;
-  IntegratorDef integrator;
+  BodyIntegratorDef integrator;    ///< what the body sets; the rest is the world's default
   double contact_thickness = 0.0;  ///< [m] in limits::kContactThickness: kept from ground and spheres (0 = touch)
 };
 

@@ -12,6 +12,7 @@
 #include "particle_sim/core/forces/baraff_witkin_model.h"
 #include "particle_sim/core/forces/force_set.h"
 #include "particle_sim/core/integrator.h"
+#include "particle_sim/core/integrators/implicit_euler.h"
 #include "particle_sim/core/integrators/integration_method.h"
 #include "particle_sim/core/integrators/stability_guard.h"
 #include "particle_sim/core/spring.h"
@@ -46,7 +47,7 @@ struct SpringNetworkDef
   std::vector<Eigen::Vector3i> triangles;  ///< surface triangles (cloth, jelly): drawn, published, feel the air
   BaraffWitkinDef baraff_witkin;           ///< Baraff–Witkin energies (cloth model baraff_witkin); empty = none
   StrainLimitDef strain_limit;
-  IntegratorDef integrator;
+  BodyIntegratorDef integrator;    ///< what the body sets; the rest is the world's default
   double contact_thickness = 0.0;  ///< [m] in limits::kContactThickness: kept from ground and spheres (0 = touch)
 };
 
@@ -83,7 +84,9 @@ class SpringNetworkBody : public Body, private DynamicSystem
 {
 public:
   /// `def` must have passed validate().
-  explicit SpringNetworkBody(const SpringNetworkDef& def);
+  /// `integrator_defaults`: the settings of every integrator field `def` does not set (a World
+  /// passes its WorldDef::integrator).
+  explicit SpringNetworkBody(const SpringNetworkDef& def, const IntegratorDef& integrator_defaults = IntegratorDef());
 
   BodyKind kind() const override { return BodyKind::SpringNetwork; }
   NetworkShape shape() const { return def_.shape; }
@@ -122,8 +125,11 @@ public:
   Status setSpringConstants(std::optional<SpringClass> spring_class, double stiffness, double damping);
 
   // Integrator ---------------------------------------------------------------------------------
+  /// The settings it integrates with: its definition's over the defaults it was built with.
   const IntegratorDef& integrator() const { return integrator_; }
   Status setIntegrator(const IntegratorDef& integrator);
+  /// Sets the fields `settings` sets and keeps the others.
+  Status setIntegrator(const BodyIntegratorDef& settings) { return setIntegrator(resolve(settings, integrator_)); }
   const SolverReport& lastSolve() const { return last_solve_; }
   /// The method the last step used (auto resolved).
   IntegratorType lastIntegrator() const { return last_integrator_; }
@@ -190,6 +196,7 @@ private:
 
   SpringNetworkDef def_;
   ForceSet forces_;
+  IntegratorDef built_integrator_;  // def_.integrator over the defaults it was built with (reset() restores it)
   IntegratorDef integrator_;
   AirDef air_;            // the air of the current step
   double damping_ = 0.0;  // [1/s] global damping of the current step (Environment::damping)
@@ -197,7 +204,7 @@ private:
   Eigen::VectorXd mass_;                               // [kg], kept for pinned particles too
   std::vector<char> pinned_;
   Eigen::Matrix3Xd pin_target_;
-  IntegratorType last_integrator_ = IntegratorType::ImplicitEuler;
+  IntegratorType last_integrator_ = kImplicitEulerIntegrator;
   int last_substeps_ = 1;
   double omega_bound_ = 0.0;    // [1/s]
   double damping_bound_ = 0.0;  // [1/s], springs and conditions (global damping added at use)
@@ -207,8 +214,8 @@ private:
   std::string frozen_reason_;
 
   // Work arrays, sized once.
-  std::vector<std::unique_ptr<IntegrationMethod>> methods_;  // one per registered integrator, in its order
-  StrainLimit strain_limit_;                                 // Provot's constraint, applied after the integrator
+  std::vector<std::pair<IntegratorType, std::unique_ptr<IntegrationMethod>>> methods_;  // one per registered integrator
+  StrainLimit strain_limit_;  // Provot's constraint, applied after the integrator
   Eigen::Matrix3Xd saved_position_, saved_velocity_;
   Eigen::Matrix3Xd step_target_;  // pin targets at the end of the whole step (substeps approach them)
 };
@@ -229,8 +236,8 @@ struct RopeDef
   double bend_stiffness = 0.0;       ///< [N/m]; 0 = no bend springs
   double bend_damping = 0.0;         ///< [N·s/m]
   std::vector<int> pins;             ///< indices pinned where they start; negative counts from the end (-1 = last)
-  IntegratorDef integrator;
-  double contact_thickness = 0.0;  ///< [m] in limits::kContactThickness: kept from ground and spheres (0 = touch)
+  BodyIntegratorDef integrator;      ///< what the body sets; the rest is the world's default
+  double contact_thickness = 0.0;    ///< [m] in limits::kContactThickness: kept from ground and spheres (0 = touch)
 };
 
 Status validate(const RopeDef& def, int max_particles);

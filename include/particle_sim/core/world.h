@@ -27,7 +27,9 @@ struct WorldDef
   double dt = 0.001;            ///< [s] fixed physics step
   std::uint64_t seed = 1;       ///< default seed of bodies that do not set their own
   int max_particles_per_body = 100000;  ///< cap on any body's particle count
-  IntegratorDef integrator;             ///< default integrator of spring bodies that set none
+  /// Integrator settings of every spring body: each field a body definition does not set
+  /// (BodyIntegratorDef) is this one, applied by addRope/addClothGrid/addMeshCloth/addJelly/addSpringNetwork.
+  IntegratorDef integrator;
   GroundPlaneDef ground;
   std::vector<SphereColliderDef> spheres;
   AirDef air;

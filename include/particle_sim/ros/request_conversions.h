@@ -31,7 +31,7 @@ namespace ros_interface
 
 /// The integrator name of a spawn request into `integrator`; empty keeps `integrator` as it is
 /// (the world's default). Refuses an unknown name, listing the allowed ones.
-core::Status parseIntegratorField(const std::string& name, core::IntegratorDef& integrator);
+core::Status parseIntegratorField(const std::string& name, core::BodyIntegratorDef& integrator);
 
 /// ~spawn_emitter: the EmitterDef a scene file would build. `world_seed` gives the seed of a
 /// request whose seed is 0 (core::deriveSeed of the world seed and the name).

@@ -78,7 +78,9 @@ core::Status stepScene(const SceneDef& scene, core::World& world);
 
 /// Applies `edit` to the world's default integrator and to the integrator of every spring body of
 /// `scene` (rope, spring network, grid and mesh cloth, jelly; emitters have none), before the world
-/// is built: what `particle_sim_run --integrator` and the bench mean by "this integrator".
+/// is built: what `particle_sim_run --integrator` and the bench mean by "this integrator". A body
+/// is edited as it would integrate (its settings over the edited world's), and then sets the
+/// fields where that differs from the world's.
 void editIntegrators(SceneDef& scene, const std::function<void(core::IntegratorDef&)>& edit);
 
 /// Parses scene YAML text. Unknown keys, wrong types and out-of-range or non-finite values are

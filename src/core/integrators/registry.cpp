@@ -1,5 +1,8 @@
 #include "particle_sim/core/integrators/registry.h"
 
+#include <algorithm>
+#include <string>
+
 #include "particle_sim/core/integrators/bdf2.h"
 #include "particle_sim/core/integrators/implicit_euler.h"
 #include "particle_sim/core/integrators/rk4.h"
@@ -12,32 +15,25 @@ namespace core
 {
 namespace
 {
-// The registry entry of `Method`, from what the method declares about itself.
-template <class Method>
-IntegratorInfo entry(IntegratorType type)
+// The registry: the built-in methods, one integratorEntry line each, in the order listed to users
+// (config/Sim.cfg reads these lines for dynamic_reconfigure's enum), then what
+// ScopedIntegratorRegistration adds.
+std::vector<IntegratorInfo>& registry()
 {
-  auto make = [](int particles, const std::vector<std::pair<int, int>>& coupled_pairs) {
-    std::unique_ptr<IntegrationMethod> method;
-    if constexpr (Method::kImplicit)
-      method = std::make_unique<Method>(particles, coupled_pairs);
-    else
-      method = std::make_unique<Method>(particles);
-    return method;
+  static std::vector<IntegratorInfo> entries{
+      integratorEntry<SymplecticEulerMethod>(),
+      integratorEntry<VerletMethod>(),
+      integratorEntry<ImplicitEulerMethod>(),
+      integratorEntry<Rk4Method>(),
+      integratorEntry<Bdf2Method>(),
   };
-  return {type, Method::kName, Method::kImplicit, Method::kOrder, Method::kStabilityLimit, make};
+  return entries;
 }
 }  // namespace
 
 const std::vector<IntegratorInfo>& integratorRegistry()
 {
-  static const std::vector<IntegratorInfo> registry{
-      entry<SymplecticEulerMethod>(IntegratorType::SymplecticEuler),
-      entry<VerletMethod>(IntegratorType::Verlet),
-      entry<ImplicitEulerMethod>(IntegratorType::ImplicitEuler),
-      entry<Rk4Method>(IntegratorType::Rk4),
-      entry<Bdf2Method>(IntegratorType::Bdf2),
-  };
-  return registry;
+  return registry();
 }
 
 const IntegratorInfo* findIntegrator(IntegratorType type)
@@ -47,6 +43,26 @@ const IntegratorInfo* findIntegrator(IntegratorType type)
     if (info.type == type) return &info;
   }
   return nullptr;
+}
+
+ScopedIntegratorRegistration::ScopedIntegratorRegistration(const IntegratorInfo& entry) : type_(entry.type)
+{
+  IntegratorType taken = kAutoIntegrator;
+  if (findIntegrator(entry.type) || parseIntegratorType(entry.name, taken))
+  {
+    status_ = Status::failure(std::string("integrator '") + entry.name + "' is already registered");
+    return;
+  }
+  registry().push_back(entry);
+}
+
+ScopedIntegratorRegistration::~ScopedIntegratorRegistration()
+{
+  if (!status_) return;
+  std::vector<IntegratorInfo>& entries = registry();
+  entries.erase(
+      std::remove_if(entries.begin(), entries.end(), [this](const IntegratorInfo& info) { return info.type == type_; }),
+      entries.end());
 }
 
 }  // namespace core

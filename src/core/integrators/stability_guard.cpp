@@ -4,6 +4,8 @@
 #include <cmath>
 #include <limits>
 
+#include "particle_sim/core/integrators/implicit_euler.h"
+#include "particle_sim/core/integrators/verlet.h"
 #include "particle_sim/core/validation.h"
 
 namespace particle_sim
@@ -14,8 +16,8 @@ IntegratorType StabilityGuard::chooseAuto(double dt, double omega_max, double c_
 {
   // Verlet where one step is stable with a factor 2 of margin; implicit Euler otherwise.
   const double product = dt * (omega_max + c_max);
-  const double limit = 0.5 * stabilityLimit(IntegratorType::Verlet);
-  return product <= limit ? IntegratorType::Verlet : IntegratorType::ImplicitEuler;
+  const double limit = 0.5 * stabilityLimit(kVerletIntegrator);
+  return product <= limit ? kVerletIntegrator : kImplicitEulerIntegrator;
 }
 
 SubstepPlan StabilityGuard::planSubsteps(IntegratorType type, double dt, double omega_max, double c_max,
@@ -38,15 +40,15 @@ IntegratorType StabilityGuard::resolve(IntegratorType requested, double dt, doub
                                        IntegratorType last, bool& switched)
 {
   switched = false;
-  if (requested != IntegratorType::Auto) return requested;
+  if (requested != kAutoIntegrator) return requested;
   const IntegratorType choice = chooseAuto(dt, omega_max, c_max);
   const double product = dt * (omega_max + c_max);
-  const double limit = 0.5 * stabilityLimit(IntegratorType::Verlet);
+  const double limit = 0.5 * stabilityLimit(kVerletIntegrator);
   if (auto_choice_.empty() || choice != last)
   {
     switched = choice != last;
     auto_choice_ = std::string(toString(choice)) + ": h (omega_max + c_max) = " + formatValue(product) +
-                   (choice == IntegratorType::Verlet ? " <= " : " > ") + formatValue(limit) +
+                   (choice == kVerletIntegrator ? " <= " : " > ") + formatValue(limit) +
                    " (half of Verlet's limit 2; omega_max = " + formatValue(omega_max) +
                    " 1/s, c_max = " + formatValue(c_max) + " 1/s, dt = " + formatValue(dt) + " s)";
   }

@@ -24,7 +24,11 @@ namespace body_yaml
 // Fails at `reader`'s node with a core validation message, prefixed by the entry's path.
 void check(const MapReader& reader, const std::string& prefix, const Status& status);
 
-// The integrator keys, read at world level (the default) and per body (an override), and written.
+// The integrator keys (integrator, verlet_damping, cg_tolerance, cg_max_iterations, max_substeps).
+// A body reads and writes only the keys it sets (the world applies its default to the others);
+// the world reads its keys over the built-in defaults and writes them all.
+void readIntegrator(MapReader& reader, core::BodyIntegratorDef& integrator);
+void writeIntegrator(YAML::Node node, const core::BodyIntegratorDef& integrator);
 void readIntegrator(MapReader& reader, core::IntegratorDef& integrator);
 void writeIntegrator(YAML::Node node, const core::IntegratorDef& integrator);
 

@@ -86,15 +86,13 @@ std::string resolvePath(const std::string& source, const std::string& path)
   return (std::filesystem::path(source).parent_path() / p).string();
 }
 
-// What grid and mesh cloth start with: name, model with its default constants, the world's
-// integrator and, for a Baraff–Witkin cloth, its rest stretch b_u, b_v.
+// What grid and mesh cloth start with: name, model with its default constants and, for a
+// Baraff–Witkin cloth, its rest stretch b_u, b_v.
 template <typename ClothDef>
-void startCloth(MapReader& reader, const std::string& name, core::ClothModel model,
-                const core::IntegratorDef& integrator, ClothDef& def)
+void startCloth(MapReader& reader, const std::string& name, core::ClothModel model, ClothDef& def)
 {
   def = ClothDef(model);  // the model's default constants
   def.name = name;
-  def.integrator = integrator;
   if (model != core::ClothModel::BaraffWitkin) return;
   reader.read("b_u", def.b_u);
   reader.read("b_v", def.b_v);
@@ -149,7 +147,7 @@ BodyDef readCloth(MapReader& reader, SceneDef& scene, const std::string& source)
   if (reader.has("mesh") || reader.has("vertices"))
   {
     core::MeshClothDef def;
-    startCloth(reader, name, model, world.integrator, def);
+    startCloth(reader, name, model, def);
     if (reader.has("mesh"))
     {
       std::string file;
@@ -208,7 +206,7 @@ BodyDef readCloth(MapReader& reader, SceneDef& scene, const std::string& source)
   }
 
   core::ClothGridDef def;
-  startCloth(reader, name, model, world.integrator, def);
+  startCloth(reader, name, model, def);
   reader.read("origin", def.origin);
   reader.read("edge_u", def.edge_u);
   reader.read("edge_v", def.edge_v);

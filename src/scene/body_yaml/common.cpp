@@ -11,29 +11,56 @@ void check(const MapReader& reader, const std::string& prefix, const Status& sta
   if (!status) reader.fail(reader.node(), prefix + status.message);
 }
 
-void readIntegrator(MapReader& reader, core::IntegratorDef& integrator)
+namespace
+{
+// `key` into `value` when the map has it; left empty otherwise.
+template <typename T>
+void readSetting(MapReader& reader, const std::string& key, std::optional<T>& value)
+{
+  if (!reader.has(key)) return;
+  T given{};
+  reader.read(key, given);
+  value = given;
+}
+}  // namespace
+
+void readIntegrator(MapReader& reader, core::BodyIntegratorDef& integrator)
 {
   std::string name;
   reader.read("integrator", name);
   if (reader.has("integrator"))
   {
-    if (!core::parseIntegratorType(name, integrator.type))
+    core::IntegratorType type;
+    if (!core::parseIntegratorType(name, type))
       reader.fail(reader.node()["integrator"], reader.field("integrator") + " = " + core::quoteReceived(name) +
                                                    " is not an integrator; allowed: " + core::integratorTypeNames());
+    integrator.type = type;
   }
-  reader.read("verlet_damping", integrator.verlet_damping);
-  reader.read("cg_tolerance", integrator.cg_tolerance);
-  reader.read("cg_max_iterations", integrator.cg_max_iterations);
-  reader.read("max_substeps", integrator.max_substeps);
+  readSetting(reader, "verlet_damping", integrator.verlet_damping);
+  readSetting(reader, "cg_tolerance", integrator.cg_tolerance);
+  readSetting(reader, "cg_max_iterations", integrator.cg_max_iterations);
+  readSetting(reader, "max_substeps", integrator.max_substeps);
+}
+
+void readIntegrator(MapReader& reader, core::IntegratorDef& integrator)
+{
+  core::BodyIntegratorDef given;
+  readIntegrator(reader, given);
+  integrator = core::resolve(given, integrator);
+}
+
+void writeIntegrator(YAML::Node node, const core::BodyIntegratorDef& i)
+{
+  if (i.type) node["integrator"] = core::toString(*i.type);
+  if (i.verlet_damping) node["verlet_damping"] = *i.verlet_damping;
+  if (i.cg_tolerance) node["cg_tolerance"] = *i.cg_tolerance;
+  if (i.cg_max_iterations) node["cg_max_iterations"] = *i.cg_max_iterations;
+  if (i.max_substeps) node["max_substeps"] = *i.max_substeps;
 }
 
 void writeIntegrator(YAML::Node node, const core::IntegratorDef& i)
 {
-  node["integrator"] = core::toString(i.type);
-  node["verlet_damping"] = i.verlet_damping;
-  node["cg_tolerance"] = i.cg_tolerance;
-  node["cg_max_iterations"] = i.cg_max_iterations;
-  node["max_substeps"] = i.max_substeps;
+  writeIntegrator(node, core::settingEveryField(i));
 }
 
 void readSpringConstants(MapReader& parent, const std::string& key, double& stiffness, double& damping,

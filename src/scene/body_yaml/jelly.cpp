@@ -9,7 +9,6 @@ namespace body_yaml
 core::JellyDef readJelly(MapReader& reader, SceneDef& scene, const std::string& source)
 {
   core::JellyDef def;
-  def.integrator = scene.world.integrator;
   reader.require("name", def.name);
   reader.read("origin", def.origin);
   reader.read("size", def.size);

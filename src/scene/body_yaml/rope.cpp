@@ -9,7 +9,6 @@ namespace body_yaml
 core::RopeDef readRope(MapReader& reader, const core::WorldDef& world, const std::string& source)
 {
   core::RopeDef def;
-  def.integrator = world.integrator;
   reader.require("name", def.name);
   reader.read("particles", def.particles);
   reader.read("start", def.start);

@@ -9,7 +9,6 @@ namespace body_yaml
 core::SpringNetworkDef readSpringNetwork(MapReader& reader, const core::WorldDef& world, const std::string& source)
 {
   core::SpringNetworkDef def;
-  def.integrator = world.integrator;
   reader.require("name", def.name);
 
   const YAML::Node particles = reader.child("particles");

@@ -68,5 +68,8 @@ private:
   Eigen::Matrix3Xd force_, x0_, v0_, x_hat_, x_predicted_, w_;  // work arrays; (x0, v0) = (x_n, v_n)
 };
 
+/// BDF2 as a body's IntegratorDef::type.
+inline constexpr IntegratorType kBdf2Integrator = IntegratorType::of<Bdf2Method>();
+
 }  // namespace core
 }  // namespace particle_sim

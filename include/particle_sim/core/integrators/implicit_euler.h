@@ -37,5 +37,8 @@ private:
   Eigen::Matrix3Xd force_, x0_, v0_;  // work arrays; (x0, v0) = state at the start of the (sub)step
 };
 
+/// Implicit Euler as a body's IntegratorDef::type.
+inline constexpr IntegratorType kImplicitEulerIntegrator = IntegratorType::of<ImplicitEulerMethod>();
+
 }  // namespace core
 }  // namespace particle_sim

@@ -24,5 +24,8 @@ private:
   Eigen::Matrix3Xd stage_x_, stage_v_, kx_[4], kv_[4];
 };
 
+/// RK4 as a body's IntegratorDef::type.
+inline constexpr IntegratorType kRk4Integrator = IntegratorType::of<Rk4Method>();
+
 }  // namespace core
 }  // namespace particle_sim

@@ -3,6 +3,7 @@
 #include <string>
 
 #include "particle_sim/core/integrator.h"
+#include "particle_sim/core/integrators/implicit_euler.h"
 
 namespace particle_sim
 {
@@ -11,7 +12,7 @@ namespace core
 /// How one step will be taken, decided before it is: the method that runs and its substeps.
 struct SubstepPlan
 {
-  IntegratorType method = IntegratorType::ImplicitEuler;  ///< the method that runs (never auto)
+  IntegratorType method = kImplicitEulerIntegrator;  ///< the method that runs (never auto)
   int substeps = 1;  ///< substeps of the step, 1 ≤ substeps ≤ max_substeps (1 for an implicit method)
   /// Substeps the method's stability limit asks for before the max_substeps cap (saturated at the
   /// largest long long); above `substeps` when the cap cuts them, and the step may then blow up.

@@ -23,5 +23,8 @@ private:
   Eigen::Matrix3Xd acceleration_;
 };
 
+/// Symplectic Euler as a body's IntegratorDef::type.
+inline constexpr IntegratorType kSymplecticEulerIntegrator = IntegratorType::of<SymplecticEulerMethod>();
+
 }  // namespace core
 }  // namespace particle_sim

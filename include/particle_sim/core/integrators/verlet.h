@@ -30,5 +30,8 @@ private:
   Eigen::Matrix3Xd acceleration_;
 };
 
+/// Verlet as a body's IntegratorDef::type.
+inline constexpr IntegratorType kVerletIntegrator = IntegratorType::of<VerletMethod>();
+
 }  // namespace core
 }  // namespace particle_sim
