@@ -9,6 +9,7 @@
 #include <optional>
 #include <string>
 
+#include "particle_sim/core/builders/rope.h"
 #include "particle_sim/core/cloth.h"
 #include "particle_sim/core/emitter.h"
 #include "particle_sim/core/integrators/stability_guard.h"

@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <limits>
 
+#include "particle_sim/core/builders/rope.h"
 #include "particle_sim/core/spring_network.h"
 #include "test_helpers.h"
 

@@ -11,6 +11,7 @@
 #include "particle_sim/SpawnEmitter.h"
 #include "particle_sim/SpawnJelly.h"
 #include "particle_sim/SpawnRope.h"
+#include "particle_sim/core/builders/rope.h"
 #include "particle_sim/core/cloth.h"
 #include "particle_sim/core/emitter.h"
 #include "particle_sim/core/integrator.h"

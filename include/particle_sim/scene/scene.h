@@ -6,6 +6,7 @@
 #include <variant>
 #include <vector>
 
+#include "particle_sim/core/builders/rope.h"
 #include "particle_sim/core/cloth.h"
 #include "particle_sim/core/emitter.h"
 #include "particle_sim/core/jelly.h"
