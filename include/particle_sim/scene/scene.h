@@ -6,10 +6,10 @@
 #include <variant>
 #include <vector>
 
+#include "particle_sim/core/builders/jelly.h"
 #include "particle_sim/core/builders/rope.h"
 #include "particle_sim/core/cloth.h"
 #include "particle_sim/core/emitter.h"
-#include "particle_sim/core/jelly.h"
 #include "particle_sim/core/spring_network.h"
 #include "particle_sim/core/status.h"
 #include "particle_sim/core/world.h"
