@@ -20,6 +20,7 @@
 #include <utility>
 #include <vector>
 
+#include "particle_sim/core/builders/cloth_grid.h"
 #include "particle_sim/core/world.h"
 #include "test_helpers.h"
 

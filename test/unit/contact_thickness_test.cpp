@@ -8,6 +8,7 @@
 #include <Eigen/Geometry>
 #include <cmath>
 
+#include "particle_sim/core/builders/cloth_grid.h"
 #include "particle_sim/core/cloth.h"
 #include "particle_sim/core/world.h"
 #include "particle_sim/scene/scene.h"

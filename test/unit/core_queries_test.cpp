@@ -9,6 +9,7 @@
 #include <optional>
 #include <string>
 
+#include "particle_sim/core/builders/cloth_grid.h"
 #include "particle_sim/core/builders/rope.h"
 #include "particle_sim/core/cloth.h"
 #include "particle_sim/core/emitter.h"

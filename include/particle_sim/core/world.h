@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "particle_sim/core/body.h"
+#include "particle_sim/core/builders/cloth_grid.h"
 #include "particle_sim/core/builders/jelly.h"
 #include "particle_sim/core/builders/rope.h"
 #include "particle_sim/core/cloth.h"

@@ -11,6 +11,7 @@
 #include "particle_sim/SpawnEmitter.h"
 #include "particle_sim/SpawnJelly.h"
 #include "particle_sim/SpawnRope.h"
+#include "particle_sim/core/builders/cloth_grid.h"
 #include "particle_sim/core/builders/jelly.h"
 #include "particle_sim/core/builders/rope.h"
 #include "particle_sim/core/cloth.h"
