@@ -11,7 +11,7 @@
 
 #include "particle_sim/core/builders/cloth_grid.h"
 #include "particle_sim/core/builders/rope.h"
-#include "particle_sim/core/cloth.h"
+#include "particle_sim/core/cloth_model.h"
 #include "particle_sim/core/emitter.h"
 #include "particle_sim/core/integrators/stability_guard.h"
 #include "particle_sim/core/spring_network.h"

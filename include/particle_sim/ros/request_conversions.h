@@ -14,7 +14,6 @@
 #include "particle_sim/core/builders/cloth_grid.h"
 #include "particle_sim/core/builders/jelly.h"
 #include "particle_sim/core/builders/rope.h"
-#include "particle_sim/core/cloth.h"
 #include "particle_sim/core/emitter.h"
 #include "particle_sim/core/integrator.h"
 #include "particle_sim/core/spring.h"

@@ -3,6 +3,7 @@
 
 #include "body_yaml.h"
 #include "particle_sim/core/builders/pins.h"
+#include "particle_sim/core/surface.h"
 #include "particle_sim/scene/obj_mesh.h"
 
 namespace particle_sim
