@@ -23,6 +23,27 @@ SpringConstants defaultClothConstants(ClothModel model, SpringClass spring_class
   return {};
 }
 
+ClothConstants ClothConstants::unset(ClothModel model, SpringClass spring_class)
+{
+  const SpringConstants shown = defaultClothConstants(model, spring_class);
+  return {ClothConstant::unset(shown.stiffness), ClothConstant::unset(shown.damping)};
+}
+
+SpringConstants ClothConstants::resolve(ClothModel model, SpringClass spring_class) const
+{
+  const SpringConstants defaults = defaultClothConstants(model, spring_class);
+  return {stiffness.orDefault(defaults.stiffness), damping.orDefault(defaults.damping)};
+}
+
+SpringConstants resolveClothConstants(ClothModel model, SpringClass spring_class, const ClothConstants& stretch,
+                                      const ClothConstants& shear, const ClothConstants& bend)
+{
+  const ClothConstants& set = spring_class == SpringClass::Stretch ? stretch
+                              : spring_class == SpringClass::Shear ? shear
+                                                                   : bend;
+  return set.resolve(model, spring_class);
+}
+
 Status validateClothCommon(const std::string& name, const SpringConstants& stretch, const SpringConstants& bend,
                            double mass, const StrainLimitDef& strain_limit, const IntegratorDef& integrator,
                            double contact_thickness)

@@ -12,10 +12,15 @@ namespace core
 {
 ClothGridDef::ClothGridDef(ClothModel cloth_model)
     : model(cloth_model),
-      stretch(defaultClothConstants(cloth_model, SpringClass::Stretch)),
-      shear(defaultClothConstants(cloth_model, SpringClass::Shear)),
-      bend(defaultClothConstants(cloth_model, SpringClass::Bend))
+      stretch(ClothConstants::unset(cloth_model, SpringClass::Stretch)),
+      shear(ClothConstants::unset(cloth_model, SpringClass::Shear)),
+      bend(ClothConstants::unset(cloth_model, SpringClass::Bend))
 {}
+
+SpringConstants ClothGridDef::constants(SpringClass spring_class) const
+{
+  return resolveClothConstants(model, spring_class, stretch, shear, bend);
+}
 
 const char* namedGridPinNames()
 {
@@ -47,11 +52,9 @@ bool namedGridPins(const std::string& name, int nu, int nv, std::vector<int>& in
 
 Status validate(const ClothGridDef& def, int max_particles)
 {
-  if (Status s = validateClothCommon(def.name, def.stretch, def.bend, def.mass, def.strain_limit, def.integrator,
-                                     def.contact_thickness);
-      !s)
-    return s;
-  if (Status s = checkSpringConstants("shear.", def.shear.stiffness, def.shear.damping); !s) return s;
+  if (Status s = validateClothCommon(def); !s) return s;
+  const SpringConstants shear = def.constants(SpringClass::Shear);
+  if (Status s = checkSpringConstants("shear.", shear.stiffness, shear.damping); !s) return s;
   if (Status s = checkFinite("origin", def.origin); !s) return s;
   if (Status s = checkFinite("edge_u", def.edge_u); !s) return s;
   if (Status s = checkFinite("edge_v", def.edge_v); !s) return s;
@@ -78,6 +81,8 @@ Status validate(const ClothGridDef& def, int max_particles)
 
 SpringNetworkDef buildClothGrid(const ClothGridDef& def)
 {
+  const SpringConstants stretch = def.constants(SpringClass::Stretch), shear = def.constants(SpringClass::Shear),
+                        bend = def.constants(SpringClass::Bend);
   SpringNetworkDef net = emptyCloth(def.name, def.integrator, def.strain_limit, def.contact_thickness);
   const int nu = def.nu, nv = def.nv, n = nu * nv;
   auto index = [nu](int a, int b) { return b * nu + a; };
@@ -105,20 +110,18 @@ SpringNetworkDef buildClothGrid(const ClothGridDef& def)
       }
       if (!springs) continue;
       if (a + 1 < nu)
-        net.springs.push_back(clothSpring(x, index(a, b), index(a + 1, b), def.stretch, SpringClass::Stretch));
+        net.springs.push_back(clothSpring(x, index(a, b), index(a + 1, b), stretch, SpringClass::Stretch));
       if (b + 1 < nv)
-        net.springs.push_back(clothSpring(x, index(a, b), index(a, b + 1), def.stretch, SpringClass::Stretch));
+        net.springs.push_back(clothSpring(x, index(a, b), index(a, b + 1), stretch, SpringClass::Stretch));
       if (a + 1 < nu && b + 1 < nv)
       {
-        net.springs.push_back(clothSpring(x, index(a, b), index(a + 1, b + 1), def.shear, SpringClass::Shear));
-        net.springs.push_back(clothSpring(x, index(a + 1, b), index(a, b + 1), def.shear, SpringClass::Shear));
+        net.springs.push_back(clothSpring(x, index(a, b), index(a + 1, b + 1), shear, SpringClass::Shear));
+        net.springs.push_back(clothSpring(x, index(a + 1, b), index(a, b + 1), shear, SpringClass::Shear));
       }
-      if (def.bend.stiffness > 0.0)
+      if (bend.stiffness > 0.0)
       {
-        if (a + 2 < nu)
-          net.springs.push_back(clothSpring(x, index(a, b), index(a + 2, b), def.bend, SpringClass::Bend));
-        if (b + 2 < nv)
-          net.springs.push_back(clothSpring(x, index(a, b), index(a, b + 2), def.bend, SpringClass::Bend));
+        if (a + 2 < nu) net.springs.push_back(clothSpring(x, index(a, b), index(a + 2, b), bend, SpringClass::Bend));
+        if (b + 2 < nv) net.springs.push_back(clothSpring(x, index(a, b), index(a, b + 2), bend, SpringClass::Bend));
       }
     }
   }
@@ -132,7 +135,7 @@ SpringNetworkDef buildClothGrid(const ClothGridDef& def)
     std::vector<Eigen::Vector2d> uvs;
     for (const Eigen::Vector3d& p : net.positions)
       uvs.emplace_back((p - def.origin).dot(e1), (p - def.origin).dot(e2));
-    addBaraffWitkin(uvs, def.stretch, def.shear, def.bend, def.b_u, def.b_v, net);
+    addBaraffWitkin(uvs, stretch, shear, bend, def.b_u, def.b_v, net);
   }
 
   // Pins by index and by name, each particle once.

@@ -14,17 +14,19 @@ namespace core
 {
 MeshClothDef::MeshClothDef(ClothModel cloth_model)
     : model(cloth_model),
-      stretch(defaultClothConstants(cloth_model, SpringClass::Stretch)),
-      shear(defaultClothConstants(cloth_model, SpringClass::Shear)),
-      bend(defaultClothConstants(cloth_model, SpringClass::Bend))
+      stretch(ClothConstants::unset(cloth_model, SpringClass::Stretch)),
+      shear(ClothConstants::unset(cloth_model, SpringClass::Shear)),
+      bend(ClothConstants::unset(cloth_model, SpringClass::Bend))
 {}
+
+SpringConstants MeshClothDef::constants(SpringClass spring_class) const
+{
+  return resolveClothConstants(model, spring_class, stretch, shear, bend);
+}
 
 Status validate(const MeshClothDef& def, int max_particles)
 {
-  if (Status s = validateClothCommon(def.name, def.stretch, def.bend, def.mass, def.strain_limit, def.integrator,
-                                     def.contact_thickness);
-      !s)
-    return s;
+  if (Status s = validateClothCommon(def); !s) return s;
   const int n = static_cast<int>(def.vertices.size());
   if (Status s = checkIntRange("vertices (count)", n, 3, max_particles); !s) return s;
   if (def.triangles.empty()) return Status::failure("triangles is empty: a mesh cloth needs at least one triangle");
@@ -53,7 +55,8 @@ Status validate(const MeshClothDef& def, int max_particles)
   if (Status s = checkPinIndices(def.pins, n); !s) return s;
   if (def.model == ClothModel::BaraffWitkin)
   {
-    if (Status s = checkSpringConstants("shear.", def.shear.stiffness, def.shear.damping); !s) return s;
+    const SpringConstants shear = def.constants(SpringClass::Shear);
+    if (Status s = checkSpringConstants("shear.", shear.stiffness, shear.damping); !s) return s;
     if (Status s = validateBaraffWitkinRest(def.b_u, def.b_v); !s) return s;
     if (def.uvs.size() != def.vertices.size())
       return Status::failure("model = baraff_witkin needs texture coordinates (vt) for every vertex; the mesh has " +
@@ -67,6 +70,8 @@ Status validate(const MeshClothDef& def, int max_particles)
 
 SpringNetworkDef buildMeshCloth(const MeshClothDef& def)
 {
+  const SpringConstants stretch = def.constants(SpringClass::Stretch), shear = def.constants(SpringClass::Shear),
+                        bend = def.constants(SpringClass::Bend);
   SpringNetworkDef net = emptyCloth(def.name, def.integrator, def.strain_limit, def.contact_thickness);
   net.positions = def.vertices;
   net.triangles = def.triangles;
@@ -88,7 +93,7 @@ SpringNetworkDef buildMeshCloth(const MeshClothDef& def)
     std::vector<Eigen::Vector2d> uvs;
     for (const Eigen::Vector2d& uv : def.uvs)
       uvs.push_back(scale * uv);
-    addBaraffWitkin(uvs, def.stretch, def.shear, def.bend, def.b_u, def.b_v, net);
+    addBaraffWitkin(uvs, stretch, shear, bend, def.b_u, def.b_v, net);
     appendPins(def.pins, n, net.pins);
     return net;
   }
@@ -96,10 +101,9 @@ SpringNetworkDef buildMeshCloth(const MeshClothDef& def)
   // (two triangles) a bend spring between the vertices opposite it.
   for (const auto& [edge, sides] : meshEdges(def.triangles))
   {
-    net.springs.push_back(clothSpring(net.positions, edge.first, edge.second, def.stretch, SpringClass::Stretch));
-    if (def.bend.stiffness > 0.0 && sides.size() == 2 && sides[0].opposite != sides[1].opposite)
-      net.springs.push_back(
-          clothSpring(net.positions, sides[0].opposite, sides[1].opposite, def.bend, SpringClass::Bend));
+    net.springs.push_back(clothSpring(net.positions, edge.first, edge.second, stretch, SpringClass::Stretch));
+    if (bend.stiffness > 0.0 && sides.size() == 2 && sides[0].opposite != sides[1].opposite)
+      net.springs.push_back(clothSpring(net.positions, sides[0].opposite, sides[1].opposite, bend, SpringClass::Bend));
   }
   appendPins(def.pins, n, net.pins);
   return net;

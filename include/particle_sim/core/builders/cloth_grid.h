@@ -24,8 +24,8 @@ namespace core
 struct ClothGridDef
 {
   ClothGridDef() = default;
-  /// A cloth of `cloth_model` with that model's default constants (defaultClothConstants()). Choose
-  /// the model here: assigning `model` afterwards keeps the constants already set.
+  /// A cloth of `cloth_model`; the same cloth as assigning `model` to a default one (the constants
+  /// left unset take the model's defaults when the cloth is built, see ClothConstant).
   explicit ClothGridDef(ClothModel cloth_model);
 
   std::string name;
@@ -36,10 +36,10 @@ struct ClothGridDef
   int nu = 15;                                               ///< particles along u, >= 2
   int nv = 15;                                               ///< particles along v, >= 2
   double mass = 0.5;                                         ///< [kg] total, shared equally
-  SpringConstants stretch = kSpringClothStretch;
-  SpringConstants shear = kSpringClothShear;
-  SpringConstants bend =
-      kSpringClothBend;         ///< stiffness 0 = no bend springs (Baraff–Witkin: see BaraffWitkinDef units)
+  /// Unset: the model's defaults (defaultClothConstants()). Bend stiffness 0 = no bend springs.
+  ClothConstants stretch = ClothConstants::unset(ClothModel::Springs, SpringClass::Stretch);
+  ClothConstants shear = ClothConstants::unset(ClothModel::Springs, SpringClass::Shear);
+  ClothConstants bend = ClothConstants::unset(ClothModel::Springs, SpringClass::Bend);
   double b_u = 1.0, b_v = 1.0;  ///< Baraff–Witkin rest stretch along u and v, > 0
   std::vector<int> pins;        ///< indices; negative counts from the end
   std::vector<std::string>
@@ -47,6 +47,9 @@ struct ClothGridDef
   StrainLimitDef strain_limit;
   IntegratorDef integrator;
   double contact_thickness = 0.0;  ///< [m] in limits::kContactThickness: kept from ground and spheres (0 = touch)
+
+  /// The constants of `spring_class` this cloth gets: those set, else its model's defaults.
+  SpringConstants constants(SpringClass spring_class) const;
 };
 
 Status validate(const ClothGridDef& def, int max_particles);

@@ -17,8 +17,8 @@ namespace core
 struct MeshClothDef
 {
   MeshClothDef() = default;
-  /// A cloth of `cloth_model` with that model's default constants (defaultClothConstants()). Choose
-  /// the model here: assigning `model` afterwards keeps the constants already set.
+  /// A cloth of `cloth_model`; the same cloth as assigning `model` to a default one (the constants
+  /// left unset take the model's defaults when the cloth is built, see ClothConstant).
   explicit MeshClothDef(ClothModel cloth_model);
 
   std::string name;
@@ -27,14 +27,19 @@ struct MeshClothDef
   std::vector<Eigen::Vector3i> triangles;  ///< vertex indices
   std::vector<Eigen::Vector2d> uvs;        ///< per vertex texture coordinates; needed by Baraff–Witkin
   double mass = 0.5;                       ///< [kg] total, shared equally by the vertices
-  SpringConstants stretch = kSpringClothStretch;
-  SpringConstants shear = kSpringClothShear;  ///< Baraff–Witkin only
-  SpringConstants bend = kSpringClothBend;    ///< stiffness 0 = no bend springs
-  double b_u = 1.0, b_v = 1.0;                ///< Baraff–Witkin rest stretch
+  /// Unset: the model's defaults (defaultClothConstants()). Shear: Baraff–Witkin only. Bend
+  /// stiffness 0 = no bend springs.
+  ClothConstants stretch = ClothConstants::unset(ClothModel::Springs, SpringClass::Stretch);
+  ClothConstants shear = ClothConstants::unset(ClothModel::Springs, SpringClass::Shear);
+  ClothConstants bend = ClothConstants::unset(ClothModel::Springs, SpringClass::Bend);
+  double b_u = 1.0, b_v = 1.0;  ///< Baraff–Witkin rest stretch
   std::vector<int> pins;
   StrainLimitDef strain_limit;
   IntegratorDef integrator;
   double contact_thickness = 0.0;  ///< [m] in limits::kContactThickness: kept from ground and spheres (0 = touch)
+
+  /// The constants of `spring_class` this cloth gets: those set, else its model's defaults.
+  SpringConstants constants(SpringClass spring_class) const;
 };
 
 Status validate(const MeshClothDef& def, int max_particles);
