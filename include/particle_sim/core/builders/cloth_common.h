@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "particle_sim/core/cloth_model.h"
+#include "particle_sim/core/forces/baraff_witkin_model.h"
 #include "particle_sim/core/spring.h"
 #include "particle_sim/core/spring_network.h"
 #include "particle_sim/core/status.h"
@@ -18,6 +19,9 @@ namespace core
 constexpr SpringConstants kSpringClothStretch{1000.0, 0.5};
 constexpr SpringConstants kSpringClothShear{200.0, 0.2};
 constexpr SpringConstants kSpringClothBend{20.0, 0.05};
+
+/// Default total mass of a grid or mesh cloth [kg].
+constexpr double kClothMass = 0.5;
 
 /// The default constants of `spring_class` for a cloth of `model`: the one table of cloth defaults.
 SpringConstants defaultClothConstants(ClothModel model, SpringClass spring_class);

@@ -35,13 +35,14 @@ struct ClothGridDef
   Eigen::Vector3d edge_v = Eigen::Vector3d(0.0, 1.0, 0.0);   ///< [m] from (0, 0) to (0, nv − 1)
   int nu = 15;                                               ///< particles along u, >= 2
   int nv = 15;                                               ///< particles along v, >= 2
-  double mass = 0.5;                                         ///< [kg] total, shared equally
+  double mass = kClothMass;                                  ///< [kg] total, shared equally
   /// Unset: the model's defaults (defaultClothConstants()). Bend stiffness 0 = no bend springs.
   ClothConstants stretch = ClothConstants::unset(ClothModel::Springs, SpringClass::Stretch);
   ClothConstants shear = ClothConstants::unset(ClothModel::Springs, SpringClass::Shear);
   ClothConstants bend = ClothConstants::unset(ClothModel::Springs, SpringClass::Bend);
-  double b_u = 1.0, b_v = 1.0;  ///< Baraff–Witkin rest stretch along u and v, > 0
-  std::vector<int> pins;        ///< indices; negative counts from the end
+  double b_u = kBaraffWitkinRestStretch;  ///< Baraff–Witkin rest stretch along u, > 0
+  double b_v = kBaraffWitkinRestStretch;  ///< Baraff–Witkin rest stretch along v, > 0
+  std::vector<int> pins;                  ///< indices; negative counts from the end
   std::vector<std::string>
       named_pins;  ///< corner_00, corner_10, corner_01, corner_11, edge_u0, edge_u1, edge_v0, edge_v1
   StrainLimitDef strain_limit;

@@ -26,13 +26,14 @@ struct MeshClothDef
   std::vector<Eigen::Vector3d> vertices;   ///< [m]
   std::vector<Eigen::Vector3i> triangles;  ///< vertex indices
   std::vector<Eigen::Vector2d> uvs;        ///< per vertex texture coordinates; needed by Baraff–Witkin
-  double mass = 0.5;                       ///< [kg] total, shared equally by the vertices
+  double mass = kClothMass;                ///< [kg] total, shared equally by the vertices
   /// Unset: the model's defaults (defaultClothConstants()). Shear: Baraff–Witkin only. Bend
   /// stiffness 0 = no bend springs.
   ClothConstants stretch = ClothConstants::unset(ClothModel::Springs, SpringClass::Stretch);
   ClothConstants shear = ClothConstants::unset(ClothModel::Springs, SpringClass::Shear);
   ClothConstants bend = ClothConstants::unset(ClothModel::Springs, SpringClass::Bend);
-  double b_u = 1.0, b_v = 1.0;  ///< Baraff–Witkin rest stretch
+  double b_u = kBaraffWitkinRestStretch;  ///< Baraff–Witkin rest stretch along u
+  double b_v = kBaraffWitkinRestStretch;  ///< Baraff–Witkin rest stretch along v
   std::vector<int> pins;
   StrainLimitDef strain_limit;
   IntegratorDef integrator;
