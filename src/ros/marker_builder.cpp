@@ -2,9 +2,9 @@
 
 #include <algorithm>
 
-#include "particle_sim/core/cloth.h"
 #include "particle_sim/core/emitter.h"
 #include "particle_sim/core/spring_network.h"
+#include "particle_sim/core/surface.h"
 
 namespace particle_sim
 {

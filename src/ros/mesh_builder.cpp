@@ -2,7 +2,7 @@
 
 #include <vector>
 
-#include "particle_sim/core/cloth.h"
+#include "particle_sim/core/surface.h"
 
 namespace particle_sim
 {

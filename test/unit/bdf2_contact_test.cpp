@@ -7,7 +7,7 @@
 #include <cmath>
 #include <vector>
 
-#include "particle_sim/core/cloth.h"
+#include "particle_sim/core/builders/cloth_grid.h"
 #include "particle_sim/core/integrators/bdf2.h"
 #include "particle_sim/core/integrators/implicit_euler.h"
 #include "particle_sim/core/integrators/rk4.h"

@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "particle_sim/core/builders/pins.h"
+#include "particle_sim/core/builders/rope.h"
 #include "particle_sim/core/spring_network.h"
 
 using namespace particle_sim::core;

@@ -7,8 +7,6 @@
 // hanging cloth settles to a dt-independent equilibrium that implicit Euler approaches at first
 // order.
 
-#include "particle_sim/core/cloth.h"
-
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
@@ -20,9 +18,12 @@
 #include <utility>
 #include <vector>
 
+#include "particle_sim/core/builders/cloth_grid.h"
+#include "particle_sim/core/builders/mesh_cloth.h"
 #include "particle_sim/core/integrators/implicit_euler.h"
 #include "particle_sim/core/integrators/rk4.h"
 #include "particle_sim/core/integrators/symplectic_euler.h"
+#include "particle_sim/core/surface.h"
 #include "particle_sim/core/world.h"
 #include "test_helpers.h"
 

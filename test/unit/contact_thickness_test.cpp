@@ -8,8 +8,9 @@
 #include <Eigen/Geometry>
 #include <cmath>
 
-#include "particle_sim/core/cloth.h"
+#include "particle_sim/core/builders/cloth_grid.h"
 #include "particle_sim/core/integrators/implicit_euler.h"
+#include "particle_sim/core/surface.h"
 #include "particle_sim/core/world.h"
 #include "particle_sim/scene/scene.h"
 

@@ -9,7 +9,9 @@
 #include <optional>
 #include <string>
 
-#include "particle_sim/core/cloth.h"
+#include "particle_sim/core/builders/cloth_grid.h"
+#include "particle_sim/core/builders/rope.h"
+#include "particle_sim/core/cloth_model.h"
 #include "particle_sim/core/emitter.h"
 #include "particle_sim/core/integrators/implicit_euler.h"
 #include "particle_sim/core/integrators/rk4.h"

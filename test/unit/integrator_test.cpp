@@ -10,6 +10,7 @@
 #include <random>
 #include <vector>
 
+#include "particle_sim/core/builders/rope.h"
 #include "particle_sim/core/integrators/bdf2.h"
 #include "particle_sim/core/integrators/implicit_euler.h"
 #include "particle_sim/core/integrators/rk4.h"

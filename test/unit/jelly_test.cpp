@@ -4,7 +4,7 @@
 // it and comes to rest there with its shape, and without external forces its momentum is
 // conserved and a uniform motion is a rigid translation.
 
-#include "particle_sim/core/jelly.h"
+#include "particle_sim/core/builders/jelly.h"
 
 #include <gtest/gtest.h>
 

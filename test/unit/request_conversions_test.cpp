@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <limits>
 
+#include "particle_sim/core/builders/rope.h"
 #include "particle_sim/core/integrators/implicit_euler.h"
 #include "particle_sim/core/integrators/rk4.h"
 #include "particle_sim/core/integrators/verlet.h"

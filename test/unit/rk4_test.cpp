@@ -10,6 +10,7 @@
 #include <cmath>
 #include <vector>
 
+#include "particle_sim/core/builders/rope.h"
 #include "particle_sim/core/spring_network.h"
 
 using namespace particle_sim::core;

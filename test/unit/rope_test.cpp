@@ -3,6 +3,8 @@
 // analytic static equilibrium, and spring constants can only be changed to valid values of classes
 // the body has.
 
+#include "particle_sim/core/builders/rope.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>

@@ -6,11 +6,13 @@
 #include <vector>
 
 #include "particle_sim/core/body.h"
-#include "particle_sim/core/cloth.h"
+#include "particle_sim/core/builders/cloth_grid.h"
+#include "particle_sim/core/builders/jelly.h"
+#include "particle_sim/core/builders/mesh_cloth.h"
+#include "particle_sim/core/builders/rope.h"
 #include "particle_sim/core/emitter.h"
 #include "particle_sim/core/environment.h"
 #include "particle_sim/core/integrator.h"
-#include "particle_sim/core/jelly.h"
 #include "particle_sim/core/names.h"  // body names follow validateBodyName()
 #include "particle_sim/core/spring_network.h"
 #include "particle_sim/core/status.h"

@@ -6,9 +6,11 @@
 #include <variant>
 #include <vector>
 
-#include "particle_sim/core/cloth.h"
+#include "particle_sim/core/builders/cloth_grid.h"
+#include "particle_sim/core/builders/jelly.h"
+#include "particle_sim/core/builders/mesh_cloth.h"
+#include "particle_sim/core/builders/rope.h"
 #include "particle_sim/core/emitter.h"
-#include "particle_sim/core/jelly.h"
 #include "particle_sim/core/spring_network.h"
 #include "particle_sim/core/status.h"
 #include "particle_sim/core/world.h"

@@ -36,9 +36,10 @@ void writeIntegrator(YAML::Node node, const core::IntegratorDef& integrator);
 void readSpringConstants(MapReader& parent, const std::string& key, double& stiffness, double& damping,
                          const std::string& source);
 YAML::Node springConstants(double stiffness, double damping);
-// The stretch, shear (when `shear` is given) and bend constants of cloth and jelly.
-void readClothConstants(MapReader& reader, core::SpringConstants& stretch, core::SpringConstants* shear,
-                        core::SpringConstants& bend, const std::string& source);
+// The stretch, shear (when `shear` is given) and bend constants of a cloth: each value the file
+// gives is set, the others keep the cloth model's default.
+void readClothConstants(MapReader& reader, core::ClothConstants& stretch, core::ClothConstants* shear,
+                        core::ClothConstants& bend, const std::string& source);
 
 // A list of integer particle indices.
 std::vector<int> readIndexList(MapReader& reader, const std::string& key);

@@ -3,6 +3,7 @@
 
 #include "body_yaml.h"
 #include "particle_sim/core/builders/pins.h"
+#include "particle_sim/core/surface.h"
 #include "particle_sim/scene/obj_mesh.h"
 
 namespace particle_sim
@@ -86,12 +87,12 @@ std::string resolvePath(const std::string& source, const std::string& path)
   return (std::filesystem::path(source).parent_path() / p).string();
 }
 
-// What grid and mesh cloth start with: name, model with its default constants and, for a
-// Baraff–Witkin cloth, its rest stretch b_u, b_v.
+// What grid and mesh cloth start with: name, model (constants the file does not give take its
+// defaults when the cloth is built) and, for a Baraff–Witkin cloth, its rest stretch b_u, b_v.
 template <typename ClothDef>
 void startCloth(MapReader& reader, const std::string& name, core::ClothModel model, ClothDef& def)
 {
-  def = ClothDef(model);  // the model's default constants
+  def = ClothDef(model);
   def.name = name;
   if (model != core::ClothModel::BaraffWitkin) return;
   reader.read("b_u", def.b_u);
@@ -115,13 +116,23 @@ YAML::Node framePins(const SceneDef& scene, const std::string& body)
   return list;
 }
 
+// The shear constants a cloth gets, as written.
+template <typename ClothDef>
+YAML::Node shearConstants(const ClothDef& def)
+{
+  const core::SpringConstants shear = def.constants(core::SpringClass::Shear);
+  return springConstants(shear.stiffness, shear.damping);
+}
+
 // The keys grid and mesh cloth share: mass, stretch, bend, pins, frame pins, strain limit, integrator.
 template <typename ClothDef>
 void clothTail(YAML::Node node, const SceneDef& scene, const ClothDef& cloth, const YAML::Node& pins)
 {
   node["mass"] = cloth.mass;
-  node["stretch"] = springConstants(cloth.stretch.stiffness, cloth.stretch.damping);
-  node["bend"] = springConstants(cloth.bend.stiffness, cloth.bend.damping);
+  const core::SpringConstants stretch = cloth.constants(core::SpringClass::Stretch);
+  const core::SpringConstants bend = cloth.constants(core::SpringClass::Bend);
+  node["stretch"] = springConstants(stretch.stiffness, stretch.damping);
+  node["bend"] = springConstants(bend.stiffness, bend.damping);
   node["pins"] = pins;
   node["frame_pins"] = framePins(scene, cloth.name);
   writeStrainLimit(node, cloth.strain_limit);
@@ -254,7 +265,7 @@ YAML::Node writeClothGrid(const SceneDef& scene, const core::ClothGridDef& def)
   node["edge_u"] = vector3(def.edge_u);
   node["edge_v"] = vector3(def.edge_v);
   node["resolution"] = indexList({def.nu, def.nv});
-  node["shear"] = springConstants(def.shear.stiffness, def.shear.damping);
+  node["shear"] = shearConstants(def);
   YAML::Node pins = indexList(def.pins);
   for (const std::string& name : def.named_pins)
     pins.push_back(name);
@@ -282,7 +293,7 @@ YAML::Node writeMeshCloth(const SceneDef& scene, const core::MeshClothDef& def)
   }
   if (def.model == core::ClothModel::BaraffWitkin)
   {
-    node["shear"] = springConstants(def.shear.stiffness, def.shear.damping);
+    node["shear"] = shearConstants(def);
     node["b_u"] = def.b_u;
     node["b_v"] = def.b_v;
   }

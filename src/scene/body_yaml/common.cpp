@@ -83,12 +83,27 @@ YAML::Node springConstants(double stiffness, double damping)
   return node;
 }
 
-void readClothConstants(MapReader& reader, core::SpringConstants& stretch, core::SpringConstants* shear,
-                        core::SpringConstants& bend, const std::string& source)
+namespace
 {
-  readSpringConstants(reader, "stretch", stretch.stiffness, stretch.damping, source);
-  if (shear) readSpringConstants(reader, "shear", shear->stiffness, shear->damping, source);
-  readSpringConstants(reader, "bend", bend.stiffness, bend.damping, source);
+// Reads {stiffness, damping} of one class of a cloth: what the file gives is set, the rest stays
+// unset (the cloth model's default, core::ClothConstant).
+void readClothClass(MapReader& reader, const std::string& key, core::ClothConstants& constants,
+                    const std::string& source)
+{
+  double stiffness = constants.stiffness, damping = constants.damping;
+  readSpringConstants(reader, key, stiffness, damping, source);
+  const YAML::Node node = reader.child(key);
+  if (node && node["stiffness"]) constants.stiffness = stiffness;
+  if (node && node["damping"]) constants.damping = damping;
+}
+}  // namespace
+
+void readClothConstants(MapReader& reader, core::ClothConstants& stretch, core::ClothConstants* shear,
+                        core::ClothConstants& bend, const std::string& source)
+{
+  readClothClass(reader, "stretch", stretch, source);
+  if (shear) readClothClass(reader, "shear", *shear, source);
+  readClothClass(reader, "bend", bend, source);
 }
 
 std::vector<int> readIndexList(MapReader& reader, const std::string& key)

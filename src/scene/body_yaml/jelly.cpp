@@ -22,7 +22,9 @@ core::JellyDef readJelly(MapReader& reader, SceneDef& scene, const std::string& 
   }
   reader.read("mass", def.mass);
   reader.read("velocity", def.velocity);
-  readClothConstants(reader, def.stretch, &def.shear, def.bend, source);
+  readSpringConstants(reader, "stretch", def.stretch.stiffness, def.stretch.damping, source);
+  readSpringConstants(reader, "shear", def.shear.stiffness, def.shear.damping, source);
+  readSpringConstants(reader, "bend", def.bend.stiffness, def.bend.damping, source);
   readPins(reader, def.pins, nullptr);
   readStrainLimit(reader, def.strain_limit);
   readIntegrator(reader, def.integrator);

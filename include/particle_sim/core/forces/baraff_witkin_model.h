@@ -30,6 +30,8 @@ namespace core
 constexpr SpringConstants kBaraffWitkinStretch{1000.0, 1.0};
 constexpr SpringConstants kBaraffWitkinShear{100.0, 0.1};
 constexpr SpringConstants kBaraffWitkinBend{0.005, 5e-5};
+/// Default rest stretch b_u, b_v of a Baraff–Witkin cloth [-] (1 = the rest shape as given).
+constexpr double kBaraffWitkinRestStretch = 1.0;
 
 struct BaraffWitkinDef
 {
@@ -39,8 +41,8 @@ struct BaraffWitkinDef
   SpringConstants stretch = kBaraffWitkinStretch;  ///< [N/m], [N·s/m]
   SpringConstants shear = kBaraffWitkinShear;      ///< [N/m], [N·s/m]
   SpringConstants bend = kBaraffWitkinBend;        ///< [N·m], [N·m·s]
-  double b_u = 1.0;                                ///< rest stretch along u (< 1 shrinks, > 1 grows the cloth)
-  double b_v = 1.0;                                ///< rest stretch along v
+  double b_u = kBaraffWitkinRestStretch;           ///< rest stretch along u (< 1 shrinks, > 1 grows the cloth)
+  double b_v = kBaraffWitkinRestStretch;           ///< rest stretch along v
 
   bool empty() const { return triangles.empty(); }
 };

@@ -1,4 +1,4 @@
-#include "particle_sim/core/jelly.h"
+#include "particle_sim/core/builders/jelly.h"
 
 #include "particle_sim/core/builders/pins.h"
 #include "particle_sim/core/names.h"

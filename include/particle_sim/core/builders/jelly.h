@@ -4,7 +4,6 @@
 #include <string>
 #include <vector>
 
-#include "particle_sim/core/cloth.h"
 #include "particle_sim/core/spring_network.h"
 
 namespace particle_sim

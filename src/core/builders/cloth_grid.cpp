@@ -1,0 +1,155 @@
+#include "particle_sim/core/builders/cloth_grid.h"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+
+#include "particle_sim/core/builders/pins.h"
+#include "particle_sim/core/validation.h"
+
+namespace particle_sim
+{
+namespace core
+{
+ClothGridDef::ClothGridDef(ClothModel cloth_model)
+    : model(cloth_model),
+      stretch(ClothConstants::unset(cloth_model, SpringClass::Stretch)),
+      shear(ClothConstants::unset(cloth_model, SpringClass::Shear)),
+      bend(ClothConstants::unset(cloth_model, SpringClass::Bend))
+{}
+
+SpringConstants ClothGridDef::constants(SpringClass spring_class) const
+{
+  return resolveClothConstants(model, spring_class, stretch, shear, bend);
+}
+
+const char* namedGridPinNames()
+{
+  return "corner_00, corner_10, corner_01, corner_11, edge_u0, edge_u1, edge_v0, edge_v1";
+}
+
+bool namedGridPins(const std::string& name, int nu, int nv, std::vector<int>& indices)
+{
+  auto index = [nu](int a, int b) { return b * nu + a; };
+  indices.clear();
+  if (name == "corner_00")
+    indices = {index(0, 0)};
+  else if (name == "corner_10")
+    indices = {index(nu - 1, 0)};
+  else if (name == "corner_01")
+    indices = {index(0, nv - 1)};
+  else if (name == "corner_11")
+    indices = {index(nu - 1, nv - 1)};
+  else if (name == "edge_v0" || name == "edge_v1")  // the edges along u, at v = 0 or v = 1
+    for (int a = 0; a < nu; ++a)
+      indices.push_back(index(a, name == "edge_v0" ? 0 : nv - 1));
+  else if (name == "edge_u0" || name == "edge_u1")  // the edges along v, at u = 0 or u = 1
+    for (int b = 0; b < nv; ++b)
+      indices.push_back(index(name == "edge_u0" ? 0 : nu - 1, b));
+  else
+    return false;
+  return true;
+}
+
+Status validate(const ClothGridDef& def, int max_particles)
+{
+  if (Status s = validateClothCommon(def); !s) return s;
+  const SpringConstants shear = def.constants(SpringClass::Shear);
+  if (Status s = checkSpringConstants("shear.", shear.stiffness, shear.damping); !s) return s;
+  if (Status s = checkFinite("origin", def.origin); !s) return s;
+  if (Status s = checkFinite("edge_u", def.edge_u); !s) return s;
+  if (Status s = checkFinite("edge_v", def.edge_v); !s) return s;
+  if (def.edge_u.cross(def.edge_v).norm() <= 1e-12 * def.edge_u.norm() * def.edge_v.norm() || def.edge_u.norm() == 0.0)
+    return Status::failure("edge_u = " + formatValue(def.edge_u) + " and edge_v = " + formatValue(def.edge_v) +
+                           " must be non-zero and not parallel");
+  if (Status s = checkIntRange("resolution[0]", def.nu, 2, max_particles); !s) return s;
+  if (Status s = checkIntRange("resolution[1]", def.nv, 2, max_particles); !s) return s;
+  if (static_cast<long long>(def.nu) * def.nv > max_particles)
+    return Status::failure("resolution = [" + std::to_string(def.nu) + ", " + std::to_string(def.nv) + "] makes " +
+                           std::to_string(static_cast<long long>(def.nu) * def.nv) + " particles, over the cap of " +
+                           std::to_string(max_particles));
+  if (Status s = checkPinIndices(def.pins, def.nu * def.nv); !s) return s;
+  if (Status s = validateBaraffWitkinRest(def.b_u, def.b_v); !s) return s;
+  std::vector<int> ignored;
+  for (std::size_t k = 0; k < def.named_pins.size(); ++k)
+  {
+    if (!namedGridPins(def.named_pins[k], def.nu, def.nv, ignored))
+      return Status::failure("pins[" + std::to_string(k) + "] = '" + def.named_pins[k] +
+                             "' is not a pin name; allowed: " + namedGridPinNames() + ", or an index");
+  }
+  return Status::success();
+}
+
+SpringNetworkDef buildClothGrid(const ClothGridDef& def)
+{
+  const SpringConstants stretch = def.constants(SpringClass::Stretch), shear = def.constants(SpringClass::Shear),
+                        bend = def.constants(SpringClass::Bend);
+  SpringNetworkDef net = emptyCloth(def.name, def.integrator, def.strain_limit, def.contact_thickness);
+  const int nu = def.nu, nv = def.nv, n = nu * nv;
+  auto index = [nu](int a, int b) { return b * nu + a; };
+
+  // Particles on the grid, equal masses.
+  for (int b = 0; b < nv; ++b)
+    for (int a = 0; a < nu; ++a)
+      net.positions.push_back(def.origin + def.edge_u * (static_cast<double>(a) / (nu - 1)) +
+                              def.edge_v * (static_cast<double>(b) / (nv - 1)));
+  net.masses.assign(n, def.mass / n);
+
+  // Provot's springs: stretch to the neighbours, shear across each cell, bend two apart (none for
+  // a Baraff–Witkin cloth, which gets its energies from the triangles below).
+  const std::vector<Eigen::Vector3d>& x = net.positions;
+  const bool springs = def.model == ClothModel::Springs;
+  for (int b = 0; b < nv; ++b)
+  {
+    for (int a = 0; a < nu; ++a)
+    {
+      if (a + 1 < nu && b + 1 < nv)
+      {
+        // Two triangles per cell, both wound like (edge_u, edge_v).
+        net.triangles.emplace_back(index(a, b), index(a + 1, b), index(a + 1, b + 1));
+        net.triangles.emplace_back(index(a, b), index(a + 1, b + 1), index(a, b + 1));
+      }
+      if (!springs) continue;
+      if (a + 1 < nu)
+        net.springs.push_back(clothSpring(x, index(a, b), index(a + 1, b), stretch, SpringClass::Stretch));
+      if (b + 1 < nv)
+        net.springs.push_back(clothSpring(x, index(a, b), index(a, b + 1), stretch, SpringClass::Stretch));
+      if (a + 1 < nu && b + 1 < nv)
+      {
+        net.springs.push_back(clothSpring(x, index(a, b), index(a + 1, b + 1), shear, SpringClass::Shear));
+        net.springs.push_back(clothSpring(x, index(a + 1, b), index(a, b + 1), shear, SpringClass::Shear));
+      }
+      if (bend.stiffness > 0.0)
+      {
+        if (a + 2 < nu) net.springs.push_back(clothSpring(x, index(a, b), index(a + 2, b), bend, SpringClass::Bend));
+        if (b + 2 < nv) net.springs.push_back(clothSpring(x, index(a, b), index(a, b + 2), bend, SpringClass::Bend));
+      }
+    }
+  }
+
+  // Baraff–Witkin: (u, v) of each particle are its rest coordinates in the cloth's plane, u along
+  // edge_u and v perpendicular to it, so the cloth starts at rest.
+  if (!springs)
+  {
+    const Eigen::Vector3d e1 = def.edge_u.normalized();
+    const Eigen::Vector3d e2 = (def.edge_v - def.edge_v.dot(e1) * e1).normalized();
+    std::vector<Eigen::Vector2d> uvs;
+    for (const Eigen::Vector3d& p : net.positions)
+      uvs.emplace_back((p - def.origin).dot(e1), (p - def.origin).dot(e2));
+    addBaraffWitkin(uvs, stretch, shear, bend, def.b_u, def.b_v, net);
+  }
+
+  // Pins by index and by name, each particle once.
+  appendPins(def.pins, n, net.pins);
+  for (const std::string& name : def.named_pins)
+  {
+    std::vector<int> indices;
+    namedGridPins(name, nu, nv, indices);
+    net.pins.insert(net.pins.end(), indices.begin(), indices.end());
+  }
+  std::sort(net.pins.begin(), net.pins.end());
+  net.pins.erase(std::unique(net.pins.begin(), net.pins.end()), net.pins.end());
+  return net;
+}
+
+}  // namespace core
+}  // namespace particle_sim
