@@ -400,17 +400,21 @@ def main():
 
     report('node alive', node_alive, 'the node ran for the whole %d s' % len(rows) if node_alive else 'the node died')
     if len(after) >= 10:
-        # Growth = least-squares slope of VmRSS over the seconds after warm-up x their span: robust to
-        # the +-1 MB that bodies coming and going add from one second to the next.
+        # Growth = least-squares slope of VmRSS over the seconds after warm-up x their span, robust to
+        # the +-1 MB that bodies coming and going add from one second to the next. The target fails
+        # when the growth exceeds 1 MB by more than two standard errors of that estimate (a few
+        # hundred kB over 90 s, tens of kB over an hour), so that noise alone does not fail a short run.
         ts = [r['t_s'] for r in after]
         rss = [r['rss_kb'] for r in after]
         t_mean, rss_mean = statistics.fmean(ts), statistics.fmean(rss)
-        slope = (sum((t - t_mean) * (m - rss_mean) for t, m in zip(ts, rss))
-                 / sum((t - t_mean) ** 2 for t in ts))
-        growth = slope * (ts[-1] - ts[0])
-        report('memory', growth < RSS_GROWTH_MAX_KB,
-               'VmRSS from %d to %d kB after warm-up (%d s): trend %+.0f kB over %d s (target < %d kB)'
-               % (rss[0], rss[-1], warm, growth, ts[-1] - ts[0], RSS_GROWTH_MAX_KB))
+        spread = sum((t - t_mean) ** 2 for t in ts)
+        slope = sum((t - t_mean) * (m - rss_mean) for t, m in zip(ts, rss)) / spread
+        residual = statistics.stdev(m - rss_mean - slope * (t - t_mean) for t, m in zip(ts, rss))
+        span = ts[-1] - ts[0]
+        growth, error = slope * span, residual / math.sqrt(spread) * span
+        report('memory', growth - 2 * error < RSS_GROWTH_MAX_KB,
+               'VmRSS from %d to %d kB after warm-up (%d s): trend %+.0f +- %.0f kB over %d s (target < %d kB)'
+               % (rss[0], rss[-1], warm, growth, error, span, RSS_GROWTH_MAX_KB))
     else:
         report('memory', False, 'too short a run to measure growth after warm-up')
     real_time = [r for r in after if not r['paused'] and r['fits'] and r['rtf'] == r['rtf']]

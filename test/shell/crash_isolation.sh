@@ -66,6 +66,14 @@ load() {
     _publish_clock:="$([ "$1" = a ] && echo true || echo false)" >"$work/loader_$1.log" 2>&1
   eval "loader_$1=\$background_pid"
   wait_for_service "/sim_$1/step" 60 || fail "nodelet sim_$1 did not start"
+  # The loader's bond with the manager is up (it publishes on /manager/bond): from now on its death unloads.
+  local bond_info
+  for _ in $(seq 150); do
+    bond_info="$(timeout 5 rostopic info /manager/bond 2>/dev/null)" || true
+    contains "$(sed -n '/Publishers:/,/Subscribers:/p' <<<"$bond_info")" "/sim_$1 " && return 0
+    sleep 0.2
+  done
+  fail "the loader of sim_$1 formed no bond with the manager"
 }
 load a
 load b
@@ -75,11 +83,14 @@ for victim in b a; do
   kill -KILL "${!victim_loader}"
   echo "killed the loader of nodelet sim_$victim (pid ${!victim_loader})"
   # The manager unloads it when its bond times out: its services go.
-  for _ in $(seq 150); do
-    services="$(timeout 5 rosservice list 2>/dev/null)" || true
+  deadline=$((SECONDS + 60))
+  while [ "$SECONDS" -lt "$deadline" ]; do
+    services="$(timeout 5 rosservice list 2>/dev/null)" || continue
     contains "$services" "^/sim_$victim/step\$" || break
     sleep 0.2
   done
+  echo "the manager unloaded sim_$victim within $((SECONDS + 60 - deadline)) s"
+
   contains "$services" "^/sim_$victim/step\$" && fail "the manager did not unload sim_$victim"
   kill -0 "$manager_pid" 2>/dev/null || fail "the manager died when sim_$victim was unloaded"
   answers "/sim_$survivor"
