@@ -49,7 +49,7 @@ bool FrameFollowers::lookup(const std::string& frame, const Eigen::Vector3d& off
 void FrameFollowers::follow(const std::string& body, int index, const std::string& frame, const Eigen::Vector3d& offset)
 {
   unfollow(body, index);
-  pins_.push_back({body, index, frame, offset, ros::Time(), std::chrono::steady_clock::now()});
+  pins_.push_back({body, index, frame, offset, FrameAge()});
 }
 
 void FrameFollowers::unfollow(const std::string& body, int index)
@@ -102,21 +102,8 @@ void FrameFollowers::updateFramePins(core::World& world)
     start_[k] = world.findSpringBody(pin.body)->pinTarget(pin.index);
     std::string error;
     ros::Time stamp;
-    bool available = lookup(pin.frame, pin.offset, goal_[k], stamp, error);
-    // A frame whose transform stopped changing is gone (tf keeps its last transform for ever);
-    // a static frame (stamp 0) never goes.
-    if (available && stamp != pin.stamp)
-    {
-      pin.stamp = stamp;
-      pin.updated = now;
-    }
-    else if (available && !stamp.isZero() &&
-             std::chrono::duration<double>(now - pin.updated).count() > kFramePinTimeout)
-    {
-      available = false;
-      error = "no new transform for " +
-              formatReceived(std::round(std::chrono::duration<double>(now - pin.updated).count())) + " s";
-    }
+    const bool available =
+        lookup(pin.frame, pin.offset, goal_[k], stamp, error) && stillFresh(pin.age, stamp, now, error);
     if (!available)
     {
       goal_[k] = start_[k];  // hold still until the frame is back
@@ -127,19 +114,40 @@ void FrameFollowers::updateFramePins(core::World& world)
   }
 }
 
+bool FrameFollowers::stillFresh(FrameAge& age, const ros::Time& stamp, std::chrono::steady_clock::time_point now,
+                                std::string& error)
+{
+  // A frame whose transform stopped changing is gone (tf keeps its last transform for ever);
+  // a static frame (stamp 0) never goes.
+  if (stamp != age.stamp)
+  {
+    age.stamp = stamp;
+    age.updated = now;
+    return true;
+  }
+  const double unchanged = std::chrono::duration<double>(now - age.updated).count();
+  if (stamp.isZero() || unchanged <= kFramePinTimeout) return true;
+  error = "no new transform for " + formatReceived(std::round(unchanged)) + " s";
+  return false;
+}
+
 void FrameFollowers::updateFrameSpheres(core::World& world, const scene::SceneDef& scene)
 {
+  const auto now = std::chrono::steady_clock::now();
   for (const scene::FrameSphereDef& follower : scene.frame_spheres)
   {
     if (scene::findFrame(scene, follower.frame)) continue;  // scripted: applied every step
     Eigen::Vector3d center;
     std::string error;
     ros::Time stamp;
-    if (lookup(follower.frame, Eigen::Vector3d::Zero(), center, stamp, error))
+    // A sphere whose frame is not available (unknown, or its transform stopped) holds still.
+    if (lookup(follower.frame, Eigen::Vector3d::Zero(), center, stamp, error) &&
+        stillFresh(sphere_frames_[follower.sphere], stamp, now, error))
       world.setSphereCenter(follower.sphere, center);
     else
-      ROS_WARN_THROTTLE_NAMED(5.0, "colliders", "sphere '%s' follows frame '%s', which is not available: %s",
-                              follower.sphere.c_str(), follower.frame.c_str(), error.c_str());
+      ROS_WARN_THROTTLE_NAMED(5.0, "colliders",
+                              "sphere %s follows frame %s, which is not available: %s; it holds still",
+                              quoteName(follower.sphere).c_str(), quoteName(follower.frame).c_str(), error.c_str());
   }
 }
 

@@ -1,5 +1,7 @@
 #include <ros/ros.h>
 
+#include <atomic>
+#include <csignal>
 #include <cstdio>
 #include <cstring>
 
@@ -17,6 +19,21 @@ constexpr const char* kUsage =
     "~set_wind, ~set_spring_constants; live parameters through dynamic_reconfigure.\n"
     "Needs a ROS master. Usually started by: roslaunch particle_sim particle_sim.launch scene:=NAME\n"
     "Every parameter, topic and service: README.md, section \"The node: particle_sim_node\".\n";
+
+/// The node whose loop runs, for the signal handler; null before and after.
+std::atomic<particle_sim::ros_interface::SimNode*> g_running_node{nullptr};
+
+/// SIGINT and SIGTERM end the loop (an atomic store, async-signal-safe) while ROS is still up, so
+/// that a ~step client gets its answer and every handle is released before ros::shutdown(); roscpp's
+/// own SIGINT handler would shut ROS down first, dropping the client's connection, and SIGTERM
+/// would kill the node on the spot. Before the loop runs (start-up), they ask roscpp to shut down.
+void endOnSignal(int /*signal*/)
+{
+  if (particle_sim::ros_interface::SimNode* node = g_running_node.load())
+    node->stop();
+  else
+    ros::requestShutdown();
+}
 }  // namespace
 
 int main(int argc, char** argv)
@@ -29,9 +46,14 @@ int main(int argc, char** argv)
       return 0;
     }
   }
-  ros::init(argc, argv, "particle_sim");
+  ros::init(argc, argv, "particle_sim", ros::init_options::NoSigintHandler);
+  std::signal(SIGINT, endOnSignal);
+  std::signal(SIGTERM, endOnSignal);
   particle_sim::ros_interface::SimNode node(ros::NodeHandle(), ros::NodeHandle("~"), ros::this_node::getName());
   if (!node.initialize()) return 1;
+  g_running_node = &node;
   node.run();
+  g_running_node = nullptr;
+  ros::shutdown();
   return 0;
 }

@@ -3,9 +3,11 @@
 #include <geometry_msgs/TransformStamped.h>
 #include <gtest/gtest.h>
 #include <ros/ros.h>
+#include <rosgraph_msgs/Log.h>
 #include <tf2_ros/transform_broadcaster.h>
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <mutex>
@@ -257,6 +259,31 @@ TEST_F(ClothTest, SphereFollowsItsTfFrame)
            std::abs(ball.pose.position.y - 1.5) < 1e-9 && std::abs(ball.pose.position.z - 0.75) < 1e-9;
   })) << "the sphere marker is at "
       << listener_.latest("_colliders", 0).pose.position.x;
+
+  // The frame's publisher stops: after kFramePinTimeout (1 s) the sphere holds still where it was,
+  // and the node warns (at most every 5 s) that the frame is not available.
+  std::mutex log_mutex;
+  std::vector<std::string> warnings;
+  ros::NodeHandle nh;
+  const ros::Subscriber rosout =
+      nh.subscribe<rosgraph_msgs::Log>("/rosout", 100, [&](const rosgraph_msgs::LogConstPtr& m) {
+        std::lock_guard<std::mutex> lock(log_mutex);
+        if (m->level == rosgraph_msgs::Log::WARN) warnings.push_back(m->msg);
+      });
+  const auto warned = [&] {
+    std::lock_guard<std::mutex> lock(log_mutex);
+    return std::any_of(warnings.begin(), warnings.end(), [](const std::string& w) {
+      return w.find("sphere 'ball' follows frame 'ball_frame', which is not available: no new transform for") !=
+                 std::string::npos &&
+             w.find("it holds still") != std::string::npos;
+    });
+  };
+  EXPECT_TRUE(listener_.waitFor(warned, 15.0)) << "no warning that the sphere's frame stopped";
+  const Marker held = listener_.latest("_colliders", 0);
+  EXPECT_EQ(held.action, Marker::ADD);
+  EXPECT_NEAR(held.pose.position.x, -2.0, 1e-9);
+  EXPECT_NEAR(held.pose.position.y, 1.5, 1e-9);
+  EXPECT_NEAR(held.pose.position.z, 0.75, 1e-9);
 }
 
 TEST_F(ClothTest, BaraffWitkinClothSpawnsPublishesAndTakesItsConstants)

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Shell test: when roscore stops, the node keeps simulating and warns every few seconds that the
 # master is gone; when roscore is back on the same URI, the node registers its topics, services and
-# subscriptions again (roscpp does not), so that the usual tools find it. Exits 0 on pass.
+# subscriptions again (roscpp does not), so that the usual tools find it, and the simulation state
+# is kept (sim time goes on, the same bodies). Exits 0 on pass.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/helpers.bash"
 use_devel_space
@@ -15,7 +16,10 @@ node_pid=$background_pid
 wait_for_service /particle_sim/pause_physics 30 || fail "the node's services did not appear"
 answer="$(timeout 30 rosservice call /particle_sim/pause_physics 2>&1)" || fail "pause_physics before: $answer"
 contains "$answer" 'success: True' || fail "pause_physics before: $answer"
-timeout 15 rostopic echo -n 1 /particle_sim/status >/dev/null || fail "no ~status before the restart"
+paused_at="$(sed -n 's/.*paused at sim time \([0-9.]*\) s.*/\1/p' <<<"$answer")"
+[ -n "$paused_at" ] || fail "pause_physics before: no sim time in $answer"
+bodies_before="$(timeout 15 rostopic echo -n 1 /particle_sim/status/bodies | grep '^  name:')" ||
+  fail "no ~status before the restart"
 
 # The master goes: the node goes on and warns, again and again.
 stop_roscore
@@ -34,7 +38,13 @@ contains "$services" '^/particle_sim/step$' || fail "~step is not registered aga
 contains "$services" '^/particle_sim/set_parameters$' || fail "dynamic_reconfigure is not registered again"
 answer="$(timeout 30 rosservice call /particle_sim/step 'steps: 5' 2>&1)" || fail "~step after the restart: $answer"
 contains "$answer" 'success: True' || fail "~step after the restart: $answer"
-timeout 15 rostopic echo -n 1 /particle_sim/status >/dev/null || fail "no ~status after the restart"
+# The simulation state is kept: sim time goes on from where it was paused, the bodies are the same.
+sim_time="$(sed -n 's/^sim_time: //p' <<<"$answer")"
+/usr/bin/python3 -c 'import sys; sys.exit(0 if float(sys.argv[2]) > float(sys.argv[1]) else 1)' "$paused_at" "$sim_time" ||
+  fail "sim time after the restart ($sim_time s) does not go on from $paused_at s"
+bodies_after="$(timeout 15 rostopic echo -n 1 /particle_sim/status/bodies | grep '^  name:')" ||
+  fail "no ~status after the restart"
+[ "$bodies_after" = "$bodies_before" ] || fail "the bodies changed: $bodies_before, then $bodies_after"
 tf_info="$(timeout 15 rostopic info /tf)" || fail "rostopic info /tf"
 contains "$(sed -n '/Subscribers:/,$p' <<<"$tf_info")" '/particle_sim' ||
   fail "the node's tf subscription is not registered again: $tf_info"

@@ -8,6 +8,7 @@
 #include <Eigen/Core>
 #include <chrono>
 #include <cstdint>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -19,8 +20,9 @@ namespace particle_sim
 {
 namespace ros_interface
 {
-/// A tf frame followed by a pin whose latest transform has not changed for this long [s of wall
-/// time] is taken as gone: the pin holds still and the node warns. Static frames never age.
+/// A tf frame followed by a pin or a sphere whose latest transform has not changed for this long
+/// [s of wall time] is taken as gone: the pin or sphere holds still and the node warns (throttled).
+/// Static frames never age.
 constexpr double kFramePinTimeout = 1.0;
 
 /// What follows tf frames: particles pinned to a frame (from ~pin_particle or the scene) and
@@ -58,15 +60,24 @@ public:
   void moveTargets(core::World& world, std::uint64_t step, std::uint64_t steps) const;
 
 private:
+  /// When a followed frame's transform last changed.
+  struct FrameAge
+  {
+    ros::Time stamp;                                                                   // of the latest transform seen
+    std::chrono::steady_clock::time_point updated = std::chrono::steady_clock::now();  // when it changed
+  };
   struct FramePin
   {
     std::string body;
     int index = 0;
     std::string frame;
     Eigen::Vector3d offset = Eigen::Vector3d::Zero();
-    ros::Time stamp;                                                                   // of the latest transform seen
-    std::chrono::steady_clock::time_point updated = std::chrono::steady_clock::now();  // when it changed
+    FrameAge age;
   };
+  /// Records the transform's `stamp` in `age`; false, with the reason in `error`, when a
+  /// non-static frame's transform has not changed for more than kFramePinTimeout.
+  static bool stillFresh(FrameAge& age, const ros::Time& stamp, std::chrono::steady_clock::time_point now,
+                         std::string& error);
   void updateFramePins(core::World& world);
   void updateFrameSpheres(core::World& world, const scene::SceneDef& scene);
 
@@ -74,7 +85,8 @@ private:
   std::unique_ptr<tf2_ros::Buffer> tf_buffer_;
   std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
   std::vector<FramePin> pins_;
-  std::vector<Eigen::Vector3d> start_, goal_;  // per pin, this tick
+  std::map<std::string, FrameAge> sphere_frames_;  // per sphere that follows a tf frame
+  std::vector<Eigen::Vector3d> start_, goal_;      // per pin, this tick
 };
 
 /// The scene's scripted frames at `stamp` (sim time) as transforms under `sim_frame`, for tf.
