@@ -7,10 +7,18 @@
 # It lies outside the package because rosrun never looks below a package's own build/ folder.
 
 PARTICLE_SIM_ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-PARTICLE_SIM_BUILD="$(realpath -m "${PARTICLE_SIM_BUILD:-$(dirname "$PARTICLE_SIM_ROOT")/$(basename "$PARTICLE_SIM_ROOT")_ws}")"
-PARTICLE_SIM_CMAKE_BUILD="$PARTICLE_SIM_BUILD/build"
-PARTICLE_SIM_DEVEL="$PARTICLE_SIM_BUILD/devel"
-PARTICLE_SIM_INSTALL="$PARTICLE_SIM_BUILD/install"
+
+# Sets the workspace folder and the folders inside it.
+use_workspace() {
+  PARTICLE_SIM_BUILD="$(realpath -m "$1")"
+  PARTICLE_SIM_CMAKE_BUILD="$PARTICLE_SIM_BUILD/build"
+  PARTICLE_SIM_DEVEL="$PARTICLE_SIM_BUILD/devel"
+  PARTICLE_SIM_INSTALL="$PARTICLE_SIM_BUILD/install"
+}
+use_workspace "${PARTICLE_SIM_BUILD:-$(dirname "$PARTICLE_SIM_ROOT")/$(basename "$PARTICLE_SIM_ROOT")_ws}"
+
+# Extra CMake arguments of the first configure of a workspace (scripts/test --sanitize sets them).
+PARTICLE_SIM_CMAKE_ARGS=()
 
 # Debian packages the package needs to build, run and test (ROS 1 from Debian's own archive).
 PARTICLE_SIM_PACKAGES=(
@@ -24,6 +32,9 @@ PARTICLE_SIM_PACKAGES=(
   python3-std-msgs python3-std-srvs python3-geometry-msgs python3-shape-msgs python3-visualization-msgs
   python3-rosgraph-msgs python3-diagnostic-msgs
 )
+
+# Only for scripts/fuzz (libFuzzer comes with clang; the package build and scripts/test use gcc).
+PARTICLE_SIM_FUZZ_PACKAGES=(clang-14 libclang-rt-14-dev)
 
 # ROS tools are Python programs that need Debian's python3, not a pyenv one found first on PATH.
 export PATH="/usr/bin:$PATH"
@@ -54,7 +65,8 @@ build_package() {
     log "configuring into $PARTICLE_SIM_BUILD"
     cmake -S "$PARTICLE_SIM_ROOT" -B "$PARTICLE_SIM_CMAKE_BUILD" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
       -DPYTHON_EXECUTABLE=/usr/bin/python3 -DPython3_EXECUTABLE=/usr/bin/python3 \
-      -DCATKIN_DEVEL_PREFIX="$PARTICLE_SIM_DEVEL" -DCMAKE_INSTALL_PREFIX="$PARTICLE_SIM_INSTALL" >/dev/null
+      -DCATKIN_DEVEL_PREFIX="$PARTICLE_SIM_DEVEL" -DCMAKE_INSTALL_PREFIX="$PARTICLE_SIM_INSTALL" \
+      "${PARTICLE_SIM_CMAKE_ARGS[@]}" >/dev/null
   fi
   log "building in $PARTICLE_SIM_BUILD"
   cmake --build "$PARTICLE_SIM_CMAKE_BUILD" -- -j"$(nproc)" "$@"

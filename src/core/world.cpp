@@ -15,7 +15,11 @@ Status validate(const WorldDef& def)
   if (Status s = checkRange("global_damping", def.global_damping, limits::kGlobalDamping); !s) return s;
   if (Status s = checkPositive("dt", def.dt); !s) return s;
   if (Status s = checkRange("dt", def.dt, 0.0, kMaxDt); !s) return s;
-  if (Status s = checkIntRange("max_particles_per_body", def.max_particles_per_body, 1, 100000000); !s) return s;
+  if (Status s = checkIntRange("max_particles_per_body", def.max_particles_per_body,
+                               static_cast<long long>(limits::kParticlesPerBody.min),
+                               static_cast<long long>(limits::kParticlesPerBody.max));
+      !s)
+    return s;
   if (Status s = validate(def.integrator); !s) return s;
   if (Status s = validate(def.ground); !s) return s;
   if (Status s = validate(def.air); !s) return s;
