@@ -404,7 +404,6 @@ int runObjMesh(const std::uint8_t* data, std::size_t size)
     def.vertices = mesh.vertices;
     def.triangles = mesh.triangles;
     def.uvs = mesh.uvs;
-    def.integrator = world_def.integrator;
     (void)world.addMeshCloth(def);
   }
   for (int i = 0; i < kMaxSteps; ++i)
