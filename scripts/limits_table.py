@@ -37,6 +37,8 @@ RANGE_TEXT = {
     "kContactThickness": "distance a body keeps from ground and spheres (`contact_thickness`)",
     "kParticlesPerBody": "particles of one body: the cap itself (`world.max_particles_per_body`, "
     "`~max_particles_per_body`)",
+    "kParticlesPerWorld": "particles of all bodies together: the cap itself (`world.max_particles_per_world`, "
+    "`~max_particles_per_world`)",
 }
 
 
@@ -86,6 +88,10 @@ def rows():
     default_cap = find(r"int\s+max_particles_per_body\s*=\s*([^;]+);", world_h, "max_particles_per_body").group(1)
     out.append(("particles of one body, unless the scene or `~max_particles_per_body` sets another cap", "1",
                 number(default_cap), "particles", f"`{world_h}` `WorldDef::max_particles_per_body`"))
+    world_cap = find(r"int\s+max_particles_per_world\s*=\s*([^;]+);", world_h, "max_particles_per_world").group(1)
+    out.append(("particles of all bodies of a world together (each body's full capacity), unless the scene or "
+                "`~max_particles_per_world` sets another cap", "1", number(world_cap), "particles",
+                f"`{world_h}` `WorldDef::max_particles_per_world`"))
 
     obj_h = "include/particle_sim/scene/obj_mesh.h"
     for name, what, unit in (("kMaxObjFileBytes", "OBJ mesh file size", "bytes"),

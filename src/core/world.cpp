@@ -20,6 +20,11 @@ Status validate(const WorldDef& def)
                                static_cast<long long>(limits::kParticlesPerBody.max));
       !s)
     return s;
+  if (Status s = checkIntRange("max_particles_per_world", def.max_particles_per_world,
+                               static_cast<long long>(limits::kParticlesPerWorld.min),
+                               static_cast<long long>(limits::kParticlesPerWorld.max));
+      !s)
+    return s;
   if (Status s = validate(def.integrator); !s) return s;
   if (Status s = validate(def.ground); !s) return s;
   if (Status s = validate(def.air); !s) return s;
@@ -127,6 +132,18 @@ Status World::addBody(std::unique_ptr<Body> body)
   if (Status s = validateBodyName(body->name()); !s) return s;
   if (findBody(body->name()))
     return Status::failure("name = " + quoteReceived(body->name()) + " is already taken: body names must be unique");
+  // The world's particle cap counts every body's full capacity (what it allocated).
+  long long held = 0;
+  for (const std::unique_ptr<Body>& other : bodies_)
+    held += other->particles().capacity();
+  const long long needed = body->particles().capacity();
+  if (held + needed > def_.max_particles_per_world)
+    return Status::failure(
+        "body " + quoteReceived(body->name()) + " needs " + std::to_string(needed) +
+        " particles and the world already holds " + std::to_string(held) + ": at most " +
+        std::to_string(def_.max_particles_per_world) + " particles in one world (max_particles_per_world, in [" +
+        std::to_string(static_cast<long long>(limits::kParticlesPerWorld.min)) + ", " +
+        std::to_string(static_cast<long long>(limits::kParticlesPerWorld.max)) + "]); remove a body first");
   bodies_.push_back(std::move(body));
   return Status::success();
 }

@@ -126,6 +126,30 @@ TEST(SceneFiles, RefusesOutOfRangeAndNonFiniteValues)
       "max_particles = 500 is out of range: must be in [1, 100]"));
 }
 
+TEST(SceneFiles, WorldParticleCapIsReadAndBoundsTheBodiesTogether)
+{
+  // Two pools of 2000 particles: within a cap of 4000, beyond one of 3999.
+  const std::string bodies =
+      "bodies:\n  - {name: a, kind: emitter, type: fountain, max_particles: 2000}\n"
+      "  - {name: b, kind: emitter, type: fountain, max_particles: 2000}\n";
+  for (int cap : {4000, 3999})
+  {
+    scene::SceneDef def;
+    ASSERT_TRUE(
+        scene::parseScene("world: {max_particles_per_world: " + std::to_string(cap) + "}\n" + bodies, "test.yaml", def)
+            .ok);
+    EXPECT_EQ(def.world.max_particles_per_world, cap);
+    std::unique_ptr<core::World> world;
+    const core::Status built = scene::buildWorld(def, world);
+    EXPECT_EQ(built.ok, cap == 4000) << built.message;
+    if (!built.ok)
+    {
+      EXPECT_TRUE(contains(built.message, "at most 3999 particles in one world"));
+    }
+  }
+  EXPECT_TRUE(contains(refusal("world:\n  max_particles_per_world: 0\n"), "max_particles_per_world = 0"));
+}
+
 TEST(SceneFiles, RefusesUnknownKindsTypesDuplicatesMissingKeysAndBadYaml)
 {
   EXPECT_TRUE(contains(refusal("bodies:\n  - {name: a, kind: blob}\n"), "kind = 'blob' is not a body kind"));

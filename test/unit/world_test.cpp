@@ -196,3 +196,38 @@ TEST(World, RefusesDuplicateNamesAndRemovesBodies)
   EXPECT_TRUE(world.removeBody("a").ok);
   EXPECT_EQ(world.findBody("a"), nullptr);
 }
+
+TEST(World, ParticleCapCountsEveryBodysCapacityAndRefusesWhatWouldPassIt)
+{
+  // Two 2000-particle pools fit a cap of 4500; a rope of 600 more does not (4600), one of 500 does
+  // (exactly 4500); after a removal the room is back.
+  WorldDef def;
+  def.max_particles_per_world = 4500;
+  World world(def);
+  EmitterDef pool;
+  pool.max_particles = 2000;
+  pool.name = "first";
+  ASSERT_TRUE(world.addEmitter(pool).ok);
+  pool.name = "second";
+  ASSERT_TRUE(world.addEmitter(pool).ok);
+  RopeDef rope;
+  rope.name = "long";
+  rope.particles = 600;
+  const Status refused = world.addRope(rope);
+  EXPECT_FALSE(refused.ok);
+  for (const char* part : {"'long'", "needs 600", "holds 4000", "at most 4500", "max_particles_per_world"})
+    EXPECT_NE(refused.message.find(part), std::string::npos) << part << " not in: " << refused.message;
+  EXPECT_EQ(world.findBody("long"), nullptr);
+  rope.particles = 500;
+  EXPECT_TRUE(world.addRope(rope).ok);
+  EXPECT_TRUE(world.removeBody("first").ok);
+  rope.name = "again";
+  rope.particles = 2000;
+  EXPECT_TRUE(world.addRope(rope).ok);
+
+  // The cap itself is range-checked, naming the field and the value.
+  def.max_particles_per_world = 0;
+  const Status bad = validate(def);
+  EXPECT_FALSE(bad.ok);
+  EXPECT_NE(bad.message.find("max_particles_per_world"), std::string::npos) << bad.message;
+}

@@ -31,6 +31,7 @@ constexpr Range kRealTimeFactor{0.0, 1000.0, "-"};     // 0 = as fast as possibl
 constexpr Range kPublishRate{0.1, 1000.0, "Hz"};
 constexpr Range kContactThickness{0.0, 1.0, "m"};      // distance a body keeps from ground and spheres
 constexpr Range kParticlesPerBody{1, 1e8, "particles"};  // the cap world.max_particles_per_body itself
+constexpr Range kParticlesPerWorld{1, 1e9, "particles"};  // the cap world.max_particles_per_world itself
 // clang-format on
 
 /// Longest body name [characters].

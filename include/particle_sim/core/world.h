@@ -29,6 +29,9 @@ struct WorldDef
   double dt = 0.001;            ///< [s] fixed physics step
   std::uint64_t seed = 1;       ///< default seed of bodies that do not set their own
   int max_particles_per_body = 100000;  ///< cap on any body's particle count
+  /// Cap on the particles of all bodies together (each body counts its full capacity: an
+  /// emitter's pool, a spring body's particles), so that spawning bodies cannot exhaust memory.
+  int max_particles_per_world = 2000000;
   /// Integrator settings of every spring body: each field a body definition does not set
   /// (BodyIntegratorDef) is this one, applied by addRope/addClothGrid/addMeshCloth/addJelly/addSpringNetwork.
   IntegratorDef integrator;

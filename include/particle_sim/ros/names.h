@@ -43,6 +43,7 @@ constexpr const char* kFrameOffsetParam = "frame_offset";
 constexpr const char* kPublishClockParam = "publish_clock";
 constexpr const char* kParticleSizeParam = "particle_size";
 constexpr const char* kMaxParticlesParam = "max_particles_per_body";
+constexpr const char* kMaxWorldParticlesParam = "max_particles_per_world";
 constexpr const char* kStatusPeriodParam = "status_period";
 constexpr const char* kColorByStrainParam = "color_by_strain";
 constexpr const char* kStrainColorMaxParam = "strain_color_max";

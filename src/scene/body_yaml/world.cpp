@@ -34,6 +34,7 @@ void readWorld(const YAML::Node& node, const std::string& source, SceneDef& scen
   reader.read("global_damping", world.global_damping);
   reader.read("seed", world.seed);
   reader.read("max_particles_per_body", world.max_particles_per_body);
+  reader.read("max_particles_per_world", world.max_particles_per_world);
 
   if (const YAML::Node ground = reader.child("ground"))
   {
@@ -107,6 +108,7 @@ void writeWorld(YAML::Node root, const SceneDef& scene)
   world["global_damping"] = w.global_damping;
   world["seed"] = w.seed;
   world["max_particles_per_body"] = w.max_particles_per_body;
+  world["max_particles_per_world"] = w.max_particles_per_world;
   writeIntegrator(world, w.integrator);
   YAML::Node ground;
   ground["enabled"] = w.ground.enabled;
