@@ -88,6 +88,7 @@ bool SimNode::initialize()
   }
   if (s.dt != 0.0) scene.world.dt = s.dt;
   if (s.max_particles_per_body != 0) scene.world.max_particles_per_body = s.max_particles_per_body;
+  if (s.max_particles_per_world != 0) scene.world.max_particles_per_world = s.max_particles_per_world;
   if (core::Status status = scene::buildWorld(scene, world_); !status) return refuse("~scene: " + status.message);
   // Scene pins that follow frames other than the scene's scripted ones follow them through tf.
   for (const scene::FramePinDef& pin : scene.frame_pins)
@@ -242,12 +243,12 @@ void SimNode::run()
         settings_.real_time_factor > 0.0 ? sim_per_tick / settings_.real_time_factor : 0.0);
     const auto paused_period = std::chrono::duration<double>(1.0 / settings_.rate);
 
-    // Sleep until the next tick; if we fell more than a tick behind, do not try to catch up.
+    // Wait for the next tick; if we fell more than a tick behind, do not try to catch up.
     next_tick += std::chrono::duration_cast<SteadyClock::duration>(paused_ ? paused_period : wall_period);
     const auto now = SteadyClock::now();
     if (next_tick < now - std::chrono::duration_cast<SteadyClock::duration>(paused_period)) next_tick = now;
     if (step_job_.active) next_tick = now;  // a ~step in slices: the next slice at once
-    if (next_tick > now) std::this_thread::sleep_until(next_tick);
+    waitForTick(next_tick);
   }
 
   // Let go of every ROS handle here, in the loop's thread, while ROS still exists: in a nodelet
@@ -258,32 +259,62 @@ void SimNode::run()
   callback_queue_.clear();
 }
 
+void SimNode::waitForTick(std::chrono::steady_clock::time_point next_tick)
+{
+  // The wait serves services and dynamic_reconfigure as they arrive, so that a request waits for
+  // the tick in progress at most, never for the idle rest of the period. They still run between two
+  // ticks, in this thread, as before. Each wait lasts at most 50 ms, so that a stop (a signal, ROS
+  // shutting down) is seen at once even at a slow ~rate.
+  constexpr double kLongestWait = 0.05;  // [s]
+  for (auto now = SteadyClock::now(); now < next_tick && ros::ok() && !stop_requested_; now = SteadyClock::now())
+    callback_queue_.callAvailable(
+        ros::WallDuration(std::min(kLongestWait, std::chrono::duration<double>(next_tick - now).count())));
+}
+
 void SimNode::tick()
 {
   if (step_job_.active)
     runStepSlice();
   else if (!paused_)
-    stepPhysics(substeps_);
+    stepPhysics(substeps_, ServeRequests::BetweenSteps);
   publish();
   if (step_job_.active && step_job_.remaining == 0) finishStepJob();
 }
 
-void SimNode::stepPhysics(std::uint64_t steps)
+std::uint64_t SimNode::stepPhysics(std::uint64_t steps, ServeRequests serve)
 {
   frame_followers_.beginTick(*world_, scene_);
   const auto start = SteadyClock::now();
-  for (std::uint64_t i = 0; i < steps; ++i)
+  double serving = 0.0;  // [s] spent on requests between steps, not on physics
+  std::uint64_t ran = 0;
+  std::uint64_t segment = 0;  // the step the frame targets were last computed at
+  while (ran < steps)
   {
-    frame_followers_.moveTargets(*world_, i, steps);
+    // tf-followed pins move in equal parts towards this tick's frame pose.
+    frame_followers_.moveTargets(*world_, ran - segment, steps - segment);
     // The step every front-end shares: scripted frames where they are at the end of this step
     // (known exactly), then the world's step.
     scene::stepScene(scene_, *world_);
+    ++ran;
+    // A request that arrived during this step is served before the next one, so that it waits for
+    // one step at most rather than for the rest of the tick. A pause takes effect at once; other
+    // requests may have changed pins and bodies, so the frame targets are computed again for the
+    // steps left.
+    if (serve == ServeRequests::BetweenSteps && ran < steps && !callback_queue_.isEmpty())
+    {
+      const auto served = SteadyClock::now();
+      callback_queue_.callAvailable();
+      serving += secondsSince(served);
+      if (paused_) break;
+      frame_followers_.beginTick(*world_, scene_);
+      segment = ran;
+    }
   }
-  const double seconds = secondsSince(start);
+  const double seconds = secondsSince(start) - serving;
   for (Window* window : {&status_window_, &diagnostics_window_})
   {
     window->step_seconds += seconds;
-    window->steps += steps;
+    window->steps += ran;
   }
 
   // A body that froze is reported once; other stability events (substeps added, blow-ups rolled
@@ -315,6 +346,7 @@ void SimNode::stepPhysics(std::uint64_t steps)
       if (!choice.empty()) ROS_INFO_NAMED("stability", "body '%s' auto: %s", body->name().c_str(), choice.c_str());
     }
   }
+  return ran;
 }
 
 void SimNode::publish()
@@ -643,7 +675,7 @@ void SimNode::runStepSlice()
   // come between every two slices, so a long ~step is seen tick by tick as if running unpaused
   // as fast as possible (and how many ticks it takes does not depend on the machine's speed).
   const std::uint64_t chunk = std::min(static_cast<std::uint64_t>(substeps_), step_job_.remaining);
-  stepPhysics(chunk);
+  stepPhysics(chunk, ServeRequests::AfterTick);
   step_job_.remaining -= chunk;
 }
 

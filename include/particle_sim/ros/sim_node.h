@@ -74,8 +74,8 @@ public:
   /// Reads parameters and loads the scene; false (after logging why) when they are unusable.
   bool initialize();
 
-  /// Runs until ROS shuts down or stop() is called: serve callbacks, step, publish, sleep until the
-  /// next tick.
+  /// Runs until ROS shuts down or stop() is called: serve callbacks, step, publish, wait for the
+  /// next tick (serving callbacks as they arrive).
   void run();
   /// Makes run() return after its current tick (thread-safe).
   void stop() { stop_requested_ = true; }
@@ -83,6 +83,8 @@ public:
 private:
   // One tick: `substeps_` physics steps unless paused (or a slice of a running ~step), then publish.
   void tick();
+  // Until `next_tick` (steady clock): serves our callback queue as requests arrive.
+  void waitForTick(std::chrono::steady_clock::time_point next_tick);
   // Publishers, services, dynamic_reconfigure, diagnostics and the tf listener: created once by
   // initialize() and released at the end of run(), in the loop's thread.
   void advertiseInterfaces();
@@ -93,7 +95,16 @@ private:
   void runStepSlice();
   void finishStepJob();
   void deliverStepAnswer(const Step::Response& answer);
-  void stepPhysics(std::uint64_t steps);
+  // When requests are served during a tick: only after it (its steps run whatever arrives), or
+  // also between two of its steps (a pause among them ends the tick early).
+  enum class ServeRequests
+  {
+    AfterTick,
+    BetweenSteps
+  };
+  // Runs `steps` physics steps (fewer when a pause served between them ends the tick); returns how
+  // many ran.
+  std::uint64_t stepPhysics(std::uint64_t steps, ServeRequests serve);
   void publish();
   void printStatus();
 
