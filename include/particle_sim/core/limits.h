@@ -31,6 +31,11 @@ constexpr Range kRealTimeFactor{0.0, 1000.0, "-"};     // 0 = as fast as possibl
 constexpr Range kPublishRate{0.1, 1000.0, "Hz"};
 constexpr Range kContactThickness{0.0, 1.0, "m"};      // distance a body keeps from ground and spheres
 constexpr Range kParticlesPerBody{1, 1e8, "particles"};  // the cap world.max_particles_per_body itself
+constexpr Range kDampingRatio{0.0, 10.0, "-"};         // ζ, fraction of critical damping (cloth and rope materials)
+constexpr Range kArealDensity{0.001, 10.0, "kg/m^2"};  // cloth material: mass per unit area
+constexpr Range kTensileStiffness{1.0, 1e7, "N/m"};    // cloth material: Young's modulus × thickness
+constexpr Range kShearStiffness{0.01, 1e6, "N/m"};     // cloth material: shear modulus × thickness
+constexpr Range kBendingRigidity{0.0, 1.0, "N·m"};     // cloth material: B, bending moment per width per curvature
 // clang-format on
 
 /// Longest body name [characters].
