@@ -31,6 +31,10 @@ constexpr Range kRealTimeFactor{0.0, 1000.0, "-"};     // 0 = as fast as possibl
 constexpr Range kPublishRate{0.1, 1000.0, "Hz"};
 constexpr Range kContactThickness{0.0, 1.0, "m"};      // distance a body keeps from ground and spheres
 constexpr Range kParticlesPerBody{1, 1e8, "particles"};  // the cap world.max_particles_per_body itself
+constexpr Range kLinearDensity{1e-6, 1e4, "kg/m"};    // rope mass per length μ (sewing thread to heavy chain)
+constexpr Range kAxialStiffness{1e-3, 1e12, "N"};     // rope EA (elastic thread to bridge cable)
+constexpr Range kBendingStiffness{0.0, 1e6, "N·m²"};  // rope EI (0 = a chain)
+constexpr Range kDampingRatio{0.0, 10.0, "-"};
 // clang-format on
 
 /// Longest body name [characters].
