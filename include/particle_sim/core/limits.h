@@ -36,6 +36,9 @@ constexpr Range kArealDensity{0.001, 10.0, "kg/m^2"};  // cloth material: mass p
 constexpr Range kTensileStiffness{1.0, 1e7, "N/m"};    // cloth material: Young's modulus × thickness
 constexpr Range kShearStiffness{0.01, 1e6, "N/m"};     // cloth material: shear modulus × thickness
 constexpr Range kBendingRigidity{0.0, 1.0, "N·m"};     // cloth material: B, bending moment per width per curvature
+constexpr Range kLinearDensity{1e-6, 1e4, "kg/m"};    // rope mass per length μ (sewing thread to heavy chain)
+constexpr Range kAxialStiffness{1e-3, 1e12, "N"};     // rope EA (elastic thread to bridge cable)
+constexpr Range kBendingStiffness{0.0, 1e6, "N·m²"};  // rope EI (0 = a chain)
 // clang-format on
 
 /// Longest body name [characters].
