@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "particle_sim/core/limits.h"
+#include "particle_sim/ros/material_conversions.h"
 #include "particle_sim/ros/message_text.h"
 #include "particle_sim/ros/names.h"
 
@@ -42,6 +43,8 @@ NodeSettings readNodeSettings(const ros::NodeHandle& private_node)
   private_node.param(names::kStrainColorMaxParam, s.strain_color_max, s.strain_color_max);
   private_node.param(names::kDiagnosticPeriodParam, s.diagnostic_period, s.diagnostic_period);
   private_node.param(names::kDiagnosticMaxStrainParam, s.diagnostic_max_strain, s.diagnostic_max_strain);
+  private_node.param(names::kRopeMaterialParam, s.rope_material, s.rope_material);
+  private_node.param(names::kClothMaterialParam, s.cloth_material, s.cloth_material);
   return s;
 }
 
@@ -71,6 +74,8 @@ core::Status validate(const NodeSettings& s)
     return Status::failure("~diagnostic_period = " + formatReceived(s.diagnostic_period) + " must be > 0 s");
   if (!(s.diagnostic_max_strain > 0.0 && std::isfinite(s.diagnostic_max_strain)))
     return Status::failure("~diagnostic_max_strain = " + formatReceived(s.diagnostic_max_strain) + " must be > 0");
+  if (Status status = checkRopePresetName("~rope_material", s.rope_material); !status) return status;
+  if (Status status = checkClothPresetName("~cloth_material", s.cloth_material); !status) return status;
   return Status::success();
 }
 

@@ -2,6 +2,7 @@
 
 #include <utility>
 
+#include "particle_sim/ros/material_conversions.h"
 #include "particle_sim/ros/message_text.h"
 #include "particle_sim/ros/spring_constants.h"
 
@@ -62,6 +63,8 @@ SimConfig ReconfigureHandler::currentConfig() const
   config.real_time_factor = settings_.real_time_factor;
   config.rate = settings_.rate;
   config.integrator = core::toString(default_integrator_.type);
+  config.rope_material = settings_.rope_material;
+  config.cloth_material = settings_.cloth_material;
   // Show the first spring body, if there is one, so that rqt has something to edit.
   if (config.body.empty() || !world_.findSpringBody(config.body))
   {
@@ -156,6 +159,24 @@ void ReconfigureHandler::reconfigure(SimConfig& config, std::uint32_t level)
                                              " springs (or is not a rope, cloth, jelly or spring network)"));
         config.body = config_.body, config.spring_class = config_.spring_class;
       }
+    }
+  }
+  if (level & 16u)
+  {
+    // Default materials of spawned ropes and cloth: a preset's name or empty.
+    if (core::Status s = checkRopePresetName("rope_material", config.rope_material); s)
+      settings_.rope_material = config.rope_material;
+    else
+    {
+      refuse("rope_material", s);
+      config.rope_material = config_.rope_material;
+    }
+    if (core::Status s = checkClothPresetName("cloth_material", config.cloth_material); s)
+      settings_.cloth_material = config.cloth_material;
+    else
+    {
+      refuse("cloth_material", s);
+      config.cloth_material = config_.cloth_material;
     }
   }
   config_ = config;

@@ -3,6 +3,7 @@
 #include <limits>
 
 #include "particle_sim/core/world.h"
+#include "particle_sim/ros/material_conversions.h"
 #include "particle_sim/ros/message_text.h"
 
 namespace particle_sim
@@ -78,27 +79,37 @@ core::Status toEmitterDef(const SpawnEmitter::Request& req, std::uint64_t world_
   return core::Status::success();
 }
 
-core::Status toRopeDef(const SpawnRope::Request& req, const core::IntegratorDef& default_integrator, core::RopeDef& def)
+core::Status toRopeDef(const SpawnRope::Request& req, const core::IntegratorDef& default_integrator, core::RopeDef& def,
+                       const std::string& default_material)
 {
   def.name = req.name;
+  if (core::Status s = ropeMaterialOf(req, default_material, def.material); !s) return s;
   if (core::Status s = readCountOrDefault("particles", req.particles, def.particles); !s) return s;
   def.start = toEigen(req.start);
   def.end = toEigen(req.end);
-  if (req.mass != 0.0) def.mass = req.mass;
   def.rest_length = req.rest_length;
-  def.stretch_stiffness = req.stretch_stiffness;
-  def.stretch_damping = req.stretch_damping;
-  def.bend_stiffness = req.bend_stiffness;
-  def.bend_damping = req.bend_damping;
+  // A material gives the mass and constants (the request has none: ropeMaterialOf).
+  if (!def.material)
+  {
+    if (req.mass != 0.0) def.mass = req.mass;
+    def.stretch_stiffness = req.stretch_stiffness;
+    def.stretch_damping = req.stretch_damping;
+    def.bend_stiffness = req.bend_stiffness;
+    def.bend_damping = req.bend_damping;
+  }
   def.pins.assign(req.pins.begin(), req.pins.end());
   def.integrator = core::settingEveryField(default_integrator);
   return parseIntegratorField(req.integrator, def.integrator);
 }
 
 core::Status toClothGridDef(const SpawnCloth::Request& req, const core::IntegratorDef& default_integrator,
-                            core::ClothGridDef& def)
+                            core::ClothGridDef& def, const std::string& default_material)
 {
   def.name = req.name;
+  if (core::Status s = clothMaterialOf(req, default_material, def.material); !s) return s;
+  // The model: the request's; empty = springs, or Baraff–Witkin for a material (the model that
+  // carries its bending rigidity; the spring model refuses one > 0).
+  if (req.model.empty() && def.material) def.model = core::ClothModel::BaraffWitkin;
   if (!req.model.empty() && !core::parseClothModel(req.model, def.model))
     return core::Status::failure("model = " + quoteName(req.model) +
                                  " is not a cloth model; allowed: springs, baraff_witkin");
@@ -109,10 +120,14 @@ core::Status toClothGridDef(const SpawnCloth::Request& req, const core::Integrat
   def.edge_v = toEigen(req.edge_v);
   if (core::Status s = readCountOrDefault("nu", req.nu, def.nu); !s) return s;
   if (core::Status s = readCountOrDefault("nv", req.nv, def.nv); !s) return s;
-  if (req.mass != 0.0) def.mass = req.mass;
-  def.stretch = {req.stretch_stiffness, req.stretch_damping};
-  def.shear = {req.shear_stiffness, req.shear_damping};
-  def.bend = {req.bend_stiffness, req.bend_damping};
+  // A material gives the mass and constants (the request has none: clothMaterialOf).
+  if (!def.material)
+  {
+    if (req.mass != 0.0) def.mass = req.mass;
+    def.stretch = {req.stretch_stiffness, req.stretch_damping};
+    def.shear = {req.shear_stiffness, req.shear_damping};
+    def.bend = {req.bend_stiffness, req.bend_damping};
+  }
   def.pins.assign(req.pins.begin(), req.pins.end());
   def.named_pins = req.named_pins;
   def.strain_limit.max_strain = req.max_strain;

@@ -7,7 +7,10 @@
 #include <cmath>
 #include <sstream>
 #include <thread>
+#include <type_traits>
+#include <variant>
 
+#include "particle_sim/ros/material_conversions.h"
 #include "particle_sim/ros/mesh_builder.h"
 #include "particle_sim/ros/message_text.h"
 #include "particle_sim/ros/names.h"
@@ -90,6 +93,20 @@ bool SimNode::initialize()
   if (s.max_particles_per_body != 0) scene.world.max_particles_per_body = s.max_particles_per_body;
   if (s.max_particles_per_world != 0) scene.world.max_particles_per_world = s.max_particles_per_world;
   if (core::Status status = scene::buildWorld(scene, world_); !status) return refuse("~scene: " + status.message);
+  // ~status names the material of the scene's ropes and cloth built of one.
+  for (const scene::BodyDef& body : scene.bodies)
+  {
+    std::visit(
+        [this](const auto& def) {
+          using Def = std::decay_t<decltype(def)>;
+          if constexpr (std::is_same_v<Def, core::RopeDef> || std::is_same_v<Def, core::ClothGridDef> ||
+                        std::is_same_v<Def, core::MeshClothDef>)
+          {
+            if (def.material) body_materials_[def.name] = def.material->name;
+          }
+        },
+        body);
+  }
   // Scene pins that follow frames other than the scene's scripted ones follow them through tf.
   for (const scene::FramePinDef& pin : scene.frame_pins)
   {
@@ -396,7 +413,7 @@ void SimNode::publish()
   // touched again, so that a nodelet in the same process gets them without a copy.
   if (status_pub_.getNumSubscribers() > 0)
     status_pub_.publish(boost::make_shared<SimStatus>(
-        buildSimStatus(*world_, stamp, settings_.frame_id, paused_, settings_.real_time_factor)));
+        buildSimStatus(*world_, stamp, settings_.frame_id, paused_, settings_.real_time_factor, body_materials_)));
 
   // Markers are only built when someone listens.
   if (markers_pub_.getNumSubscribers() == 0) return;
@@ -435,11 +452,15 @@ bool SimNode::spawnRope(SpawnRope::Request& req, SpawnRope::Response& res)
 {
   // The request becomes the same RopeDef a scene file builds, checked by the same validate().
   core::RopeDef def;
-  if (core::Status s = toRopeDef(req, default_integrator_, def); !s) return answer(res, s);
+  if (core::Status s = toRopeDef(req, default_integrator_, def, settings_.rope_material); !s) return answer(res, s);
   core::Status status = inRequestTerms(SpawnRequest::Rope, world_->addRope(def));
   if (status)
+  {
     status.message = "spawned rope " + quoteName(def.name) + " with " + std::to_string(def.particles) + " particles, " +
-                     core::toString(world_->findSpringBody(def.name)->integrator().type);
+                     core::toString(world_->findSpringBody(def.name)->integrator().type) +
+                     (def.material ? ", " + materialText(def.material->name) : "");
+    if (def.material) body_materials_[def.name] = def.material->name;
+  }
   else
     ROS_WARN_NAMED("services", "spawn_rope refused: %s", toMessageText(status.message).c_str());
   return answer(res, status);
@@ -513,11 +534,16 @@ bool SimNode::setSpringConstants(SetSpringConstants::Request& req, SetSpringCons
 bool SimNode::spawnCloth(SpawnCloth::Request& req, SpawnCloth::Response& res)
 {
   core::ClothGridDef def;
-  if (core::Status s = toClothGridDef(req, default_integrator_, def); !s) return answer(res, s);
+  if (core::Status s = toClothGridDef(req, default_integrator_, def, settings_.cloth_material); !s)
+    return answer(res, s);
   core::Status status = inRequestTerms(SpawnRequest::Cloth, world_->addClothGrid(def));
   if (status)
+  {
     status.message = "spawned " + std::string(core::toString(def.model)) + " cloth " + quoteName(def.name) + " of " +
-                     std::to_string(def.nu) + " x " + std::to_string(def.nv) + " particles";
+                     std::to_string(def.nu) + " x " + std::to_string(def.nv) + " particles" +
+                     (def.material ? ", " + materialText(def.material->name) : "");
+    if (def.material) body_materials_[def.name] = def.material->name;
+  }
   else
     ROS_WARN_NAMED("services", "spawn_cloth refused: %s", toMessageText(status.message).c_str());
   return answer(res, status);
@@ -577,6 +603,7 @@ void SimNode::forgetBody(const std::string& name)
   // Everything else the node kept about it.
   reported_frozen_.erase(name);
   reported_events_.erase(name);
+  body_materials_.erase(name);
   reported_auto_.erase(name);
   frame_followers_.forgetBody(name);
   // dynamic_reconfigure shows another body (or none) instead of the removed one.

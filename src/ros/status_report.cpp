@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <numeric>
 #include <sstream>
 #include <vector>
 
@@ -33,7 +34,7 @@ core::IntegratorType integratorThatRan(const core::SpringNetworkBody& body)
 }
 
 SimStatus buildSimStatus(const core::World& world, const ros::Time& stamp, const std::string& frame_id, bool paused,
-                         double real_time_factor)
+                         double real_time_factor, const BodyMaterials& materials)
 {
   SimStatus status;
   status.header.stamp = stamp;
@@ -59,12 +60,15 @@ SimStatus buildSimStatus(const core::World& world, const ros::Time& stamp, const
       const auto& emitter = static_cast<const core::EmitterBody&>(*body);
       b.type = "emitter";
       b.model = core::toString(emitter.definition().type);
+      b.mass = emitter.definition().particle_mass * static_cast<double>(b.particle_count);
     }
     else if (body->kind() == core::BodyKind::SpringNetwork)
     {
       const auto& spring_body = static_cast<const core::SpringNetworkBody&>(*body);
       b.type = core::toString(spring_body.shape());
       b.model = core::toString(spring_body.clothModel());
+      const std::vector<double>& masses = spring_body.definition().masses;
+      b.mass = std::accumulate(masses.begin(), masses.end(), 0.0);
       b.integrator = core::toString(spring_body.integrator().type);
       b.last_integrator = core::toString(integratorThatRan(spring_body));
       b.auto_choice = spring_body.autoChoice();
@@ -77,6 +81,8 @@ SimStatus buildSimStatus(const core::World& world, const ros::Time& stamp, const
       b.solver_residual = spring_body.lastSolve().relative_residual;
       b.frozen = spring_body.frozen();
       b.frozen_reason = spring_body.frozenReason();
+      if (const auto material = materials.find(b.name); material != materials.end())
+        b.material = material->second.empty() ? "by value" : material->second;
     }
     status.bodies.push_back(std::move(b));
   }

@@ -148,6 +148,27 @@ void fields(IO& io, SpawnEmitter::Request& r)
 }
 
 template <class IO>
+void fields(IO& io, RopeMaterial& m)
+{
+  io.text(m.preset);
+  io.real(m.linear_density);
+  io.real(m.axial_stiffness);
+  io.real(m.bending_stiffness);
+  io.real(m.damping_ratio);
+}
+
+template <class IO>
+void fields(IO& io, ClothMaterial& m)
+{
+  io.text(m.preset);
+  io.real(m.areal_density);
+  io.real(m.tensile_stiffness);
+  io.real(m.shear_stiffness);
+  io.real(m.bending_rigidity);
+  io.real(m.damping_ratio);
+}
+
+template <class IO>
 void fields(IO& io, SpawnRope::Request& r)
 {
   io.text(r.name);
@@ -162,6 +183,7 @@ void fields(IO& io, SpawnRope::Request& r)
   io.real(r.bend_damping);
   list(io, r.pins, [&io](std::int32_t& pin) { io.integer(pin); });
   io.text(r.integrator);
+  fields(io, r.material);
 }
 
 template <class IO>
@@ -187,6 +209,7 @@ void fields(IO& io, SpawnCloth::Request& r)
   io.real(r.b_v);
   io.real(r.max_strain);
   io.text(r.integrator);
+  fields(io, r.material);
 }
 
 template <class IO>
@@ -250,6 +273,8 @@ void fields(IO& io, ros_interface::NodeSettings& s)
   io.real(s.strain_color_max);
   io.real(s.diagnostic_period);
   io.real(s.diagnostic_max_strain);
+  io.text(s.rope_material);
+  io.text(s.cloth_material);
 }
 
 template <class IO>
@@ -302,7 +327,7 @@ void capWork(core::IntegratorDef& integrator)
 }
 
 RequestAnswer serve(const Request& r, const scene::SceneDef& scene, const core::IntegratorDef& default_integrator,
-                    core::World& world)
+                    const ros_interface::NodeSettings& settings, core::World& world)
 {
   using namespace ros_interface;
   auto answer = [](const char* service, const core::Status& status) {
@@ -318,12 +343,14 @@ RequestAnswer serve(const Request& r, const scene::SceneDef& scene, const core::
     }
     case Request::Service::SpawnRope: {
       core::RopeDef def;
-      if (core::Status s = toRopeDef(r.spawn_rope, default_integrator, def); !s) return answer("spawn_rope", s);
+      if (core::Status s = toRopeDef(r.spawn_rope, default_integrator, def, settings.rope_material); !s)
+        return answer("spawn_rope", s);
       return answer("spawn_rope", inRequestTerms(SpawnRequest::Rope, world.addRope(def)));
     }
     case Request::Service::SpawnCloth: {
       core::ClothGridDef def;
-      if (core::Status s = toClothGridDef(r.spawn_cloth, default_integrator, def); !s) return answer("spawn_cloth", s);
+      if (core::Status s = toClothGridDef(r.spawn_cloth, default_integrator, def, settings.cloth_material); !s)
+        return answer("spawn_cloth", s);
       return answer("spawn_cloth", inRequestTerms(SpawnRequest::Cloth, world.addClothGrid(def)));
     }
     case Request::Service::SpawnJelly: {
@@ -444,7 +471,7 @@ std::vector<RequestAnswer> answerRequests(const std::uint8_t* data, std::size_t 
   {
     Request request;
     fields(decoder, request);
-    answers.push_back(serve(request, scene, default_integrator, *world));
+    answers.push_back(serve(request, scene, default_integrator, settings, *world));
   }
   return answers;
 }
@@ -551,6 +578,27 @@ std::vector<RequestSeed> requestSeeds()
   Request remove = request(Service::RemoveBody);
   remove.body = "line";
 
+  // Materials (README "Services", Materials): a rope and a cloth by preset, a preset with a value
+  // replaced, and a cloth by value.
+  Request nylon = request(Service::SpawnRope);
+  nylon.spawn_rope.name = "nylon";
+  nylon.spawn_rope.start = point(0, 0, 2);
+  nylon.spawn_rope.end = point(2, 0, 2);
+  nylon.spawn_rope.pins = {0};
+  nylon.spawn_rope.material.preset = "nylon_rope";
+  Request heavy_nylon = nylon;
+  heavy_nylon.spawn_rope.name = "heavy_nylon";
+  heavy_nylon.spawn_rope.material.linear_density = 0.5;
+  Request cotton = cloth;
+  cotton.spawn_cloth.name = "cotton";
+  cotton.spawn_cloth.material.preset = "cotton";
+  Request towel = bw_cloth;
+  towel.spawn_cloth.name = "towel";
+  towel.spawn_cloth.material.areal_density = 0.4;
+  towel.spawn_cloth.material.tensile_stiffness = 8000;
+  towel.spawn_cloth.material.shear_stiffness = 40;
+  towel.spawn_cloth.material.bending_rigidity = 1e-4;
+
   return {{"readme_session", {jet, bad, step, line, pin_point, pin_frame, springs, step}},
           {"spawn_emitter", {jet, step}},
           {"spawn_rope", {line, step}},
@@ -559,7 +607,8 @@ std::vector<RequestSeed> requestSeeds()
           {"spawn_jelly", {jelly, step}},
           {"set_wind", {cloth, wind, step}},
           {"pin_unpin", {line, pin_point, step, unpin, step}},
-          {"remove_reset", {line, jet, step, remove, request(Service::Reset), step}}};
+          {"remove_reset", {line, jet, step, remove, request(Service::Reset), step}},
+          {"spawn_materials", {nylon, heavy_nylon, cotton, towel, step}}};
 }
 
 const std::vector<Target>& targets()

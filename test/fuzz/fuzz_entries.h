@@ -105,7 +105,8 @@ struct RequestSeed
   std::vector<Request> requests;
 };
 /// The README's service calls (section "Services") as one session, each spawn request with the
-/// .srv defaults, and each other service once: the seed corpus of the requests target
+/// .srv defaults, each other service once, and ropes and cloth of materials (a preset, a preset
+/// with a value replaced, by value): the seed corpus of the requests target
 /// (scripts/fuzz writes them with encodeRequests and the default NodeSettings).
 std::vector<RequestSeed> requestSeeds();
 

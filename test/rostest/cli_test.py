@@ -101,6 +101,13 @@ class Cli(unittest.TestCase):
         self.good("spawn_rope", "{name: cli_rope, particles: 5, start: {x: 0, y: 2, z: 2}, end: {x: 1, y: 2, z: 2}, "
                   "mass: 0.1, stretch_stiffness: 300, stretch_damping: 0.1, pins: [0]}")
         self.bad("spawn_rope", "{name: bad_rope, particles: 1, end: {x: 1}}", "particles")
+        # A material as a user types it (README "Services", Materials), and one that clashes.
+        self.good("spawn_rope", "{name: cli_nylon, start: {x: 0, y: 3, z: 2}, end: {x: 1, y: 3, z: 2}, pins: [0], "
+                  "material: {preset: nylon_rope}}")
+        self.bad("spawn_rope", "{name: bad_nylon, mass: 0.3, material: {preset: nylon_rope}}",
+                 "material.preset = 'nylon_rope' and mass = 0.3 kg are both set")
+        self.bad("spawn_cloth", "{name: bad_towel, edge_u: {x: 0.5}, edge_v: {y: 0.5}, material: {preset: towel}}",
+                 "material.preset = 'towel' is not a cloth material preset; allowed: ")
         self.good("spawn_cloth", "{name: cli_cloth, origin: {x: 0, y: -2, z: 2}, edge_u: {x: 0.5}, edge_v: {y: 0.5}, "
                   "nu: 4, nv: 4, mass: 0.1, stretch_stiffness: 300, named_pins: [corner_00]}")
         self.bad("spawn_cloth", "{name: bad_cloth, edge_u: {x: 0.5}, edge_v: {y: 0.5}, nu: 1, nv: 4}",

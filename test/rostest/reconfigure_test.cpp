@@ -10,6 +10,8 @@
 #include "particle_sim/SetSpringConstants.h"
 #include "particle_sim/SpawnCloth.h"
 #include "particle_sim/SpawnRope.h"
+#include "particle_sim/core/materials/cloth_material.h"
+#include "particle_sim/core/materials/rope_material.h"
 #include "sim_probe.h"
 
 using particle_sim_test::call;
@@ -190,6 +192,81 @@ TEST_F(ReconfigureTest, BaraffWitkinClothShowsAndTakesItsConditionConstants)
   probe_.reconfigure({}, {{"spring_class", "stretch"}});
   answered = probe_.reconfigure({}, {{"spring_class", "shear"}});
   EXPECT_DOUBLE_EQ(answered.doubles.at("stiffness"), 80.0);
+}
+
+// Materials in physical units (issue 17): a rope and a cloth spawned by preset weigh μ·L and
+// ρ_A·area in ~status; ~cloth_material (reconfigure.test) and rope_material set live are the
+// presets of requests without material or constants; unknown presets are refused.
+TEST_F(ReconfigureTest, MaterialPresetsGiveTheMassAndTheDefaultMaterials)
+{
+  // The presets' values (the core's table): nylon_rope μ [kg/m], cotton ρ_A [kg/m²].
+  ASSERT_TRUE(particle_sim::core::findRopePreset("nylon_rope"));
+  ASSERT_TRUE(particle_sim::core::findClothPreset("cotton"));
+  const double nylon_rope_density = particle_sim::core::findRopePreset("nylon_rope")->linear_density;
+  const double cotton_density = particle_sim::core::findClothPreset("cotton")->areal_density;
+
+  // A rope by preset, 1.5 m long: μ·L.
+  particle_sim::SpawnRope::Request rope;
+  rope.name = "nylon";
+  rope.particles = 16;
+  rope.start.z = 1.5;
+  rope.end.x = 1.5;
+  rope.end.z = 1.5;
+  rope.pins = {0};
+  rope.material.preset = "nylon_rope";
+  auto spawned = call<particle_sim::SpawnRope>("spawn_rope", rope);
+  ASSERT_TRUE(spawned.success) << spawned.message;
+  EXPECT_NE(spawned.message.find("material 'nylon_rope'"), std::string::npos) << spawned.message;
+  ASSERT_TRUE(waitForWall([&] { return !probe_.body("nylon").name.empty(); }));
+  EXPECT_NEAR(probe_.body("nylon").mass, nylon_rope_density * 1.5, 1e-12 * nylon_rope_density);
+  EXPECT_EQ(probe_.body("nylon").material, "nylon_rope");
+
+  // With a spring constant too: refused, naming both.
+  rope.name = "both";
+  rope.stretch_stiffness = 300.0;
+  spawned = call<particle_sim::SpawnRope>("spawn_rope", rope);
+  EXPECT_FALSE(spawned.success);
+  EXPECT_EQ(spawned.message.rfind("material.preset = 'nylon_rope' and stretch_stiffness = 300 N/m are both set", 0), 0u)
+      << spawned.message;
+
+  // The cloth preset of ~cloth_material (reconfigure.test), shown by dynamic_reconfigure, is what a
+  // cloth without material or constants gets: 0.6 m × 0.4 m of cotton.
+  EXPECT_EQ(probe_.config().strs.at("cloth_material"), "cotton");
+  particle_sim::SpawnCloth::Request cloth;
+  cloth.name = "sheet";
+  cloth.origin.z = 1.0;
+  cloth.edge_u.x = 0.6;
+  cloth.edge_v.y = 0.4;
+  cloth.nu = 7;
+  cloth.nv = 5;
+  cloth.named_pins = {"edge_u0"};
+  const auto cloth_spawned = call<particle_sim::SpawnCloth>("spawn_cloth", cloth);
+  ASSERT_TRUE(cloth_spawned.success) << cloth_spawned.message;
+  EXPECT_NE(cloth_spawned.message.find("material 'cotton'"), std::string::npos) << cloth_spawned.message;
+  ASSERT_TRUE(waitForWall([&] { return !probe_.body("sheet").name.empty(); }));
+  EXPECT_NEAR(probe_.body("sheet").mass, cotton_density * 0.24, 1e-12 * cotton_density);
+  EXPECT_EQ(probe_.body("sheet").material, "cotton");
+  EXPECT_EQ(probe_.body("rope").material, "");  // the scene's, of spring constants
+
+  // rope_material set live: a rope without material or constants is of that preset (its mass
+  // μ·L, not the 1 kg default); an unknown name is refused and the field goes back.
+  auto answered = probe_.reconfigure({}, {{"rope_material", "steel?"}});
+  EXPECT_EQ(answered.strs.at("rope_material"), "");
+  answered = probe_.reconfigure({}, {{"rope_material", "nylon_rope"}});
+  EXPECT_EQ(answered.strs.at("rope_material"), "nylon_rope");
+  particle_sim::SpawnRope::Request plain;
+  plain.name = "plain";
+  plain.particles = 10;
+  plain.start.z = 1.0;
+  plain.end.x = 2.0;
+  plain.end.z = 1.0;
+  plain.pins = {0};
+  spawned = call<particle_sim::SpawnRope>("spawn_rope", plain);
+  ASSERT_TRUE(spawned.success) << spawned.message;
+  ASSERT_TRUE(waitForWall([&] { return !probe_.body("plain").name.empty(); }));
+  EXPECT_NEAR(probe_.body("plain").mass, nylon_rope_density * 2.0, 1e-12 * nylon_rope_density);
+  answered = probe_.reconfigure({}, {{"rope_material", ""}});
+  EXPECT_EQ(answered.strs.at("rope_material"), "");
 }
 
 int main(int argc, char** argv)

@@ -7,6 +7,8 @@
 #include <limits>
 
 #include "particle_sim/core/limits.h"
+#include "particle_sim/core/materials/cloth_material.h"
+#include "particle_sim/core/materials/rope_material.h"
 #include "particle_sim/ros/parameters.h"
 
 using namespace particle_sim;
@@ -85,4 +87,21 @@ TEST(ParametersConversions, FramesMustBeNamedDistinctAndTheOffsetThreeFiniteNumb
   EXPECT_EQ(refusal(s), "~frame_offset must be a list of 3 finite numbers [x, y, z] in m");
   s.frame_offset = {1.0, kNaN, 2.0};
   EXPECT_EQ(refusal(s), "~frame_offset must be a list of 3 finite numbers [x, y, z] in m");
+}
+
+TEST(ParametersConversions, DefaultMaterialsMustBeEmptyOrAPreset)
+{
+  NodeSettings s;
+  EXPECT_TRUE(s.rope_material.empty());  // no default material: spawned bodies as before
+  EXPECT_TRUE(s.cloth_material.empty());
+  s.rope_material = core::ropePresets().front().name;
+  s.cloth_material = core::clothPresets().front().name;
+  EXPECT_TRUE(validate(s).ok) << validate(s).message;
+
+  s.rope_material = "hemp?";
+  EXPECT_EQ(refusal(s), "~rope_material = 'hemp?' is not a rope material preset; allowed: " + core::ropePresetNames());
+  s.rope_material.clear();
+  s.cloth_material = "Cotton ";  // names are exact
+  EXPECT_EQ(refusal(s),
+            "~cloth_material = 'Cotton ' is not a cloth material preset; allowed: " + core::clothPresetNames());
 }

@@ -90,6 +90,7 @@ TEST(StatusConversions, SimStatusDescribesTheWorldAndEveryBody)
   EXPECT_EQ(fountain.type, "emitter");
   EXPECT_EQ(fountain.model, "fountain");
   EXPECT_EQ(fountain.particle_count, 5u);
+  EXPECT_NEAR(fountain.mass, 5 * 0.01, 1e-15);  // [kg] live particles × particle mass
 
   const BodyStatus& rope = status.bodies[1];
   EXPECT_EQ(rope.name, "taut");
@@ -99,10 +100,21 @@ TEST(StatusConversions, SimStatusDescribesTheWorldAndEveryBody)
   EXPECT_EQ(rope.last_integrator, "implicit_euler");
   EXPECT_EQ(rope.particle_count, 10u);
   EXPECT_EQ(rope.pinned_count, 2u);
+  EXPECT_NEAR(rope.mass, core::RopeDef().mass, 1e-12);  // [kg] the rope's total, pinned ends included
   EXPECT_FALSE(rope.frozen);
   EXPECT_TRUE(rope.frozen_reason.empty());
   EXPECT_GT(rope.solver_iterations, 0u);  // an implicit step solves
   EXPECT_GE(rope.max_strain, 0.0);
+}
+
+TEST(StatusConversions, BodiesBuiltOfAMaterialShowItsPresetOrByValue)
+{
+  core::World world = makeWorld();
+  EXPECT_EQ(buildSimStatus(world, ros::Time(), "sim", false, 1.0).bodies[1].material, "");  // spring constants
+  EXPECT_EQ(buildSimStatus(world, ros::Time(), "sim", false, 1.0, {{"taut", "nylon_rope"}}).bodies[1].material,
+            "nylon_rope");
+  EXPECT_EQ(buildSimStatus(world, ros::Time(), "sim", false, 1.0, {{"taut", ""}}).bodies[1].material, "by value");
+  EXPECT_EQ(buildSimStatus(world, ros::Time(), "sim", false, 1.0, {{"other", "cotton"}}).bodies[1].material, "");
 }
 
 TEST(StatusConversions, EmitterEnergyIsThatOfFreeFlightAndIsConserved)

@@ -32,6 +32,14 @@ constexpr Range kPublishRate{0.1, 1000.0, "Hz"};
 constexpr Range kContactThickness{0.0, 1.0, "m"};      // distance a body keeps from ground and spheres
 constexpr Range kParticlesPerBody{1, 1e8, "particles"};  // the cap world.max_particles_per_body itself
 constexpr Range kParticlesPerWorld{1, 1e9, "particles"};  // the cap world.max_particles_per_world itself
+constexpr Range kDampingRatio{0.0, 10.0, "-"};         // ζ, fraction of critical damping (cloth and rope materials)
+constexpr Range kArealDensity{0.001, 10.0, "kg/m^2"};  // cloth material: mass per unit area
+constexpr Range kTensileStiffness{1.0, 1e7, "N/m"};    // cloth material: Young's modulus × thickness
+constexpr Range kShearStiffness{0.01, 1e6, "N/m"};     // cloth material: shear modulus × thickness
+constexpr Range kBendingRigidity{0.0, 1.0, "N·m"};     // cloth material: B, bending moment per width per curvature
+constexpr Range kLinearDensity{1e-6, 1e4, "kg/m"};    // rope mass per length μ (sewing thread to heavy chain)
+constexpr Range kAxialStiffness{1e-3, 1e12, "N"};     // rope EA (elastic thread to bridge cable)
+constexpr Range kBendingStiffness{0.0, 1e6, "N·m²"};  // rope EI (0 = a chain)
 // clang-format on
 
 /// Longest body name [characters].

@@ -49,8 +49,11 @@ constexpr const char* kColorByStrainParam = "color_by_strain";
 constexpr const char* kStrainColorMaxParam = "strain_color_max";
 constexpr const char* kDiagnosticPeriodParam = "diagnostic_period";  // also read by diagnostic_updater
 constexpr const char* kDiagnosticMaxStrainParam = "diagnostic_max_strain";
+constexpr const char* kRopeMaterialParam = "rope_material";    // also live (dynamic_reconfigure)
+constexpr const char* kClothMaterialParam = "cloth_material";  // also live (dynamic_reconfigure)
 // Live (dynamic_reconfigure, config/Sim.cfg) and also read at start from the parameter server:
-// rate and real_time_factor above, and gravity_x/y/z, global_damping, wind_x/y/z, integrator,
-// body, spring_class, stiffness, damping, whose start values come from the scene.
+// rate, real_time_factor, rope_material and cloth_material above, and gravity_x/y/z,
+// global_damping, wind_x/y/z, integrator, body, spring_class, stiffness, damping, whose start values
+// come from the scene.
 }  // namespace names
 }  // namespace particle_sim

@@ -31,6 +31,8 @@ struct NodeSettings
   double strain_color_max = 0.1;       ///< ~strain_color_max [-]: strain drawn fully red
   double diagnostic_period = 1.0;      ///< ~diagnostic_period [s] of wall time between /diagnostics updates
   double diagnostic_max_strain = 0.5;  ///< ~diagnostic_max_strain [-]: a larger max strain is a WARN
+  std::string rope_material;   ///< ~rope_material: preset of spawned ropes without material or constants; empty = none
+  std::string cloth_material;  ///< ~cloth_material: the same for cloth (live: dynamic_reconfigure)
 };
 
 /// The settings from the private parameters of `private_node`; a parameter that is not set keeps

@@ -20,16 +20,17 @@ namespace particle_sim
 namespace ros_interface
 {
 /// dynamic_reconfigure (config/Sim.cfg): shows the world's live values (gravity, global damping,
-/// wind, spring constants of one body) and the node's (rate, real-time factor, default integrator),
-/// and applies a change from rqt or dynparam. A value the world refuses is put back, so that rqt
-/// always shows what the simulation uses. Its callback runs in the node's callback queue, between
-/// two steps.
+/// wind, spring constants of one body) and the node's (rate, real-time factor, default integrator,
+/// default rope and cloth materials), and applies a change from rqt or dynparam. A value the world
+/// (or the list of presets) refuses is put back, so that rqt always shows what the simulation uses.
+/// Its callback runs in the node's callback queue, between two steps.
 class ReconfigureHandler
 {
 public:
-  /// Serves ~set_parameters on `private_node` from the world as built. `world`, `settings` (rate
-  /// and real_time_factor change here) and `default_integrator` (of bodies spawned by services) are
-  /// the node's and outlive the handler; `on_rate_changed` runs after ~rate changed.
+  /// Serves ~set_parameters on `private_node` from the world as built. `world`, `settings` (rate,
+  /// real_time_factor, rope_material and cloth_material change here) and `default_integrator` (of
+  /// bodies spawned by services) are the node's and outlive the handler; `on_rate_changed` runs
+  /// after ~rate changed.
   ReconfigureHandler(const ros::NodeHandle& private_node, core::World& world, NodeSettings& settings,
                      core::IntegratorDef& default_integrator, std::function<void()> on_rate_changed);
 

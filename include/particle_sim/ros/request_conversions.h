@@ -27,8 +27,9 @@ namespace ros_interface
 // Service requests to core definitions: pure functions of the request (and the few world values
 // they need, passed in), with no node handle and no master. A request field left at 0 (or empty)
 // keeps the definition's default, as the .srv files say. What these functions refuse is what only
-// the request can get wrong (an unknown name, a count beyond int); every range is then checked by
-// the core's validate(), which the world runs when the definition is added.
+// the request can get wrong (an unknown name, a count beyond int, a material next to spring
+// constants, see material_conversions.h); every range is then checked by the core's validate(),
+// which the world runs when the definition is added.
 
 /// The integrator name of a spawn request into `integrator`; empty keeps `integrator` as it is
 /// (the world's default). Refuses an unknown name, listing the allowed ones.
@@ -39,13 +40,16 @@ core::Status parseIntegratorField(const std::string& name, core::BodyIntegratorD
 core::Status toEmitterDef(const SpawnEmitter::Request& req, std::uint64_t world_seed, core::EmitterDef& def);
 
 /// ~spawn_rope: the RopeDef a scene file would build, integrated by `default_integrator` unless the
-/// request names one.
-core::Status toRopeDef(const SpawnRope::Request& req, const core::IntegratorDef& default_integrator,
-                       core::RopeDef& def);
+/// request names one, of the request's material or, when it sets neither a material nor a mass or
+/// spring constant, of the preset `default_material` (dynamic_reconfigure's rope_material; empty =
+/// none). See material_conversions.h.
+core::Status toRopeDef(const SpawnRope::Request& req, const core::IntegratorDef& default_integrator, core::RopeDef& def,
+                       const std::string& default_material = {});
 
-/// ~spawn_cloth: the grid cloth a scene file would build (springs or Baraff–Witkin).
+/// ~spawn_cloth: the grid cloth a scene file would build (springs or Baraff–Witkin), its material
+/// as toRopeDef()'s (`default_material`: dynamic_reconfigure's cloth_material).
 core::Status toClothGridDef(const SpawnCloth::Request& req, const core::IntegratorDef& default_integrator,
-                            core::ClothGridDef& def);
+                            core::ClothGridDef& def, const std::string& default_material = {});
 
 /// ~spawn_jelly: the JellyDef a scene file would build.
 core::Status toJellyDef(const SpawnJelly::Request& req, const core::IntegratorDef& default_integrator,

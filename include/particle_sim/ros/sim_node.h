@@ -34,6 +34,7 @@
 #include "particle_sim/ros/master_link.h"
 #include "particle_sim/ros/parameters.h"
 #include "particle_sim/ros/reconfigure.h"
+#include "particle_sim/ros/status_report.h"
 #include "particle_sim/scene/scene.h"
 
 namespace particle_sim
@@ -166,6 +167,7 @@ private:
   ros::Publisher clock_pub_;
   ros::Publisher status_pub_;
   core::IntegratorDef default_integrator_;  // of bodies spawned by services (dynamic_reconfigure "integrator")
+  BodyMaterials body_materials_;            // ~status: the material of each body built of one
 
   std::unique_ptr<ReconfigureHandler> reconfigure_;
   std::unique_ptr<diagnostic_updater::Updater> diagnostics_;

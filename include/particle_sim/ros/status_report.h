@@ -4,6 +4,7 @@
 #include <ros/time.h>
 
 #include <cstdint>
+#include <map>
 #include <string>
 
 #include "particle_sim/SimStatus.h"
@@ -28,11 +29,16 @@ constexpr double kRealTimeFactorWarnRatio =
 /// the default).
 core::IntegratorType integratorThatRan(const core::SpringNetworkBody& body);
 
-/// ~status: the world's time, environment and every body's figures (energies [J], strain, solver,
-/// stability), stamped `stamp` in `frame_id`; `paused` and `real_time_factor` [-] (the target)
-/// come from the node.
+/// The material each body was built of, by body name (the node knows it from the scene and the
+/// spawn requests; the built body keeps only masses and constants): the preset's name, or empty
+/// for a material given by value. Bodies built from spring constants are not listed.
+using BodyMaterials = std::map<std::string, std::string>;
+
+/// ~status: the world's time, environment and every body's figures (mass [kg], energies [J],
+/// strain, solver, stability, material), stamped `stamp` in `frame_id`; `paused` and
+/// `real_time_factor` [-] (the target) come from the node.
 SimStatus buildSimStatus(const core::World& world, const ros::Time& stamp, const std::string& frame_id, bool paused,
-                         double real_time_factor);
+                         double real_time_factor, const BodyMaterials& materials = {});
 
 /// The node's loop over one diagnostics window.
 struct LoopFigures

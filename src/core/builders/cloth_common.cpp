@@ -1,5 +1,8 @@
 #include "particle_sim/core/builders/cloth_common.h"
 
+#include <Eigen/Geometry>
+#include <cmath>
+
 #include "particle_sim/core/forces/baraff_witkin_model.h"
 #include "particle_sim/core/names.h"
 #include "particle_sim/core/validation.h"
@@ -42,6 +45,104 @@ SpringConstants resolveClothConstants(ClothModel model, SpringClass spring_class
                               : spring_class == SpringClass::Shear ? shear
                                                                    : bend;
   return set.resolve(model, spring_class);
+}
+
+Status validateClothMaterial(const std::optional<ClothMaterial>& material, ClothModel model,
+                             const ClothConstants& stretch, const ClothConstants& shear, const ClothConstants& bend)
+{
+  if (!material) return Status::success();
+  if (Status s = validate(*material); !s) return s;
+  // The material gives every constant: one set beside it would be silently overridden.
+  const std::pair<const char*, const ClothConstants*> classes[] = {
+      {"stretch", &stretch}, {"shear", &shear}, {"bend", &bend}};
+  for (const auto& [class_name, constants] : classes)
+  {
+    for (const auto& [field, constant] :
+         {std::pair<const char*, const ClothConstant*>{"stiffness", &constants->stiffness},
+          std::pair<const char*, const ClothConstant*>{"damping", &constants->damping}})
+    {
+      if (constant->isSet())
+        return Status::failure(std::string("material and ") + class_name + "." + field +
+                               " are both set: a material gives the cloth its constants; set one or the other");
+    }
+  }
+  // Distance springs two apart have no stiffness to first order about the flat state (bending by θ
+  // lengthens them by O(θ²)), so no spring constant gives a bending rigidity that holds at every
+  // resolution and curvature: refused rather than approximated.
+  if (model == ClothModel::Springs && material->bending_rigidity > 0.0)
+    return Status::failure("material.bending_rigidity = " + formatValue(material->bending_rigidity) +
+                           " N·m needs model baraff_witkin: the spring model's bend springs cannot carry a bending "
+                           "rigidity (use model: baraff_witkin, recommended, or bending_rigidity: 0)");
+  return Status::success();
+}
+
+// Damping from the ratio ζ. Each class gets stiffness-proportional (Rayleigh) damping, k_d = β k:
+// a mode of angular frequency ω dominated by that class is then damped at ζ = β ω / 2. The mode ζ
+// refers to is a property of the material and the cloth's size, never of the mesh: the fundamental of
+// a strip of length L = √(rest area) fixed at one end,
+//   stretch  ω = (π / 2L) √(E·t / ρ_A)          (axial, quarter wave)
+//   shear    ω = (π / 2L) √(G·t / ρ_A)          (in-plane shear, quarter wave)
+//   bend     ω = (1.8751 / L)² √(B / ρ_A)       (cantilever, Euler–Bernoulli plate strip)
+// so β = 2ζ/ω is the same at every resolution (finer modes of the same cloth are damped more, as
+// stiffness-proportional damping does).
+ClothDampingTimes clothDampingTimes(const ClothMaterial& m, double area)
+{
+  const double length = std::sqrt(area), zeta = m.damping_ratio, rho = m.areal_density;
+  const double quarter_wave = M_PI / (2.0 * length), cantilever = std::pow(1.8751 / length, 2);
+  ClothDampingTimes times;
+  times.stretch = 2.0 * zeta / (quarter_wave * std::sqrt(m.tensile_stiffness / rho));
+  times.shear = 2.0 * zeta / (quarter_wave * std::sqrt(m.shear_stiffness / rho));
+  if (m.bending_rigidity > 0.0) times.bend = 2.0 * zeta / (cantilever * std::sqrt(m.bending_rigidity / rho));
+  return times;
+}
+
+double clothArea(const std::vector<Eigen::Vector3d>& x, const std::vector<Eigen::Vector3i>& triangles)
+{
+  double area = 0.0;
+  for (const Eigen::Vector3i& t : triangles)
+    area += 0.5 * (x[t[1]] - x[t[0]]).cross(x[t[2]] - x[t[0]]).norm();
+  return area;
+}
+
+std::vector<double> lumpedClothMasses(const std::vector<Eigen::Vector3d>& x,
+                                      const std::vector<Eigen::Vector3i>& triangles, double areal_density)
+{
+  std::vector<double> masses(x.size(), 0.0);
+  for (const Eigen::Vector3i& t : triangles)
+  {
+    const double third = areal_density * 0.5 * (x[t[1]] - x[t[0]]).cross(x[t[2]] - x[t[0]]).norm() / 3.0;
+    for (int c = 0; c < 3; ++c)
+      masses[t[c]] += third;
+  }
+  return masses;
+}
+
+// Baraff–Witkin constants from membrane and plate theory. The energies are per unit rest area
+// (forces/baraff_witkin_model.h): a triangle of rest area a stores
+//   stretch  k_s a (ε_u² + ε_v²) / 2,   ε_d = |w_d| − 1 (the strain along u or v),
+//   shear    k_h a (w_u·w_v)² / 2,      w_u·w_v = γ (the engineering shear strain, for small strains),
+// and the stretch conditions along u and v are independent (no Poisson coupling). So:
+// - a strip of width w stretched uniaxially by ε stores k_s ε²/2 per area: its tension is k_s ε per
+//   width, the force E·t·w·ε of membrane theory when k_s = E·t [N/m];
+// - simple shear γ stores k_h γ²/2 per area: the shear flow is k_h γ per width, G·t·γ when
+//   k_h = G·t [N/m];
+// - bending: a bend element of rest edge e between triangles of areas a₁, a₂ stores
+//   k_b |e|²/(a₁ + a₂) θ²/2. On the grid's right triangles (cells h_u × h_v, diagonal (0,0)–(1,1)),
+//   bent into a cylinder of curvature κ about an axis along v, the two triangles of a cell stay
+//   coplanar (their P1 slopes along u are equal), the diagonal and u-edges keep θ = 0, and each
+//   v-edge (length h_v, a₁ + a₂ = h_u h_v) turns by θ = κ h_u: per cell (area h_u h_v) the energy is
+//   k_b h_v²/(h_u h_v) (κ h_u)²/2 = k_b κ² h_u h_v / 2, i.e. k_b κ²/2 per area, the plate's B κ²/2
+//   when k_b = B: the factor is exactly 1, at any h (alike for an axis along u). Bent along a direction at
+//   angle φ to u the same computation gives (1 + sin 2φ + sin² 2φ) B κ²/2 (0.75 to 3 times): the
+//   regular triangulation's known anisotropy of the discrete-shells energy, not a resolution effect.
+ClothClassConstants baraffWitkinMaterialConstants(const ClothMaterial& material, double area)
+{
+  const ClothDampingTimes beta = clothDampingTimes(material, area);
+  ClothClassConstants c;
+  c.stretch = {material.tensile_stiffness, beta.stretch * material.tensile_stiffness};
+  c.shear = {material.shear_stiffness, beta.shear * material.shear_stiffness};
+  c.bend = {material.bending_rigidity, beta.bend * material.bending_rigidity};
+  return c;
 }
 
 Status validateClothCommon(const std::string& name, const SpringConstants& stretch, const SpringConstants& bend,

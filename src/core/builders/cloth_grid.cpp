@@ -2,6 +2,8 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <cmath>
+#include <optional>
 
 #include "particle_sim/core/builders/pins.h"
 #include "particle_sim/core/validation.h"
@@ -50,6 +52,52 @@ bool namedGridPins(const std::string& name, int nu, int nv, std::vector<int>& in
   return true;
 }
 
+namespace
+{
+// Spring constants of a grid cloth of `material` (issue 17), from membrane equivalence. A cell of
+// h_u × h_v has a u spring (length h_u), a v spring (length h_v) and two diagonals (length
+// L_d = √(h_u² + h_v²)). Under a uniform small strain ε a spring of direction d and length L stores
+// k L² (dᵀ ε d)²/2; summed over a cell and divided by its area h_u h_v, the energy density is
+//   W = ½ C₁₁ ε_uu² + ½ C₂₂ ε_vv² + C₁₂ ε_uu ε_vv + ½ C₆₆ γ²,   γ = 2 ε_uv,
+//   C₁₁ = k_u h_u/h_v + k_d 2 h_u³/(h_v L_d²),  C₂₂ = k_v h_v/h_u + k_d 2 h_v³/(h_u L_d²),
+//   C₁₂ = C₆₆ = k_d 2 h_u h_v / L_d².
+// Shear: C₆₆ = G·t gives k_d = G·t L_d² / (2 h_u h_v) (= G·t on square cells), and then C₁₂ = G·t.
+// Tension: a strip pulled along u contracts freely across, so its stiffness is C₁₁ − C₁₂²/C₂₂; with
+// C₁₁ = C₂₂ = C this is E·t when C = (E·t + √((E·t)² + 4 (G·t)²)) / 2, whence
+//   k_u = (C − G·t h_u²/h_v²) h_v/h_u,   k_v = (C − G·t h_v²/h_u²) h_u/h_v
+// (= C − G·t on square cells). The cloth's (u, v) cells must be rectangular for this to be exact; the
+// grid's cells are h_u × h_v with h = |edge|/(n − 1). An axis spring inside the cloth is shared by the
+// two cells on its sides (one per cell, as counted above); one on the border belongs to one cell and
+// gets half the constants, so that a uniform strain of the whole cloth stores exactly W × area (the
+// patch test). Damping: β k per class (clothDampingTimes()).
+struct GridMaterialSprings
+{
+  SpringConstants u, v, diagonal;
+};
+
+GridMaterialSprings gridMaterialSprings(const ClothGridDef& def, const ClothMaterial& material)
+{
+  const double hu = def.edge_u.norm() / (def.nu - 1), hv = def.edge_v.norm() / (def.nv - 1);
+  const double et = material.tensile_stiffness, gt = material.shear_stiffness;
+  const double c = 0.5 * (et + std::sqrt(et * et + 4.0 * gt * gt));
+  const ClothDampingTimes beta = clothDampingTimes(material, def.edge_u.cross(def.edge_v).norm());
+  GridMaterialSprings springs;
+  springs.u.stiffness = (c - gt * hu * hu / (hv * hv)) * hv / hu;
+  springs.v.stiffness = (c - gt * hv * hv / (hu * hu)) * hu / hv;
+  springs.diagonal.stiffness = gt * (hu * hu + hv * hv) / (2.0 * hu * hv);
+  springs.u.damping = beta.stretch * springs.u.stiffness;
+  springs.v.damping = beta.stretch * springs.v.stiffness;
+  springs.diagonal.damping = beta.shear * springs.diagonal.stiffness;
+  return springs;
+}
+
+// `c` halved for a spring on the border (issue 17's material springs), else `c`.
+SpringConstants borderHalf(const SpringConstants& c, bool on_border)
+{
+  return on_border ? SpringConstants{0.5 * c.stiffness, 0.5 * c.damping} : c;
+}
+}  // namespace
+
 Status validate(const ClothGridDef& def, int max_particles)
 {
   if (Status s = validateClothCommon(def); !s) return s;
@@ -69,6 +117,16 @@ Status validate(const ClothGridDef& def, int max_particles)
                            std::to_string(max_particles));
   if (Status s = checkPinIndices(def.pins, def.nu * def.nv); !s) return s;
   if (Status s = validateBaraffWitkinRest(def.b_u, def.b_v); !s) return s;
+  if (def.material && def.model == ClothModel::Springs)
+  {
+    // Very elongated cells leave the axis springs nothing to carry once the diagonals give the shear.
+    const GridMaterialSprings springs = gridMaterialSprings(def, *def.material);
+    if (!(springs.u.stiffness > 0.0 && springs.v.stiffness > 0.0))
+      return Status::failure("material.shear_stiffness = " + formatValue(def.material->shear_stiffness) +
+                             " N/m is too large for cells of aspect ratio " +
+                             formatValue((def.edge_u.norm() / (def.nu - 1)) / (def.edge_v.norm() / (def.nv - 1))) +
+                             " with the spring model: use model baraff_witkin or cells closer to square");
+  }
   std::vector<int> ignored;
   for (std::size_t k = 0; k < def.named_pins.size(); ++k)
   {
@@ -87,12 +145,14 @@ SpringNetworkDef buildClothGrid(const ClothGridDef& def)
   const int nu = def.nu, nv = def.nv, n = nu * nv;
   auto index = [nu](int a, int b) { return b * nu + a; };
 
-  // Particles on the grid, equal masses.
+  // Particles on the grid, equal masses (a material's lumped masses once the triangles are built).
   for (int b = 0; b < nv; ++b)
     for (int a = 0; a < nu; ++a)
       net.positions.push_back(def.origin + def.edge_u * (static_cast<double>(a) / (nu - 1)) +
                               def.edge_v * (static_cast<double>(b) / (nv - 1)));
   net.masses.assign(n, def.mass / n);
+  std::optional<GridMaterialSprings> material_springs;
+  if (def.material && def.model == ClothModel::Springs) material_springs = gridMaterialSprings(def, *def.material);
 
   // Provot's springs: stretch to the neighbours, shear across each cell, bend two apart (none for
   // a Baraff–Witkin cloth, which gets its energies from the triangles below).
@@ -109,22 +169,31 @@ SpringNetworkDef buildClothGrid(const ClothGridDef& def)
         net.triangles.emplace_back(index(a, b), index(a + 1, b + 1), index(a, b + 1));
       }
       if (!springs) continue;
+      const SpringConstants& along_u = material_springs ? material_springs->u : stretch;
+      const SpringConstants& along_v = material_springs ? material_springs->v : stretch;
+      const SpringConstants& diagonal = material_springs ? material_springs->diagonal : shear;
       if (a + 1 < nu)
-        net.springs.push_back(clothSpring(x, index(a, b), index(a + 1, b), stretch, SpringClass::Stretch));
+        net.springs.push_back(clothSpring(x, index(a, b), index(a + 1, b),
+                                          borderHalf(along_u, material_springs && (b == 0 || b == nv - 1)),
+                                          SpringClass::Stretch));
       if (b + 1 < nv)
-        net.springs.push_back(clothSpring(x, index(a, b), index(a, b + 1), stretch, SpringClass::Stretch));
+        net.springs.push_back(clothSpring(x, index(a, b), index(a, b + 1),
+                                          borderHalf(along_v, material_springs && (a == 0 || a == nu - 1)),
+                                          SpringClass::Stretch));
       if (a + 1 < nu && b + 1 < nv)
       {
-        net.springs.push_back(clothSpring(x, index(a, b), index(a + 1, b + 1), shear, SpringClass::Shear));
-        net.springs.push_back(clothSpring(x, index(a + 1, b), index(a, b + 1), shear, SpringClass::Shear));
+        net.springs.push_back(clothSpring(x, index(a, b), index(a + 1, b + 1), diagonal, SpringClass::Shear));
+        net.springs.push_back(clothSpring(x, index(a + 1, b), index(a, b + 1), diagonal, SpringClass::Shear));
       }
-      if (bend.stiffness > 0.0)
+      if (!material_springs && bend.stiffness > 0.0)  // a material's cloth has no bend springs (validate())
       {
         if (a + 2 < nu) net.springs.push_back(clothSpring(x, index(a, b), index(a + 2, b), bend, SpringClass::Bend));
         if (b + 2 < nv) net.springs.push_back(clothSpring(x, index(a, b), index(a, b + 2), bend, SpringClass::Bend));
       }
     }
   }
+
+  if (def.material) net.masses = lumpedClothMasses(x, net.triangles, def.material->areal_density);
 
   // Baraff–Witkin: (u, v) of each particle are its rest coordinates in the cloth's plane, u along
   // edge_u and v perpendicular to it, so the cloth starts at rest.
@@ -135,7 +204,13 @@ SpringNetworkDef buildClothGrid(const ClothGridDef& def)
     std::vector<Eigen::Vector2d> uvs;
     for (const Eigen::Vector3d& p : net.positions)
       uvs.emplace_back((p - def.origin).dot(e1), (p - def.origin).dot(e2));
-    addBaraffWitkin(uvs, stretch, shear, bend, def.b_u, def.b_v, net);
+    if (def.material)
+    {
+      const ClothClassConstants c = baraffWitkinMaterialConstants(*def.material, clothArea(x, net.triangles));
+      addBaraffWitkin(uvs, c.stretch, c.shear, c.bend, def.b_u, def.b_v, net);
+    }
+    else
+      addBaraffWitkin(uvs, stretch, shear, bend, def.b_u, def.b_v, net);
   }
 
   // Pins by index and by name, each particle once.

@@ -77,6 +77,7 @@ SpringNetworkDef buildMeshCloth(const MeshClothDef& def)
   net.triangles = def.triangles;
   const int n = static_cast<int>(def.vertices.size());
   net.masses.assign(n, def.mass / n);
+  if (def.material) net.masses = lumpedClothMasses(def.vertices, def.triangles, def.material->areal_density);
 
   if (def.model == ClothModel::BaraffWitkin)
   {
@@ -93,16 +94,44 @@ SpringNetworkDef buildMeshCloth(const MeshClothDef& def)
     std::vector<Eigen::Vector2d> uvs;
     for (const Eigen::Vector2d& uv : def.uvs)
       uvs.push_back(scale * uv);
-    addBaraffWitkin(uvs, stretch, shear, bend, def.b_u, def.b_v, net);
+    if (def.material)
+    {
+      const ClothClassConstants c = baraffWitkinMaterialConstants(*def.material, mesh_area);
+      addBaraffWitkin(uvs, c.stretch, c.shear, c.bend, def.b_u, def.b_v, net);
+    }
+    else
+      addBaraffWitkin(uvs, stretch, shear, bend, def.b_u, def.b_v, net);
     appendPins(def.pins, n, net.pins);
     return net;
   }
+  // A material's edge springs (issue 17), by a per-triangle-area rule: each triangle T adjacent to an
+  // edge e gives it E·t a_T / |e|², so k_e = E·t Σ_T a_T / |e|². On equilateral triangles (side h,
+  // k = (√3/2) E·t for an interior edge) the triangular spring lattice's plane modulus 2k/√3 is E·t,
+  // its Poisson ratio 1/3 and its shear modulus 3/8 E·t, at any h: an edge-spring mesh cannot take
+  // the material's shear stiffness apart from its tensile one (use baraff_witkin for that); other
+  // triangle shapes follow the same rule approximately. Damping: β k (clothDampingTimes()).
+  double spring_damping_time = 0.0;
+  if (def.material)
+    spring_damping_time = clothDampingTimes(*def.material, clothArea(def.vertices, def.triangles)).stretch;
   // Each edge once (keyed by its sorted ends): a stretch spring, and across an interior edge
   // (two triangles) a bend spring between the vertices opposite it.
   for (const auto& [edge, sides] : meshEdges(def.triangles))
   {
-    net.springs.push_back(clothSpring(net.positions, edge.first, edge.second, stretch, SpringClass::Stretch));
-    if (bend.stiffness > 0.0 && sides.size() == 2 && sides[0].opposite != sides[1].opposite)
+    Spring spring = clothSpring(net.positions, edge.first, edge.second, stretch, SpringClass::Stretch);
+    if (def.material)
+    {
+      double adjacent_area = 0.0;
+      for (const auto& side : sides)
+      {
+        const Eigen::Vector3i& t = def.triangles[side.triangle];
+        adjacent_area +=
+            0.5 * (def.vertices[t[1]] - def.vertices[t[0]]).cross(def.vertices[t[2]] - def.vertices[t[0]]).norm();
+      }
+      spring.stiffness = def.material->tensile_stiffness * adjacent_area / (spring.rest_length * spring.rest_length);
+      spring.damping = spring_damping_time * spring.stiffness;
+    }
+    net.springs.push_back(spring);
+    if (!def.material && bend.stiffness > 0.0 && sides.size() == 2 && sides[0].opposite != sides[1].opposite)
       net.springs.push_back(clothSpring(net.positions, sides[0].opposite, sides[1].opposite, bend, SpringClass::Bend));
   }
   appendPins(def.pins, n, net.pins);

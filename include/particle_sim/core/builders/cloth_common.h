@@ -1,11 +1,13 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "particle_sim/core/cloth_model.h"
 #include "particle_sim/core/forces/baraff_witkin_model.h"
+#include "particle_sim/core/materials/cloth_material.h"
 #include "particle_sim/core/spring.h"
 #include "particle_sim/core/spring_network.h"
 #include "particle_sim/core/status.h"
@@ -73,10 +75,48 @@ struct ClothConstants
 SpringConstants resolveClothConstants(ClothModel model, SpringClass spring_class, const ClothConstants& stretch,
                                       const ClothConstants& shear, const ClothConstants& bend);
 
+// A cloth given by its material (issue 17) ------------------------------------------------------------
+// The builders turn a ClothMaterial into particle masses and constants for the mesh they build, so
+// that the same material behaves the same at any resolution (derivations: Baraff–Witkin and damping
+// in cloth_common.cpp, the spring grid in cloth_grid.cpp, the spring mesh in mesh_cloth.cpp).
+
+/// validate(material), then what a cloth with a material may not also set: any stretch, shear or
+/// bend constant (the material gives them), and, for the spring model, a bending rigidity > 0 (see
+/// cloth_common.cpp: distance springs cannot carry one). Success when `material` is empty.
+Status validateClothMaterial(const std::optional<ClothMaterial>& material, ClothModel model,
+                             const ClothConstants& stretch, const ClothConstants& shear, const ClothConstants& bend);
+
+/// Stiffness-proportional damping times β = k_d / k [s] of a cloth of `material` and rest area
+/// `area` [m²], per class, so that each class's fundamental mode of the whole cloth is damped at the
+/// material's ratio ζ (the mode is in cloth_common.cpp). Zero for a bend class without rigidity.
+struct ClothDampingTimes
+{
+  double stretch = 0.0;  ///< [s]
+  double shear = 0.0;    ///< [s]
+  double bend = 0.0;     ///< [s]
+};
+ClothDampingTimes clothDampingTimes(const ClothMaterial& material, double area);
+
+/// Rest area of the triangles `triangles` of positions `x` [m²].
+double clothArea(const std::vector<Eigen::Vector3d>& x, const std::vector<Eigen::Vector3i>& triangles);
+/// Lumped particle masses [kg]: each triangle's rest area × areal density [kg/m²], a third to each
+/// corner. A particle on no triangle gets no mass from this; callers build surfaces where every
+/// particle is on a triangle.
+std::vector<double> lumpedClothMasses(const std::vector<Eigen::Vector3d>& x,
+                                      const std::vector<Eigen::Vector3i>& triangles, double areal_density);
+
+/// Baraff–Witkin constants of `material` for a cloth of rest area `area` [m²]: stretch E·t [N/m],
+/// shear G·t [N/m], bend B [N·m] (the energies are per unit area), damping β·k.
+struct ClothClassConstants
+{
+  SpringConstants stretch, shear, bend;
+};
+ClothClassConstants baraffWitkinMaterialConstants(const ClothMaterial& material, double area);
+
 // What the grid and mesh cloth builders share ------------------------------------------------------
 
 /// The checks every cloth passes: contact thickness, name, mass, stretch and bend constants,
-/// strain limit and integrator, in that order.
+/// strain limit and integrator, in that order (the definition's form below checks its material first).
 Status validateClothCommon(const std::string& name, const SpringConstants& stretch, const SpringConstants& bend,
                            double mass, const StrainLimitDef& strain_limit, const BodyIntegratorDef& integrator,
                            double contact_thickness);
@@ -84,6 +124,7 @@ Status validateClothCommon(const std::string& name, const SpringConstants& stret
 template <typename ClothDef>
 Status validateClothCommon(const ClothDef& def)
 {
+  if (Status s = validateClothMaterial(def.material, def.model, def.stretch, def.shear, def.bend); !s) return s;
   return validateClothCommon(def.name, def.constants(SpringClass::Stretch), def.constants(SpringClass::Bend), def.mass,
                              def.strain_limit, def.integrator, def.contact_thickness);
 }

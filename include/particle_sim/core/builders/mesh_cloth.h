@@ -1,6 +1,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -38,6 +39,11 @@ struct MeshClothDef
   StrainLimitDef strain_limit;
   BodyIntegratorDef integrator;    ///< what the body sets; the rest is the world's default
   double contact_thickness = 0.0;  ///< [m] in limits::kContactThickness: kept from ground and spheres (0 = touch)
+  /// The cloth's material in physical units (issue 17). Set, it gives the particle masses (areal
+  /// density, lumped: a third of each triangle's rest area to each corner; `mass` is then unused) and
+  /// every constant, for the mesh built (cloth_common.h); no stretch, shear or bend constant may be
+  /// set beside it. Unset: `mass` and the constants, as before.
+  std::optional<ClothMaterial> material;
 
   /// The constants of `spring_class` this cloth gets: those set, else its model's defaults.
   SpringConstants constants(SpringClass spring_class) const;
