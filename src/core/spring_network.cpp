@@ -108,13 +108,24 @@ Status validate(const SpringNetworkDef& def, int max_particles)
   if (Status s = checkSpringConstants("bend.", bw.bend.stiffness, bw.bend.damping); !s) return s;
   if (Status s = checkPositive("b_u", bw.b_u); !s) return s;
   if (Status s = checkPositive("b_v", bw.b_v); !s) return s;
+  for (std::size_t k = 0; k < def.rod_bending.bends.size(); ++k)
+  {
+    const RodBend& bend = def.rod_bending.bends[k];
+    const std::string where = indexed("rod_bending", k) + ".";
+    for (int c = 0; c < 3; ++c)
+      if (Status s = checkIndex(where + "v[" + std::to_string(c) + "]", bend.v[c], n); !s) return s;
+    if (bend.v[0] == bend.v[1] || bend.v[1] == bend.v[2] || bend.v[0] == bend.v[2])
+      return Status::failure(where + "v repeats a particle: a bend joins three different ones");
+    if (Status s = checkMin(where + "stiffness", bend.stiffness, 0.0); !s) return s;
+    if (Status s = checkMin(where + "damping", bend.damping, 0.0); !s) return s;
+  }
   return validate(def.integrator);
 }
 
 SpringNetworkBody::SpringNetworkBody(const SpringNetworkDef& def, const IntegratorDef& integrator_defaults)
     : Body(def.name),
       def_(def),
-      forces_(makeSpringBodyForces(def_.springs, def_.baraff_witkin, def_.triangles)),
+      forces_(makeSpringBodyForces(def_.springs, def_.baraff_witkin, def_.triangles, def_.rod_bending)),
       built_integrator_(resolve(def.integrator, integrator_defaults)),
       strain_limit_(def_.strain_limit, def_.springs, static_cast<int>(def_.positions.size()))
 {

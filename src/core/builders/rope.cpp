@@ -93,6 +93,15 @@ SpringNetworkDef buildRope(const RopeDef& def)
     const RopeSpringConstants stretch = ropeStretchConstants(material, total_rest, segment);
     for (int i = 0; i + 1 < n; ++i)
       net.springs.push_back({i, i + 1, segment, stretch.stiffness, stretch.damping, SpringClass::Stretch});
+    // Rod bending at each interior particle: k = EI / l̄ with l̄ = l (half of each neighbouring
+    // segment), and the bending viscosity with the axial one's retardation time: η_b = EI · c / k.
+    if (material.bending_stiffness > 0.0)
+    {
+      const double bend_stiffness = material.bending_stiffness / segment;
+      const double bend_damping = bend_stiffness * stretch.damping / stretch.stiffness;
+      for (int i = 1; i + 1 < n; ++i)
+        net.rod_bending.bends.push_back({{i - 1, i, i + 1}, bend_stiffness, bend_damping});
+    }
     appendPins(def.pins, n, net.pins);
     return net;
   }

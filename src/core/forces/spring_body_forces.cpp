@@ -5,6 +5,7 @@
 #include "particle_sim/core/forces/air.h"
 #include "particle_sim/core/forces/global_damping.h"
 #include "particle_sim/core/forces/gravity.h"
+#include "particle_sim/core/forces/rod_bending.h"
 #include "particle_sim/core/forces/springs.h"
 
 namespace particle_sim
@@ -12,7 +13,7 @@ namespace particle_sim
 namespace core
 {
 ForceSet makeSpringBodyForces(const std::vector<Spring>& springs, const BaraffWitkinDef& baraff_witkin,
-                              const std::vector<Eigen::Vector3i>& triangles)
+                              const std::vector<Eigen::Vector3i>& triangles, const RodBendingDef& rod_bending)
 {
   ForceSet forces;
   constexpr int kGravity = 0, kSprings = 1, kBaraffWitkin = 2;
@@ -23,6 +24,12 @@ ForceSet makeSpringBodyForces(const std::vector<Spring>& springs, const BaraffWi
   {
     forces.add(std::make_unique<BaraffWitkinModel>(baraff_witkin));
     energy_order.push_back(kBaraffWitkin);
+  }
+  // Only a body that declares rod bending pays for it (the others keep their element list).
+  if (!rod_bending.empty())
+  {
+    energy_order.push_back(baraff_witkin.empty() ? kBaraffWitkin : kBaraffWitkin + 1);
+    forces.add(std::make_unique<RodBendingForce>(rod_bending));
   }
   if (!triangles.empty()) forces.add(std::make_unique<AirForce>(triangles));
   forces.add(std::make_unique<GlobalDampingForce>());

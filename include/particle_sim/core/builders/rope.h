@@ -49,7 +49,10 @@ Status validate(const RopeDef& def, int max_particles);
 /// - stretch damping c = η / l [N·s/m] from a Kelvin–Voigt axial viscosity η = 2 ζ L √(EA μ) / π
 ///   [N·s]: ζ is the damping ratio of the rope's lowest axial (stretch) mode, free–free or
 ///   fixed–fixed, wavelength 2 L. η is a property of the continuum, so every mode resolved at
-///   any N keeps its damping (a mode of wavenumber q has ζ_q = ζ q L / π).
+///   any N keeps its damping (a mode of wavenumber q has ζ_q = ζ q L / π);
+/// - when EI > 0, rod bending at each interior particle (forces/rod_bending.h), k = EI / l [N·m],
+///   its damping with the same retardation time τ = η / EA [s] (bending viscosity η_b = τ EI): the
+///   damping is stiffness-proportional, every mode of frequency ω has ζ_ω = τ ω / 2.
 SpringNetworkDef buildRope(const RopeDef& def);
 
 /// The stretch spring constants a material gives a rope of rest length `rest_length` [m] built of
