@@ -1,8 +1,10 @@
 #include <algorithm>
 #include <filesystem>
+#include <optional>
 
 #include "body_yaml.h"
 #include "particle_sim/core/builders/pins.h"
+#include "particle_sim/core/materials/cloth_material.h"
 #include "particle_sim/core/surface.h"
 #include "particle_sim/scene/obj_mesh.h"
 
@@ -99,6 +101,71 @@ void startCloth(MapReader& reader, const std::string& name, core::ClothModel mod
   reader.read("b_v", def.b_v);
 }
 
+// The cloth's `material` key (issue 17): a preset's name (`material: cotton`), or a mapping with an
+// optional `preset` whose values the other keys replace, or all values by key (areal_density,
+// tensile_stiffness and shear_stiffness required without a preset; bending_rigidity and
+// damping_ratio default to 0). Refused beside `mass` or any spring constant key, naming both.
+std::optional<core::ClothMaterial> readClothMaterial(MapReader& reader, const std::string& source)
+{
+  const YAML::Node node = reader.child("material");
+  if (!node) return std::nullopt;
+  for (const char* key : {"mass", "stretch", "shear", "bend"})
+  {
+    if (reader.has(key))
+      reader.fail(reader.node()[key], reader.field("material") + " and " + reader.field(key) +
+                                          " are both set: a material gives the cloth its masses and constants; "
+                                          "set one or the other");
+  }
+  auto preset = [&](const YAML::Node& at, const std::string& name) {
+    const std::optional<core::ClothMaterial> found = core::findClothPreset(name);
+    if (!found)
+      reader.fail(at, reader.field("material") + " = " + core::quoteReceived(name) +
+                          " is not a cloth material preset; allowed: " + core::clothPresetNames());
+    return *found;
+  };
+  if (node.IsScalar()) return preset(node, node.Scalar());
+  MapReader entry(node, reader.field("material"), source);
+  core::ClothMaterial material;
+  std::string preset_name;
+  entry.read("preset", preset_name);
+  if (entry.has("preset"))
+    material = preset(node["preset"], preset_name);
+  else
+  {
+    for (const char* key : {"areal_density", "tensile_stiffness", "shear_stiffness"})
+      if (!entry.has(key))
+        entry.fail(node, reader.field("material") + " needs the key '" + key +
+                             "' (or a preset: " + core::clothPresetNames() + ")");
+  }
+  entry.read("areal_density", material.areal_density);
+  entry.read("tensile_stiffness", material.tensile_stiffness);
+  entry.read("shear_stiffness", material.shear_stiffness);
+  entry.read("bending_rigidity", material.bending_rigidity);
+  entry.read("damping_ratio", material.damping_ratio);
+  entry.finish();
+  return material;
+}
+
+// The material as read back: the preset's name when it is one unchanged, else every value (and the
+// preset it started from).
+YAML::Node clothMaterial(const core::ClothMaterial& material)
+{
+  const std::optional<core::ClothMaterial> preset = core::findClothPreset(material.name);
+  if (preset && preset->areal_density == material.areal_density &&
+      preset->tensile_stiffness == material.tensile_stiffness && preset->shear_stiffness == material.shear_stiffness &&
+      preset->bending_rigidity == material.bending_rigidity && preset->damping_ratio == material.damping_ratio)
+    return YAML::Node(material.name);
+  YAML::Node node;
+  node.SetStyle(YAML::EmitterStyle::Flow);
+  if (preset) node["preset"] = material.name;
+  node["areal_density"] = material.areal_density;
+  node["tensile_stiffness"] = material.tensile_stiffness;
+  node["shear_stiffness"] = material.shear_stiffness;
+  node["bending_rigidity"] = material.bending_rigidity;
+  node["damping_ratio"] = material.damping_ratio;
+  return node;
+}
+
 // The frame_pins entries of body `body`, written back by index.
 YAML::Node framePins(const SceneDef& scene, const std::string& body)
 {
@@ -124,15 +191,20 @@ YAML::Node shearConstants(const ClothDef& def)
   return springConstants(shear.stiffness, shear.damping);
 }
 
-// The keys grid and mesh cloth share: mass, stretch, bend, pins, frame pins, strain limit, integrator.
+// The keys grid and mesh cloth share: material, or mass, stretch and bend; pins, frame pins, strain limit, integrator.
 template <typename ClothDef>
 void clothTail(YAML::Node node, const SceneDef& scene, const ClothDef& cloth, const YAML::Node& pins)
 {
-  node["mass"] = cloth.mass;
-  const core::SpringConstants stretch = cloth.constants(core::SpringClass::Stretch);
-  const core::SpringConstants bend = cloth.constants(core::SpringClass::Bend);
-  node["stretch"] = springConstants(stretch.stiffness, stretch.damping);
-  node["bend"] = springConstants(bend.stiffness, bend.damping);
+  if (cloth.material)
+    node["material"] = clothMaterial(*cloth.material);  // it gives the mass and every constant
+  else
+  {
+    node["mass"] = cloth.mass;
+    const core::SpringConstants stretch = cloth.constants(core::SpringClass::Stretch);
+    const core::SpringConstants bend = cloth.constants(core::SpringClass::Bend);
+    node["stretch"] = springConstants(stretch.stiffness, stretch.damping);
+    node["bend"] = springConstants(bend.stiffness, bend.damping);
+  }
   node["pins"] = pins;
   node["frame_pins"] = framePins(scene, cloth.name);
   writeStrainLimit(node, cloth.strain_limit);
@@ -200,6 +272,7 @@ BodyDef readCloth(MapReader& reader, SceneDef& scene, const std::string& source)
         def.uvs.emplace_back(uvs[i][0].as<double>(), uvs[i][1].as<double>());
       }
     }
+    def.material = readClothMaterial(reader, source);
     reader.read("mass", def.mass);
     readClothConstants(reader, def.stretch, baraff_witkin ? &def.shear : nullptr, def.bend, source);
     readPins(reader, def.pins, nullptr);
@@ -228,6 +301,7 @@ BodyDef readCloth(MapReader& reader, SceneDef& scene, const std::string& source)
     def.nu = resolution[0].as<int>();
     def.nv = resolution[1].as<int>();
   }
+  def.material = readClothMaterial(reader, source);
   reader.read("mass", def.mass);
   readClothConstants(reader, def.stretch, &def.shear, def.bend, source);
   readPins(reader, def.pins, &def.named_pins);
@@ -265,7 +339,7 @@ YAML::Node writeClothGrid(const SceneDef& scene, const core::ClothGridDef& def)
   node["edge_u"] = vector3(def.edge_u);
   node["edge_v"] = vector3(def.edge_v);
   node["resolution"] = indexList({def.nu, def.nv});
-  node["shear"] = shearConstants(def);
+  if (!def.material) node["shear"] = shearConstants(def);
   YAML::Node pins = indexList(def.pins);
   for (const std::string& name : def.named_pins)
     pins.push_back(name);
@@ -293,7 +367,7 @@ YAML::Node writeMeshCloth(const SceneDef& scene, const core::MeshClothDef& def)
   }
   if (def.model == core::ClothModel::BaraffWitkin)
   {
-    node["shear"] = shearConstants(def);
+    if (!def.material) node["shear"] = shearConstants(def);
     node["b_u"] = def.b_u;
     node["b_v"] = def.b_v;
   }
