@@ -346,7 +346,8 @@ TEST(ValidationRope, TransversePulseTravelsAtTheStringWaveSpeed)
   wave.reference = c;
   wave.source = "string wave equation: c = sqrt(T / mu_stretched), T = EA strain, mu_stretched = mu / (1 + strain)";
   std::ostringstream dat;
-  dat << "# t [s] displacement [mm] at x = 7 m; blocks: exact (non-dispersive), 50, 100, 200 segments\n";
+  dat << "# t [s] displacement [mm] at the particle nearest x = 7 m; blocks: exact (non-dispersive), 50, 100, 200 "
+         "segments\n";
   const double launch = 4.0 * tau;
   for (int i = 0; i <= 400; ++i)
   {
@@ -376,7 +377,7 @@ TEST(ValidationRope, TransversePulseTravelsAtTheStringWaveSpeed)
   wave.plot_script =
       "set terminal pngcairo size 900,560 enhanced font 'DejaVu Sans,11'\n"
       "set output 'wave_speed.png'\n"
-      "set title 'Pulse passing x = 7 m on a taut rope (T = 10 N, {/Symbol m} = 0.1 kg/m, "
+      "set title 'Pulse passing the particle nearest x = 7 m on a taut rope (T = 10 N, {/Symbol m} = 0.1 kg/m, "
       "launched at x = 0)'\n"
       "set xlabel 't [s]'\nset ylabel 'transverse displacement [mm]'\nset grid\n"
       "set key top right\n"
