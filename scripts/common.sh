@@ -36,6 +36,9 @@ PARTICLE_SIM_PACKAGES=(
 # Only for scripts/fuzz (libFuzzer comes with clang; the package build and scripts/test use gcc).
 PARTICLE_SIM_FUZZ_PACKAGES=(clang-14 libclang-rt-14-dev)
 
+# Only for the reports of scripts/bench (docs/accuracy.md, docs/validation.md): the plots.
+PARTICLE_SIM_REPORT_PACKAGES=(gnuplot-nox)
+
 # ROS tools are Python programs that need Debian's python3, not a pyenv one found first on PATH.
 export PATH="/usr/bin:$PATH"
 
