@@ -37,6 +37,14 @@ RANGE_TEXT = {
     "kContactThickness": "distance a body keeps from ground and spheres (`contact_thickness`)",
     "kParticlesPerBody": "particles of one body: the cap itself (`world.max_particles_per_body`, "
     "`~max_particles_per_body`)",
+    "kDampingRatio": "damping ratio ζ of a rope or cloth material (`material.damping_ratio`)",
+    "kArealDensity": "cloth material's areal density (`material.areal_density`)",
+    "kTensileStiffness": "cloth material's tensile stiffness, Young's modulus × thickness (`material.tensile_stiffness`)",
+    "kShearStiffness": "cloth material's shear stiffness, shear modulus × thickness (`material.shear_stiffness`)",
+    "kBendingRigidity": "cloth material's bending rigidity B (`material.bending_rigidity`)",
+    "kLinearDensity": "rope material's linear density μ (`material.linear_density`)",
+    "kAxialStiffness": "rope material's axial stiffness EA (`material.axial_stiffness`)",
+    "kBendingStiffness": "rope material's bending stiffness EI (`material.bending_stiffness`)",
     "kParticlesPerWorld": "particles of all bodies together: the cap itself (`world.max_particles_per_world`, "
     "`~max_particles_per_world`)",
 }

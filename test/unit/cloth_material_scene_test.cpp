@@ -119,9 +119,22 @@ TEST(ClothMaterialScene, RefusesUnknownPresetsMissingValuesBadValuesAndUnknownKe
   EXPECT_TRUE(contains(refusal(std::string(kGrid) + "    material: {preset: silk, density: 2}\n"),
                        "bodies[0].material.density is not a known key"));
   // The spring model cannot carry a bending rigidity (core validation, the same message everywhere).
-  EXPECT_TRUE(contains(refusal("bodies:\n  - name: c\n    kind: cloth\n    material: cotton\n"),
+  EXPECT_TRUE(contains(refusal("bodies:\n  - name: c\n    kind: cloth\n    model: springs\n    material: cotton\n"),
                        "material.bending_rigidity = 7.8e-06 N·m needs model baraff_witkin"));
-  parseOk("bodies:\n  - name: c\n    kind: cloth\n    material: {preset: cotton, bending_rigidity: 0}\n");
+  parseOk(
+      "bodies:\n  - name: c\n    kind: cloth\n    model: springs\n"
+      "    material: {preset: cotton, bending_rigidity: 0}\n");
+}
+
+TEST(ClothMaterialScene, AGridClothWithAMaterialAndNoModelIsBaraffWitkinWithoutOneSprings)
+{
+  const scene::SceneDef with = parseOk("bodies:\n  - name: c\n    kind: cloth\n    material: cotton\n");
+  const scene::SceneDef without = parseOk("bodies:\n  - name: c\n    kind: cloth\n");
+  ASSERT_EQ(with.bodies.size(), 1u);
+  ASSERT_EQ(without.bodies.size(), 1u);
+  EXPECT_EQ(std::get<core::ClothGridDef>(with.bodies[0]).model, core::ClothModel::BaraffWitkin);
+  EXPECT_EQ(std::get<core::ClothGridDef>(without.bodies[0]).model, core::ClothModel::Springs);
+  expectRoundTrip(with);
 }
 
 TEST(ClothMaterialScene, BodiesWithoutAMaterialWriteTheirConstantsAsBefore)

@@ -216,7 +216,11 @@ void clothTail(YAML::Node node, const SceneDef& scene, const ClothDef& cloth, co
 BodyDef readCloth(MapReader& reader, SceneDef& scene, const std::string& source)
 {
   const core::WorldDef& world = scene.world;
-  std::string name, model_name = "springs";
+  // A grid cloth given by its material is Baraff–Witkin unless `model` says otherwise: only that
+  // model carries a bending rigidity (as ~spawn_cloth does). A mesh cloth keeps the spring default:
+  // Baraff–Witkin needs texture coordinates, which not every mesh has.
+  const bool grid = !reader.has("mesh") && !reader.has("vertices");
+  std::string name, model_name = grid && reader.has("material") ? "baraff_witkin" : "springs";
   reader.require("name", name);
   reader.read("model", model_name);
   core::ClothModel model = core::ClothModel::Springs;
