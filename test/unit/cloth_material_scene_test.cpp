@@ -8,8 +8,12 @@
 
 #include "particle_sim/core/materials/cloth_material.h"
 #include "particle_sim/scene/scene.h"
+#include "scene_test_helpers.h"
 
 using namespace particle_sim;
+using particle_sim_test::contains;
+using particle_sim_test::parseOk;
+using particle_sim_test::refusal;
 
 namespace
 {
@@ -19,28 +23,6 @@ constexpr const char* kGrid =
 constexpr const char* kMesh =
     "bodies:\n  - name: m\n    kind: cloth\n    vertices: [[0, 0, 1], [1, 0, 1], [0, 1, 1]]\n    triangles: [[0, 1, "
     "2]]\n";
-
-scene::SceneDef parseOk(const std::string& text)
-{
-  scene::SceneDef def;
-  const core::Status status = scene::parseScene(text, "test.yaml", def);
-  EXPECT_TRUE(status.ok) << status.message;
-  return def;
-}
-
-std::string refusal(const std::string& text)
-{
-  scene::SceneDef def;
-  const core::Status status = scene::parseScene(text, "test.yaml", def);
-  EXPECT_FALSE(status.ok) << "accepted:\n" << text;
-  return status.message;
-}
-
-::testing::AssertionResult contains(const std::string& message, const std::string& part)
-{
-  if (message.find(part) != std::string::npos) return ::testing::AssertionSuccess();
-  return ::testing::AssertionFailure() << "'" << message << "' does not contain '" << part << "'";
-}
 
 // Parses, writes back and parses again: the same text both times.
 void expectRoundTrip(const scene::SceneDef& def)

@@ -12,34 +12,16 @@
 #include "particle_sim/core/builders/rope.h"
 #include "particle_sim/core/materials/rope_material.h"
 #include "particle_sim/scene/scene.h"
+#include "scene_test_helpers.h"
 
 using namespace particle_sim;
+using particle_sim_test::contains;
+using particle_sim_test::parseOk;
+using particle_sim_test::refusal;
 
 namespace
 {
 const std::string kRope = "bodies:\n  - name: r\n    kind: rope\n    particles: 11\n";
-
-scene::SceneDef parseOk(const std::string& text)
-{
-  scene::SceneDef def;
-  const core::Status status = scene::parseScene(text, "test.yaml", def);
-  EXPECT_TRUE(status.ok) << status.message;
-  return def;
-}
-
-std::string refusal(const std::string& text)
-{
-  scene::SceneDef def;
-  const core::Status status = scene::parseScene(text, "test.yaml", def);
-  EXPECT_FALSE(status.ok) << "accepted:\n" << text;
-  return status.message;
-}
-
-::testing::AssertionResult contains(const std::string& message, const std::string& part)
-{
-  if (message.find(part) != std::string::npos) return ::testing::AssertionSuccess();
-  return ::testing::AssertionFailure() << "'" << message << "' does not contain '" << part << "'";
-}
 
 core::RopeMaterial materialOf(const scene::SceneDef& def)
 {

@@ -16,35 +16,17 @@
 #include "particle_sim/core/integrators/rk4.h"
 #include "particle_sim/core/integrators/verlet.h"
 #include "particle_sim/scene/obj_mesh.h"
+#include "scene_test_helpers.h"
 
 using namespace particle_sim;
+using particle_sim_test::contains;
+using particle_sim_test::parseOk;
+using particle_sim_test::refusal;
 
 namespace
 {
-scene::SceneDef parseOk(const std::string& text)
-{
-  scene::SceneDef def;
-  const core::Status status = scene::parseScene(text, "test.yaml", def);
-  EXPECT_TRUE(status.ok) << status.message;
-  return def;
-}
-
-// Parses `text`, expects a refusal and returns its message.
-std::string refusal(const std::string& text)
-{
-  scene::SceneDef def;
-  const core::Status status = scene::parseScene(text, "test.yaml", def);
-  EXPECT_FALSE(status.ok) << "accepted:\n" << text;
-  return status.message;
-}
-
 constexpr const char* kEmitterHead = "bodies:\n  - name: f\n    kind: emitter\n    type: fountain\n";
 
-::testing::AssertionResult contains(const std::string& message, const std::string& part)
-{
-  if (message.find(part) != std::string::npos) return ::testing::AssertionSuccess();
-  return ::testing::AssertionFailure() << "'" << message << "' does not contain '" << part << "'";
-}
 }  // namespace
 
 TEST(SceneFiles, EveryShippedSceneLoadsAndBuilds)
