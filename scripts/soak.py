@@ -366,6 +366,7 @@ def main():
             workers.append(worker)
 
         rows, calls, errors, pause_windows = [], [], [], []
+        spans = []  # per row: the wall-clock second it covers (time.time() at its start and end)
         start_wall = time.monotonic()
         duration = 60.0 * args.minutes
         last_wall, last_sim = start_wall, state['sim']
@@ -426,10 +427,23 @@ def main():
                 writer.writerow(row)
                 out.flush()
                 rows.append(dict(zip(header, row)))
+                spans.append((wall_now - (now_wall - last_wall), wall_now))
                 last_wall, last_sim = now_wall, now_sim
         stop.set()
         for worker in workers:
             worker.join(30)
+        # A pause is known once the control client has unpaused, which can be after the sampler has
+        # written the second it began in (more so when the clients' CPU is busy). So the paused flag
+        # of every second is decided again now, from every pause window, and the CSV rewritten.
+        while not pauses.empty():
+            pause_windows.append(pauses.get())
+        for row, (begin, end) in zip(rows, spans):
+            if not row['paused'] and any(a <= end and b >= begin for a, b, _ in pause_windows):
+                row['paused'] = 1
+        with open(os.path.join(args.out, 'soak.csv'), 'w', newline='') as out:
+            writer = csv.writer(out)
+            writer.writerow(header)
+            writer.writerows([row[name] for name in header] for row in rows)
         viewer_counts = counts.get(timeout=5) if not counts.empty() else {}
         while not results.empty():
             end, latency, service, ok, message = results.get()
