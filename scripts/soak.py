@@ -293,6 +293,10 @@ def main():
                         help='the CPU the node runs on alone, every other process of the soak on the others '
                              '(default: the last CPU; -1: no pinning)')
     args = parser.parse_args()
+    # SIGINT and SIGTERM end the soak through its clean-up (roscore, node, recorder and the client
+    # processes stopped), also when it was started in the background, where SIGINT comes ignored.
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+    signal.signal(signal.SIGTERM, signal.default_int_handler)
     # The node on a CPU of its own, as a robot's simulator process would be; the load (roscore,
     # clients, recorder, viewers, this sampler) on the others. The node's threads then wait for a
     # CPU only when something outside the soak runs on its CPU (see WAIT_BUDGET).
