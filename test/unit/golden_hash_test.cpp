@@ -45,17 +45,19 @@
 #include "particle_sim/core/integrator.h"
 #include "particle_sim/core/world.h"
 #include "particle_sim/scene/scene.h"
+#include "shipped_scenes.h"
 #include "test_helpers.h"
 
 namespace core = particle_sim::core;
 namespace scene = particle_sim::scene;
 using particle_sim_test::Fnv1a64;
+using particle_sim_test::shippedScenes;
 using particle_sim_test::worldStateHash;
 
 namespace
 {
 constexpr double kSimTime = 2.0;  // [s] simulated per scene and integrator
-const std::string kScenesDir = std::string(PARTICLE_SIM_SOURCE_DIR) + "/config/scenes";
+const std::string& kScenesDir = particle_sim_test::kShippedScenesDir;
 const std::string kGoldenFile = std::string(PARTICLE_SIM_SOURCE_DIR) + "/test/golden/state_hashes.txt";
 
 // Scene × integrator pairs that are not run, each with its reason (written to the golden file as
@@ -82,17 +84,6 @@ std::vector<std::string> coreIntegratorNames()
     if (first != std::string::npos) names.push_back(name.substr(first, last - first + 1));
   }
   return names;
-}
-
-// Every shipped scene file, as its path relative to config/scenes ("hard/long_rope.yaml"), sorted.
-std::vector<std::string> shippedScenes()
-{
-  std::vector<std::string> scenes;
-  for (const auto& entry : std::filesystem::recursive_directory_iterator(kScenesDir))
-    if (entry.is_regular_file() && entry.path().extension() == ".yaml")
-      scenes.push_back(std::filesystem::relative(entry.path(), kScenesDir).generic_string());
-  std::sort(scenes.begin(), scenes.end());
-  return scenes;
 }
 
 std::string hex(std::uint64_t value)
