@@ -33,22 +33,6 @@ bool parseSpringClass(const std::string& text, SpringClass& spring_class)
   return false;
 }
 
-Eigen::Vector3d springForce(const Eigen::Vector3d& xi, const Eigen::Vector3d& xj, const Eigen::Vector3d& vi,
-                            const Eigen::Vector3d& vj, double rest_length, double stiffness, double damping)
-{
-  const Eigen::Vector3d delta = xj - xi;
-  const double length = delta.norm();
-  if (length == 0.0) return Eigen::Vector3d::Zero();
-  const Eigen::Vector3d d = delta / length;
-  return (stiffness * (length - rest_length) + damping * (vj - vi).dot(d)) * d;
-}
-
-double springEnergy(const Eigen::Vector3d& xi, const Eigen::Vector3d& xj, double rest_length, double stiffness)
-{
-  const double stretch = (xj - xi).norm() - rest_length;
-  return 0.5 * stiffness * stretch * stretch;
-}
-
 void springJacobians(const Eigen::Vector3d& xi, const Eigen::Vector3d& xj, double rest_length, double stiffness,
                      double damping, bool definite, Eigen::Matrix3d& dfdx, Eigen::Matrix3d& dfdv)
 {
