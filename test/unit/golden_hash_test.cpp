@@ -51,13 +51,13 @@
 namespace core = particle_sim::core;
 namespace scene = particle_sim::scene;
 using particle_sim_test::Fnv1a64;
+using particle_sim_test::kShippedScenesDir;
 using particle_sim_test::shippedScenes;
 using particle_sim_test::worldStateHash;
 
 namespace
 {
 constexpr double kSimTime = 2.0;  // [s] simulated per scene and integrator
-const std::string& kScenesDir = particle_sim_test::kShippedScenesDir;
 const std::string kGoldenFile = std::string(PARTICLE_SIM_SOURCE_DIR) + "/test/golden/state_hashes.txt";
 
 // Scene × integrator pairs that are not run, each with its reason (written to the golden file as
@@ -220,7 +220,7 @@ TEST(GoldenHash, EveryShippedSceneAndIntegratorEndsInItsGoldenState)
 {
   const std::vector<std::string> integrators = coreIntegratorNames();
   const std::vector<std::string> scenes = shippedScenes();
-  ASSERT_GE(scenes.size(), 30u) << "scene files not found under " << kScenesDir;
+  ASSERT_GE(scenes.size(), 30u) << "scene files not found under " << kShippedScenesDir;
 
   // Every pair's value: the hash, or why it is excluded.
   std::vector<std::pair<std::string, std::string>> results;  // "scene integrator", value
@@ -228,7 +228,7 @@ TEST(GoldenHash, EveryShippedSceneAndIntegratorEndsInItsGoldenState)
   for (const std::string& scene_name : scenes)
   {
     scene::SceneDef scene_def;
-    const core::Status loaded = scene::loadSceneFile(kScenesDir + "/" + scene_name, scene_def);
+    const core::Status loaded = scene::loadSceneFile(kShippedScenesDir + "/" + scene_name, scene_def);
     ASSERT_TRUE(loaded.ok) << scene_name << ": " << loaded.message;
     for (const std::string& note : tfOnlyFollowers(scene_def))
       notes.push_back(scene_name + ": " + note + ", which only tf provides: offline it stays where the scene puts it");
