@@ -58,7 +58,7 @@ for victim in b a; do
 done
 
 echo "== two SimNodelets in one manager"
-background rosrun nodelet nodelet manager __name:=manager >"$work/manager.log" 2>&1
+background "${nodelet_manager[@]}" __name:=manager >"$work/manager.log" 2>&1
 manager_pid=$background_pid
 load() {
   background rosrun nodelet nodelet load particle_sim/SimNodelet manager __name:="sim_$1" \

@@ -14,6 +14,11 @@
 #                            ROS_MASTER_URI exported; called again after stop_roscore, the same port
 #   stop_roscore             stops the master started last and waits until it is gone
 #   background CMD...        runs CMD in the background (pid in $background_pid), stopped on exit
+#   "${nodelet_manager[@]}" ARGS...   the command of Debian's nodelet manager (rosrun nodelet nodelet
+#                            manager), through rosrun --prefix "$PARTICLE_SIM_MANAGER_PREFIX" when that
+#                            is set (scripts/test --sanitize preloads the sanitizer runtime there: the
+#                            manager itself is not instrumented); rosrun execs it, so $background_pid
+#                            is the manager's pid
 #   free_port                prints a TCP port nobody listens on now
 #   wait_for_service NAME [SECONDS]   until the master lists service NAME (default 30 s); 1 if not
 #   wait_for_log SECONDS FILE REGEX   until FILE matches the extended REGEX; 1 if not
@@ -68,6 +73,9 @@ background() {
   background_pid=$!
   started+=("$background_pid")
 }
+
+nodelet_manager=(rosrun nodelet nodelet manager)
+[ -z "${PARTICLE_SIM_MANAGER_PREFIX:-}" ] || nodelet_manager=(rosrun --prefix "$PARTICLE_SIM_MANAGER_PREFIX" nodelet nodelet manager)
 
 # True if text $1 has a line matching the extended regex $2 (no pipe: under pipefail, grep -q
 # ending a pipe early fails the writer).

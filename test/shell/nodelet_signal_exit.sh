@@ -13,7 +13,7 @@ use_devel_space
 start_roscore
 for signal in INT TERM; do
   echo "== SIG$signal"
-  background rosrun nodelet nodelet manager __name:=sim_manager >"$work/manager_$signal.log" 2>&1
+  background "${nodelet_manager[@]}" __name:=sim_manager >"$work/manager_$signal.log" 2>&1
   manager_pid=$background_pid
   background rosrun nodelet nodelet load particle_sim/SimNodelet sim_manager __name:=particle_sim \
     _scene:="$PARTICLE_SIM_ROOT/config/scenes/demo.yaml" _paused:=true _status_period:=0 \
