@@ -53,6 +53,38 @@ bool parseIntegratorType(const std::string& text, IntegratorType& type)
   return true;
 }
 
+const char* toString(LinearSolverType type)
+{
+  switch (type)
+  {
+    case LinearSolverType::ConjugateGradient:
+      return "cg";
+    case LinearSolverType::Direct:
+      return "direct";
+    case LinearSolverType::Auto:
+      break;
+  }
+  return "auto";
+}
+
+bool parseLinearSolverType(const std::string& text, LinearSolverType& type)
+{
+  for (LinearSolverType t : {LinearSolverType::Auto, LinearSolverType::ConjugateGradient, LinearSolverType::Direct})
+  {
+    if (text == toString(t))
+    {
+      type = t;
+      return true;
+    }
+  }
+  return false;
+}
+
+const char* linearSolverTypeNames()
+{
+  return "auto, cg, direct";
+}
+
 IntegratorDef resolve(const BodyIntegratorDef& body, const IntegratorDef& defaults)
 {
   IntegratorDef def = defaults;
@@ -61,12 +93,13 @@ IntegratorDef resolve(const BodyIntegratorDef& body, const IntegratorDef& defaul
   def.cg_tolerance = body.cg_tolerance.value_or(defaults.cg_tolerance);
   def.cg_max_iterations = body.cg_max_iterations.value_or(defaults.cg_max_iterations);
   def.max_substeps = body.max_substeps.value_or(defaults.max_substeps);
+  def.linear_solver = body.linear_solver.value_or(defaults.linear_solver);
   return def;
 }
 
 BodyIntegratorDef settingEveryField(const IntegratorDef& def)
 {
-  return {def.type, def.verlet_damping, def.cg_tolerance, def.cg_max_iterations, def.max_substeps};
+  return {def.type, def.verlet_damping, def.cg_tolerance, def.cg_max_iterations, def.max_substeps, def.linear_solver};
 }
 
 Status validate(const BodyIntegratorDef& def)

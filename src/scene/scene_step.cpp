@@ -67,6 +67,7 @@ void setWhereDifferent(core::BodyIntegratorDef& body, const core::IntegratorDef&
   set(body.cg_tolerance, wanted.cg_tolerance, defaults.cg_tolerance);
   set(body.cg_max_iterations, wanted.cg_max_iterations, defaults.cg_max_iterations);
   set(body.max_substeps, wanted.max_substeps, defaults.max_substeps);
+  set(body.linear_solver, wanted.linear_solver, defaults.linear_solver);
 }
 }  // namespace
 

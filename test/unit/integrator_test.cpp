@@ -435,9 +435,11 @@ TEST(Integrator, NewSpringConstantGivesThePredictedFrequency)
 
 TEST(Integrator, ImplicitSolveConvergesAndReportsIt)
 {
+  // The conjugate gradient's report (a rope would otherwise be solved directly: linear_solver auto).
   RopeDef def = rope(20, kImplicitEulerIntegrator);
   def.bend_stiffness = 50.0;
   def.pins = {0};
+  def.integrator.linear_solver = LinearSolverType::ConjugateGradient;
   ASSERT_TRUE(validate(def, 100).ok) << validate(def, 100).message;
   SpringNetworkBody body(buildRope(def));
   const Environment env = gravityOnly();
@@ -473,6 +475,16 @@ TEST(Integrator, ImplicitSolveConvergesAndReportsIt)
   EXPECT_EQ(body.lastSolve().iterations, 1);
   EXPECT_FALSE(body.lastSolve().converged);
   EXPECT_GT(body.lastSolve().relative_residual, capped.cg_tolerance);
+
+  // The direct solver: no CG iteration, within the tolerance, and reported as direct.
+  IntegratorDef direct = body.integrator();
+  direct.linear_solver = LinearSolverType::Direct;
+  ASSERT_TRUE(body.setIntegrator(direct).ok);
+  body.step(1.0 / 60.0, env);
+  EXPECT_TRUE(body.lastSolve().direct);
+  EXPECT_EQ(body.lastSolve().iterations, 0);
+  EXPECT_TRUE(body.lastSolve().converged);
+  EXPECT_LE(body.lastSolve().relative_residual, direct.cg_tolerance);
 
   // The explicit methods do no solve.
   IntegratorDef symplectic;

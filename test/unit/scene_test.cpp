@@ -226,12 +226,28 @@ TEST(SceneFiles, WritesOnlyTheIntegratorKeysABodySets)
     return n;
   };
   EXPECT_EQ(count("integrator"), 2) << written;  // the world's and b's
-  for (const char* key : {"verlet_damping", "cg_tolerance", "cg_max_iterations", "max_substeps"})
+  for (const char* key : {"verlet_damping", "cg_tolerance", "cg_max_iterations", "max_substeps", "linear_solver"})
     EXPECT_EQ(count(key), 1) << key << " in\n" << written;  // the world's only
   scene::SceneDef again;
   ASSERT_TRUE(scene::parseScene(written, "written", again).ok);
   EXPECT_EQ(std::get<core::JellyDef>(again.bodies[1]).integrator.type, core::kVerletIntegrator);
   EXPECT_EQ(again.world.integrator.cg_tolerance, 1.0e-5);
+}
+
+TEST(SceneFiles, ReadsAndWritesTheLinearSolver)
+{
+  // world.linear_solver is every implicit body's default; a body may set its own; both read back.
+  const scene::SceneDef def = parseOk(
+      "world: {linear_solver: cg}\n"
+      "bodies:\n  - {name: a, kind: rope}\n  - {name: b, kind: rope, linear_solver: direct}\n");
+  EXPECT_EQ(def.world.integrator.linear_solver, core::LinearSolverType::ConjugateGradient);
+  EXPECT_FALSE(std::get<core::RopeDef>(def.bodies[0]).integrator.linear_solver.has_value());
+  EXPECT_EQ(std::get<core::RopeDef>(def.bodies[1]).integrator.linear_solver, core::LinearSolverType::Direct);
+  scene::SceneDef again;
+  ASSERT_TRUE(scene::parseScene(scene::toYaml(def), "written", again).ok);
+  EXPECT_EQ(again.world.integrator.linear_solver, core::LinearSolverType::ConjugateGradient);
+  EXPECT_EQ(std::get<core::RopeDef>(again.bodies[1]).integrator.linear_solver, core::LinearSolverType::Direct);
+  EXPECT_EQ(parseOk("bodies: []\n").world.integrator.linear_solver, core::IntegratorDef().linear_solver);
 }
 
 TEST(SceneFiles, ReadsSpringNetworksWithInitialAndGivenRestLengths)
@@ -271,6 +287,8 @@ TEST(SceneFiles, RefusesBadRopesAndNetworks)
                "integrator = 'euler' is not an integrator; allowed: symplectic_euler, verlet, implicit_euler, rk4"));
   EXPECT_TRUE(contains(refusal(rope + "    verlet_damping: 1.5\n"), "verlet_damping = 1.5 is out of range"));
   EXPECT_TRUE(contains(refusal("world:\n  cg_max_iterations: 0\n"), "cg_max_iterations = 0 is out of range"));
+  EXPECT_TRUE(contains(refusal(rope + "    linear_solver: lu\n"),
+                       "bodies[0].linear_solver = 'lu' is not a linear solver; allowed: auto, cg, direct"));
 
   const std::string net = "bodies:\n  - name: n\n    kind: spring_network\n";
   EXPECT_TRUE(contains(refusal(net + "    particles: []\n"), "particles must be a non-empty list"));

@@ -56,6 +56,25 @@ bool parseIntegratorType(const std::string& text, IntegratorType& type);
 /// for error messages.
 std::string integratorTypeNames();
 
+/// How the implicit methods solve their linear system each step.
+enum class LinearSolverType
+{
+  Auto,               ///< direct where its factorization costs at most kDirectSolverCgIterations CG iterations, else CG
+  ConjugateGradient,  ///< Baraff & Witkin's modified preconditioned conjugate gradient, to cg_tolerance
+  Direct,             ///< sparse block L D Lᵀ in a fill-reducing order (exact; O(n) on a rope)
+};
+/// `auto` picks the direct solver when one factorization and solve cost at most this many
+/// conjugate-gradient iterations, counted in floating-point operations from the pattern: true of
+/// ropes and chains (no fill) and of small sheets; large sheets and lattices stay with CG.
+inline constexpr double kDirectSolverCgIterations = 40.0;
+
+/// "auto", "cg", "direct".
+const char* toString(LinearSolverType type);
+/// Parses "auto", "cg" or "direct"; false when unknown.
+bool parseLinearSolverType(const std::string& text, LinearSolverType& type);
+/// "auto, cg, direct", for error messages.
+const char* linearSolverTypeNames();
+
 /// An integrator and its settings, with defaults.
 struct IntegratorDef
 {
@@ -64,6 +83,8 @@ struct IntegratorDef
   double cg_tolerance = 1e-8;   ///< implicit Euler: stop when |r| <= tolerance |b| (filtered residuals), > 0
   int cg_max_iterations = 500;  ///< implicit Euler: iteration cap, >= 1
   int max_substeps = 64;        ///< explicit methods: most substeps a step may be split into to stay stable, >= 1
+  LinearSolverType linear_solver =
+      LinearSolverType::ConjugateGradient;  ///< implicit methods: how each step's system is solved
 };
 
 /// The integrator settings of a body definition (RopeDef, ClothGridDef, MeshClothDef, JellyDef,
@@ -78,6 +99,7 @@ struct BodyIntegratorDef
   std::optional<double> cg_tolerance;
   std::optional<int> cg_max_iterations;
   std::optional<int> max_substeps;
+  std::optional<LinearSolverType> linear_solver;
 };
 
 /// `defaults` with every field that `body` sets taken from `body`.
@@ -100,7 +122,8 @@ Status validate(const BodyIntegratorDef& def);
 /// What the last implicit solve did (zero iterations for the explicit methods).
 struct SolverReport
 {
-  int iterations = 0;
+  bool direct = false;             ///< the direct solver factorized and solved (CG iterations may follow it, to polish)
+  int iterations = 0;              ///< conjugate-gradient iterations
   double relative_residual = 0.0;  ///< |r| / |b| at the end
   bool converged = true;           ///< the residual reached the tolerance within the iteration cap
   bool breakdown = false;          ///< CG met a direction of non-positive (or NaN) curvature: the solve failed

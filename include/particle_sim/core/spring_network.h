@@ -192,7 +192,7 @@ private:
   void coupledPairs(std::vector<std::pair<int, int>>& pairs) const override { forces_.coupledPairs(pairs); }
   bool suppliesEnergy() const override { return forces_.suppliesEnergy(forceContext(gravity_)); }
   double mechanicalEnergy() const override { return mechanicalEnergy(gravity_); }
-  void recordEvent(std::string event) override { guard_.record(std::move(event)); }
+  void recordEvent(std::string_view event) override { guard_.record(event); }
   // What the force elements read besides the state, with `gravity` [m/s²].
   ForceContext forceContext(const Eigen::Vector3d& gravity) const { return {mass_, pinned_, gravity, air_, damping_}; }
 

@@ -2,8 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <string>
 
+#include "particle_sim/core/integrators/stability_guard.h"
 #include "particle_sim/core/validation.h"
 
 namespace particle_sim
@@ -123,7 +125,7 @@ SolverReport Bdf2Method::advance(double h, DynamicSystem& system, const Integrat
   solver_.begin(h_bdf, mass, force_, &w_);
   system.addJacobians(x_predicted_, solver_);
   x = x_hat_;  // the solve sets v = v_p + Δv, x = x̂ + h' v
-  SolverReport report = solver_.solve(pinned, settings.cg_tolerance, settings.cg_max_iterations, x, v);
+  SolverReport report = solver_.solve(pinned, settings, x, v);
   x_previous_ = x0_;
   v_previous_ = v0_;
   if (!conservative || report.breakdown) return report;
@@ -157,15 +159,21 @@ SolverReport Bdf2Method::advance(double h, DynamicSystem& system, const Integrat
     {
       if (!pinned[i]) v.col(i) = centre_velocity + scale * (v.col(i) - centre_velocity);
     }
-    system.recordEvent("bdf2 would have gained " + formatValue(gained) +
-                       " J in one step; velocities relative to the centre of mass scaled by " + formatValue(scale));
+    char event[StabilityGuard::kEventCapacity];
+    std::snprintf(event, sizeof event,
+                  "bdf2 would have gained %.6g J in one step; velocities relative to the centre of mass scaled by %.6g",
+                  gained, scale);
+    system.recordEvent(event);
     return report;
   }
   x = x0_;
   v = v0_;
-  system.recordEvent(
-      "bdf2 would have gained " + formatValue(gained) +
-      " J in one step, more than the kinetic energy of the relative motion; step redone with implicit_euler");
+  char event[StabilityGuard::kEventCapacity];
+  std::snprintf(event, sizeof event,
+                "bdf2 would have gained %.6g J in one step, more than the kinetic energy of the relative motion; step "
+                "redone with implicit_euler",
+                gained);
+  system.recordEvent(event);
   return first_step_.step(h, system, settings);
 }
 

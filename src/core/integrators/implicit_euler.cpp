@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
+#include "particle_sim/core/integrators/stability_guard.h"
 #include "particle_sim/core/validation.h"
 
 namespace particle_sim
@@ -35,7 +37,7 @@ SolverReport ImplicitEulerMethod::step(double h, DynamicSystem& system, const In
   system.computeForces(x, v, force_);
   solver_.begin(h, mass, force_, &v0_);
   system.addJacobians(x, solver_);
-  SolverReport report = solver_.solve(pinned, settings.cg_tolerance, settings.cg_max_iterations, x, v);
+  SolverReport report = solver_.solve(pinned, settings, x, v);
   if (!conservative || report.breakdown) return report;
 
   // 2. If that one linearisation gained energy (large rotations or stretches in one step), Newton
@@ -51,7 +53,7 @@ SolverReport ImplicitEulerMethod::step(double h, DynamicSystem& system, const In
     solver_.begin(h, mass, force_, nullptr);
     system.addJacobians(x, solver_);
     x = x0_;  // the solve sets x = x0 + h v_{k+1}
-    report = solver_.solve(pinned, settings.cg_tolerance, settings.cg_max_iterations, x, v);
+    report = solver_.solve(pinned, settings, x, v);
     if (report.breakdown) return report;
   }
 
@@ -67,9 +69,12 @@ SolverReport ImplicitEulerMethod::step(double h, DynamicSystem& system, const In
     {
       if (!pinned[i]) v.col(i) *= scale;
     }
-    system.recordEvent("implicit_euler would have gained " + formatValue(energy_after - energy_before) +
-                       " J in one step (" + std::to_string(newton) + " Newton iterations); velocities scaled by " +
-                       formatValue(scale));
+    char event[StabilityGuard::kEventCapacity];
+    std::snprintf(
+        event, sizeof event,
+        "implicit_euler would have gained %.6g J in one step (%d Newton iterations); velocities scaled by %.6g",
+        energy_after - energy_before, newton, scale);
+    system.recordEvent(event);
   }
   return report;
 }

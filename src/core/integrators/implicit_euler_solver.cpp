@@ -44,6 +44,8 @@ void ImplicitEulerSolver::setPattern(int particles, const std::vector<std::pair<
     row_start_[i + 1] = static_cast<int>(block_row_.size());
   }
   blocks_.assign(block_row_.size(), Eigen::Matrix3d::Zero());
+  direct_ = SparseBlockLdlt();
+  auto_choice_ = DirectChoice::Undecided;
   inverse_diagonal_.assign(particles, Eigen::Matrix3d::Identity());
   for (Eigen::Matrix3Xd* m : {&delta_v_, &rhs_, &residual_, &direction_, &product_, &preconditioned_})
     m->setZero(3, particles);
@@ -93,16 +95,50 @@ void ImplicitEulerSolver::precondition(const Eigen::Matrix3Xd& r, Eigen::Matrix3
     out.col(i).noalias() = inverse_diagonal_[i] * r.col(i);
 }
 
-SolverReport ImplicitEulerSolver::solve(const std::vector<char>& pinned, double tolerance, int max_iterations,
+bool ImplicitEulerSolver::usesDirect(LinearSolverType solver)
+{
+  if (solver == LinearSolverType::ConjugateGradient) return false;
+  if (solver == LinearSolverType::Auto && auto_choice_ == DirectChoice::Undecided)
+  {
+    // One CG iteration: a product with A (18 flops a block) and about 40 flops a particle of vector
+    // passes (residual, direction, preconditioner, dots).
+    const SparseBlockLdlt::Cost direct = SparseBlockLdlt::estimateCost(row_start_, block_column_);
+    const double cg_iteration = 18.0 * static_cast<double>(blocks_.size()) + 40.0 * diagonal_block_.size();
+    auto_choice_ = direct.factor_flops + direct.solve_flops <= kDirectSolverCgIterations * cg_iteration
+                       ? DirectChoice::Cheaper
+                       : DirectChoice::Dearer;
+  }
+  if (solver == LinearSolverType::Auto && auto_choice_ == DirectChoice::Dearer) return false;
+  if (!direct_.analyzed()) direct_.analyze(row_start_, block_column_);
+  return true;
+}
+
+SolverReport ImplicitEulerSolver::solve(const std::vector<char>& pinned, const IntegratorDef& settings,
                                         Eigen::Matrix3Xd& x, Eigen::Matrix3Xd& v)
 {
-  const int n = static_cast<int>(x.cols());
-  for (int i = 0; i < n; ++i)
-    inverse_diagonal_[i] = blocks_[diagonal_block_[i]].inverse();
-
-  // Modified preconditioned CG (Baraff & Witkin 1998, section 5.3), warm started from the last
-  // step's Δv, with pinned rows filtered out of the start, every residual and every direction.
+  // Directly, when chosen and the factorization succeeds (a singular or non-finite pivot leaves it
+  // to CG, from the last step's Δv); then CG, which stops at once when the residual is small enough.
   SolverReport report;
+  if (usesDirect(settings.linear_solver) && direct_.factorize(blocks_, pinned))
+  {
+    residual_ = rhs_;
+    filter(pinned, residual_);
+    direct_.solve(residual_, delta_v_);
+    report.direct = true;
+  }
+  conjugateGradient(pinned, settings.cg_tolerance, settings.cg_max_iterations, report);
+
+  // v1 = v0 + Δv, x1 = x0 + h v1.
+  v += delta_v_;
+  x += h_ * v;
+  return report;
+}
+
+void ImplicitEulerSolver::conjugateGradient(const std::vector<char>& pinned, double tolerance, int max_iterations,
+                                            SolverReport& report)
+{
+  // Modified preconditioned CG (Baraff & Witkin 1998, section 5.3), started from delta_v_, with
+  // pinned rows filtered out of the start, every residual and every direction.
   filter(pinned, delta_v_);
   residual_ = rhs_;
   filter(pinned, residual_);
@@ -110,10 +146,15 @@ SolverReport ImplicitEulerSolver::solve(const std::vector<char>& pinned, double 
   multiply(delta_v_, product_);
   residual_ -= product_;
   filter(pinned, residual_);
-  precondition(residual_, direction_);
-  filter(pinned, direction_);
-  double delta_new = dot(residual_, direction_);
   double residual_norm = std::sqrt(dot(residual_, residual_));
+  if (residual_norm > tolerance * rhs_norm && max_iterations > 0)
+  {
+    for (int i = 0; i < static_cast<int>(diagonal_block_.size()); ++i)
+      inverse_diagonal_[i] = blocks_[diagonal_block_[i]].inverse();
+    precondition(residual_, direction_);
+    filter(pinned, direction_);
+  }
+  double delta_new = dot(residual_, direction_);
   while (residual_norm > tolerance * rhs_norm && report.iterations < max_iterations)
   {
     multiply(direction_, product_);
@@ -137,11 +178,7 @@ SolverReport ImplicitEulerSolver::solve(const std::vector<char>& pinned, double 
   }
   report.relative_residual = rhs_norm > 0.0 ? residual_norm / rhs_norm : 0.0;
   report.converged = residual_norm <= tolerance * rhs_norm;
-
-  // v1 = v0 + Δv, x1 = x0 + h v1.
-  v += delta_v_;
-  x += h_ * v;
-  return report;
+  if (!std::isfinite(residual_norm)) report.converged = false;
 }
 
 }  // namespace core

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 
 #include "particle_sim/core/integrators/implicit_euler.h"
@@ -60,9 +61,13 @@ int StabilityGuard::substeps(IntegratorType type, double dt, double omega_max, d
 {
   const int substeps = planSubsteps(type, dt, omega_max, c_max, max_substeps).substeps;
   if (substeps > 1 && substeps != last_substeps)
-    record(std::string(toString(type)) + " needs h (omega + c) <= " + formatValue(stabilityLimit(type)) +
-           ": dt = " + formatValue(dt) + " s split into " + std::to_string(substeps) +
-           " substeps (omega_max = " + formatValue(omega_max) + " 1/s)");
+  {
+    char event[kEventCapacity];
+    std::snprintf(event, sizeof event,
+                  "%s needs h (omega + c) <= %.6g: dt = %.6g s split into %d substeps (omega_max = %.6g 1/s)",
+                  toString(type), stabilityLimit(type), dt, substeps, omega_max);
+    record(event);
+  }
   return substeps;
 }
 
@@ -104,10 +109,10 @@ std::string StabilityGuard::freezeReason(IntegratorType type, double dt, bool so
   return reason;
 }
 
-void StabilityGuard::record(std::string event)
+void StabilityGuard::record(std::string_view event)
 {
   ++events_;
-  last_event_ = std::move(event);
+  last_event_.assign(event.data(), event.size());  // within the capacity reserved at construction
 }
 
 void StabilityGuard::clear()

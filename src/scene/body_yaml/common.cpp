@@ -40,6 +40,17 @@ void readIntegrator(MapReader& reader, core::BodyIntegratorDef& integrator)
   readSetting(reader, "cg_tolerance", integrator.cg_tolerance);
   readSetting(reader, "cg_max_iterations", integrator.cg_max_iterations);
   readSetting(reader, "max_substeps", integrator.max_substeps);
+  if (reader.has("linear_solver"))
+  {
+    std::string solver;
+    reader.read("linear_solver", solver);
+    core::LinearSolverType type;
+    if (!core::parseLinearSolverType(solver, type))
+      reader.fail(reader.node()["linear_solver"],
+                  reader.field("linear_solver") + " = " + core::quoteReceived(solver) +
+                      " is not a linear solver; allowed: " + core::linearSolverTypeNames());
+    integrator.linear_solver = type;
+  }
 }
 
 void readIntegrator(MapReader& reader, core::IntegratorDef& integrator)
@@ -56,6 +67,7 @@ void writeIntegrator(YAML::Node node, const core::BodyIntegratorDef& i)
   if (i.cg_tolerance) node["cg_tolerance"] = *i.cg_tolerance;
   if (i.cg_max_iterations) node["cg_max_iterations"] = *i.cg_max_iterations;
   if (i.max_substeps) node["max_substeps"] = *i.max_substeps;
+  if (i.linear_solver) node["linear_solver"] = core::toString(*i.linear_solver);
 }
 
 void writeIntegrator(YAML::Node node, const core::IntegratorDef& i)

@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "particle_sim/core/integrator.h"
+#include "particle_sim/core/integrators/sparse_block_ldlt.h"
 
 namespace particle_sim
 {
@@ -16,7 +17,9 @@ namespace core
 ///
 /// solved by their modified preconditioned conjugate gradient: pinned particles' Δv is held at 0
 /// by filtering every search direction and residual (no huge masses); 3x3 block-Jacobi
-/// preconditioner; warm start from the previous step's Δv.
+/// preconditioner; warm start from the previous step's Δv. Or, by IntegratorDef::linear_solver,
+/// directly (SparseBlockLdlt, the same filtered system), with CG iterations after it only if its
+/// residual misses the tolerance; `auto` decides once per pattern from the two solvers' flop counts.
 ///
 /// The matrix is block-sparse with 3x3 blocks. Its pattern (which particle pairs are coupled) is
 /// set once per body by setPattern(); each step the force elements add their Jacobian blocks with
@@ -49,12 +52,17 @@ public:
   }
   /// Solves for Δv with pinned rows filtered, then v += Δv, x += h v. Pinned particles keep the
   /// velocity in v (the one that carries them to their target).
-  SolverReport solve(const std::vector<char>& pinned, double tolerance, int max_iterations, Eigen::Matrix3Xd& x,
+  SolverReport solve(const std::vector<char>& pinned, const IntegratorDef& settings, Eigen::Matrix3Xd& x,
                      Eigen::Matrix3Xd& v);
+  /// Whether `solver` means the direct solver for this pattern (`auto` compares the flop counts of
+  /// one factorization and solve with kDirectSolverCgIterations CG iterations; analysed once).
+  bool usesDirect(LinearSolverType solver);
   /// Forgets the warm start (after a reset or a jump of the state).
   void clearWarmStart() { delta_v_.setZero(); }
 
 private:
+  // CG iterations from delta_v_ until the filtered residual is within tolerance |b| or the cap.
+  void conjugateGradient(const std::vector<char>& pinned, double tolerance, int max_iterations, SolverReport& report);
   void multiply(const Eigen::Matrix3Xd& p, Eigen::Matrix3Xd& out) const;
   static void filter(const std::vector<char>& pinned, Eigen::Matrix3Xd& p);
   void precondition(const Eigen::Matrix3Xd& r, Eigen::Matrix3Xd& out) const;
@@ -63,6 +71,13 @@ private:
   std::vector<int> row_start_, block_row_, block_column_, diagonal_block_;
   std::vector<Eigen::Matrix3d> blocks_;
   std::vector<Eigen::Matrix3d> inverse_diagonal_;
+  SparseBlockLdlt direct_;
+  enum class DirectChoice
+  {
+    Undecided,
+    Cheaper,
+    Dearer
+  } auto_choice_ = DirectChoice::Undecided;
   double h_ = 0.0;
   const Eigen::Matrix3Xd* v0_ = nullptr;
   Eigen::Matrix3Xd delta_v_, rhs_, residual_, direction_, product_, preconditioned_;

@@ -2,6 +2,7 @@
 
 #include <Eigen/Core>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "particle_sim/core/integrator.h"
@@ -49,7 +50,7 @@ public:
   virtual double kineticEnergy() const = 0;     ///< [J] of the current state, free particles
   virtual double mechanicalEnergy() const = 0;  ///< [J] kinetic + potential of the current state
   /// Counts and describes a stability event (e.g. energy taken out by the implicit step).
-  virtual void recordEvent(std::string event) = 0;
+  virtual void recordEvent(std::string_view event) = 0;
 };
 
 /// One time integrator. Its identity, order, stability limit and whether it is implicit are

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <string>
+#include <string_view>
 
 #include "particle_sim/core/integrator.h"
 #include "particle_sim/core/integrators/implicit_euler.h"
@@ -36,6 +37,8 @@ struct SubstepPlan
 class StabilityGuard
 {
 public:
+  StabilityGuard() { last_event_.reserve(kEventCapacity); }
+
   /// What `auto` runs at step dt [s] with the bounds ω_max and c_max [1/s]: Verlet when
   /// h (ω_max + c_max) is at most half Verlet's limit, else implicit Euler.
   static IntegratorType chooseAuto(double dt, double omega_max, double c_max);
@@ -68,8 +71,10 @@ public:
   /// The reason to freeze after a step that ended non-finite or with a failed solve.
   std::string freezeReason(IntegratorType type, double dt, bool solve_failed);
 
-  /// Counts and describes a stability event.
-  void record(std::string event);
+  /// Counts and describes a stability event. Allocates nothing for a description of at most
+  /// kEventCapacity characters (an event inside a warmed-up step, such as an energy correction).
+  void record(std::string_view event);
+  static constexpr std::size_t kEventCapacity = 512;
   long long events() const { return events_; }
   const std::string& lastEvent() const { return last_event_; }
   /// Back to no events and no `auto` decision (build, reset).
