@@ -77,6 +77,8 @@ SimStatus buildSimStatus(const core::World& world, const ros::Time& stamp, const
       b.last_stability_event = spring_body.lastStabilityEvent();
       b.max_strain = spring_body.maxStrain();
       b.pinned_count = static_cast<std::uint32_t>(spring_body.pinnedCount());
+      if (core::isImplicit(integratorThatRan(spring_body)))
+        b.linear_solver = spring_body.lastSolve().direct ? "direct" : "cg";
       b.solver_iterations = static_cast<std::uint32_t>(std::max(0, spring_body.lastSolve().iterations));
       b.solver_residual = spring_body.lastSolve().relative_residual;
       b.frozen = spring_body.frozen();
@@ -170,8 +172,9 @@ void buildDiagnostics(const core::World& world, const LoopFigures& loop, double 
 
 std::string statusLine(const core::World& world, double real_time_factor, double step_time_us, bool paused)
 {
-  // The implicit solves of the last step: most CG iterations and worst relative residual.
-  int cg_iterations = 0;
+  // The implicit solves of the last step: how many were direct, most CG iterations and worst
+  // relative residual.
+  int cg_iterations = 0, direct_solves = 0, implicit_solves = 0;
   double cg_residual = 0.0;
   bool any_implicit = false;
   for (const auto& body : world.bodies())
@@ -180,11 +183,18 @@ std::string statusLine(const core::World& world, double real_time_factor, double
     const auto& spring_body = static_cast<const core::SpringNetworkBody&>(*body);
     if (!core::isImplicit(integratorThatRan(spring_body))) continue;
     any_implicit = true;
+    ++implicit_solves;
+    direct_solves += spring_body.lastSolve().direct ? 1 : 0;
     cg_iterations = std::max(cg_iterations, spring_body.lastSolve().iterations);
     cg_residual = std::max(cg_residual, spring_body.lastSolve().relative_residual);
   }
-  char solver[96] = "";
-  if (any_implicit)
+  char solver[128] = "";
+  if (any_implicit && direct_solves == implicit_solves && cg_iterations == 0)
+    std::snprintf(solver, sizeof(solver), " | direct solve, residual %.1e", cg_residual);
+  else if (any_implicit && direct_solves > 0)
+    std::snprintf(solver, sizeof(solver), " | %d of %d solves direct, CG %d iterations, residual %.1e", direct_solves,
+                  implicit_solves, cg_iterations, cg_residual);
+  else if (any_implicit)
     std::snprintf(solver, sizeof(solver), " | CG %d iterations, residual %.1e", cg_iterations, cg_residual);
   char line[512];
   std::snprintf(line, sizeof(line), "sim time %.3f s | real-time factor %.2f | live particles %d | step %.1f us%s%s",

@@ -22,7 +22,8 @@ namespace
 // A world without ground (free flight) holding a fountain that bursts 5 particles straight up at
 // 2 m/s from 1 m high, mass 0.01 kg each, and a rope of 10 particles pinned at both ends, 2 m long
 // at rest but stretched to 3 m (strain 0.5).
-core::World makeWorld(core::IntegratorType rope_integrator = core::kImplicitEulerIntegrator)
+core::World makeWorld(core::IntegratorType rope_integrator = core::kImplicitEulerIntegrator,
+                      core::LinearSolverType linear_solver = core::LinearSolverType::Auto)
 {
   core::WorldDef def;
   def.ground.enabled = false;
@@ -45,6 +46,7 @@ core::World makeWorld(core::IntegratorType rope_integrator = core::kImplicitEule
   rope.rest_length = 2.0;
   rope.pins = {0, -1};
   rope.integrator.type = rope_integrator;
+  rope.integrator.linear_solver = linear_solver;
   EXPECT_TRUE(world.addRope(rope).ok);
   return world;
 }
@@ -103,7 +105,11 @@ TEST(StatusConversions, SimStatusDescribesTheWorldAndEveryBody)
   EXPECT_NEAR(rope.mass, core::RopeDef().mass, 1e-12);  // [kg] the rope's total, pinned ends included
   EXPECT_FALSE(rope.frozen);
   EXPECT_TRUE(rope.frozen_reason.empty());
-  EXPECT_GT(rope.solver_iterations, 0u);  // an implicit step solves
+  // An implicit step solves: a rope's system directly (integrator.linear_solver auto: no fill, so
+  // cheaper than a few CG iterations), to within cg_tolerance without CG iterations after it.
+  EXPECT_EQ(rope.linear_solver, "direct");
+  EXPECT_EQ(rope.solver_iterations, 0u);
+  EXPECT_LE(rope.solver_residual, core::IntegratorDef().cg_tolerance);
   EXPECT_GE(rope.max_strain, 0.0);
 }
 
@@ -201,11 +207,22 @@ TEST(StatusConversions, StatusLineShowsTimeRateParticlesStepAndTheImplicitSolves
   core::World world = makeWorld();
   for (int k = 0; k < 10; ++k)
     world.step();
+  // The rope is solved directly (linear_solver auto).
   const std::string line = statusLine(world, 0.987, 42.26, true);
-  EXPECT_EQ(line.rfind("sim time 0.010 s | real-time factor 0.99 | live particles 15 | step 42.3 us | CG ", 0), 0u)
+  EXPECT_EQ(line.rfind("sim time 0.010 s | real-time factor 0.99 | live particles 15 | step 42.3 us | direct solve, "
+                       "residual ",
+                       0),
+            0u)
       << line;
-  EXPECT_NE(line.find(" iterations, residual "), std::string::npos) << line;
   EXPECT_EQ(line.substr(line.size() - 9), " | paused");
+
+  // By the conjugate gradient: its iterations.
+  core::World cg_world = makeWorld(core::kImplicitEulerIntegrator, core::LinearSolverType::ConjugateGradient);
+  cg_world.step();
+  const std::string cg_line = statusLine(cg_world, 1.0, 1.0, false);
+  EXPECT_EQ(cg_line.rfind("sim time 0.001 s | real-time factor 1.00 | live particles 15 | step 1.0 us | CG ", 0), 0u)
+      << cg_line;
+  EXPECT_NE(cg_line.find(" iterations, residual "), std::string::npos) << cg_line;
 
   // Without an implicit body, no solver figures.
   core::World explicit_world = makeWorld(core::kVerletIntegrator);

@@ -83,8 +83,7 @@ struct IntegratorDef
   double cg_tolerance = 1e-8;   ///< implicit Euler: stop when |r| <= tolerance |b| (filtered residuals), > 0
   int cg_max_iterations = 500;  ///< implicit Euler: iteration cap, >= 1
   int max_substeps = 64;        ///< explicit methods: most substeps a step may be split into to stay stable, >= 1
-  LinearSolverType linear_solver =
-      LinearSolverType::ConjugateGradient;  ///< implicit methods: how each step's system is solved
+  LinearSolverType linear_solver = LinearSolverType::Auto;  ///< implicit methods: how each step's system is solved
 };
 
 /// The integrator settings of a body definition (RopeDef, ClothGridDef, MeshClothDef, JellyDef,
