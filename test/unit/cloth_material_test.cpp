@@ -125,6 +125,7 @@ TEST(ClothMaterial, PresetsFollowTheKnownOrderingOfFabrics)
 
 #include "particle_sim/core/builders/cloth_grid.h"
 #include "particle_sim/core/builders/mesh_cloth.h"
+#include "particle_sim/core/forces/rod_bending.h"
 #include "particle_sim/core/spring.h"
 
 namespace
@@ -184,7 +185,7 @@ TEST(ClothMaterialConversion, LumpedMassesCarryTheArealDensity)
     for (double m : net.masses)
       total += m;
     EXPECT_NEAR(total, cotton.areal_density * kWidthU * kWidthV, 1e-12);
-    // An interior particle carries a third of its six triangles: one cell's area.
+    // An interior particle carries a quarter of each of its four cells: one cell's area.
     const double cell = kWidthU / (n - 1) * kWidthV / (n - 1);
     EXPECT_NEAR(net.masses[(n / 2) * n + n / 2], cotton.areal_density * cell, 1e-15);
   }
@@ -252,13 +253,15 @@ Eigen::Matrix3Xd rolled(const core::SpringNetworkDef& net, double curvature, boo
 }
 }  // namespace
 
-TEST(ClothMaterialConversion, BaraffWitkinBendingRigidityMapsOneToOneForCylindersAlongTheGridAxes)
+TEST(ClothMaterialConversion, GridBendingRigidityMapsOneToOneForCylindersAlongTheGridAxes)
 {
-  // Plate theory: a cylinder of curvature κ stores B κ²/2 per area. The bend element stores
-  // k_b |e|²/(a₁ + a₂) θ²/2; rolled about v, only the interior v-edges turn (θ = κ h_u, weight
-  // h_v²/(h_u h_v)), one per cell of the nu − 2 interior columns' worth: E = k_b κ²/2 (L_u − h_u) L_v.
-  // So k_b = B (factor 1) gives B κ²/2 per area of the interior, at every resolution (the border's
-  // half column carries no bend element). Alike about u.
+  // Plate theory: a cylinder of curvature κ stores B κ²/2 per area. Rolled about v, the grid's
+  // rows are circles and its columns stay straight; the cells stay flat (their diagonal hinges keep
+  // θ = 0) and each rod along a row, at its nu − 2 interior vertices, turns by θ = κ h_u: the rods
+  // store Σ_rows (2 k / 1) tan²(θ/2), k = B w_row / h_u, the rows' widths w_row summing to L_v
+  // (cloth_grid.cpp). For small θ that is B κ²/2 per area of the interior columns, (L_u − h_u) L_v:
+  // the rod's tan form is (tan(θ/2) / (θ/2))² = 1 + θ²/6 + 17 θ⁴/720 + ... times θ²/2 (second order in
+  // h). Alike about u.
   const core::ClothMaterial denim = *core::findClothPreset("denim");
   const double curvature = 4.0;  // [1/m]
   for (int n : {9, 33})
@@ -266,12 +269,136 @@ TEST(ClothMaterialConversion, BaraffWitkinBendingRigidityMapsOneToOneForCylinder
     const core::SpringNetworkDef net = core::buildClothGrid(materialGrid(core::ClothModel::BaraffWitkin, n, n, denim));
     ASSERT_DOUBLE_EQ(net.baraff_witkin.bend.stiffness, denim.bending_rigidity);
     const double hu = kWidthU / (n - 1), hv = kWidthV / (n - 1);
-    const core::BaraffWitkinModel bend = onlyClass(net, core::SpringClass::Bend);
-    const double about_v = bend.energy(rolled(net, curvature, true));
-    const double about_u = bend.energy(rolled(net, curvature, false));
-    const double density = 0.5 * denim.bending_rigidity * curvature * curvature;
-    EXPECT_NEAR(about_v / ((kWidthU - hu) * kWidthV), density, 1e-9 * density) << n << " x " << n;
-    EXPECT_NEAR(about_u / (kWidthU * (kWidthV - hv)), density, 1e-9 * density) << n << " x " << n;
+    const core::BaraffWitkinModel hinges = onlyClass(net, core::SpringClass::Bend);
+    const core::RodBendingForce rods(net.rod_bending);
+    const Eigen::VectorXd masses = Eigen::VectorXd::Ones(net.positions.size());
+    const std::vector<char> pinned(net.positions.size(), 0);
+    const core::ForceContext context{masses, pinned, Eigen::Vector3d::Zero(), core::AirDef(), 0.0};
+    for (bool around_v : {true, false})
+    {
+      const Eigen::Matrix3Xd x = rolled(net, curvature, around_v);
+      EXPECT_NEAR(hinges.energy(x), 0.0, 1e-15) << "the diagonal hinges of a cylinder along a grid axis stay flat";
+      double energy = 0.0;
+      rods.addEnergy(context, x, energy);
+      const double h = around_v ? hu : hv, along = around_v ? kWidthU : kWidthV, across = around_v ? kWidthV : kWidthU;
+      const double exact =
+          2.0 * denim.bending_rigidity * across / h * std::pow(std::tan(curvature * h / 2.0), 2) * (n - 2);
+      EXPECT_NEAR(energy, exact, 1e-9 * exact) << n << " x " << n;
+      const double density = 0.5 * denim.bending_rigidity * curvature * curvature;
+      const double theta = curvature * h;
+      EXPECT_NEAR(energy / ((along - h) * across) / density - 1.0, theta * theta / 6.0, std::pow(theta, 4) / 40.0)
+          << n << " x " << n;
+    }
+  }
+}
+
+namespace
+{
+// The grid of `net` (flat in xy) lifted onto z = ½ (κ_uu x² + 2 κ_uv x y + κ_vv y²), x and y from the
+// point (x0, y0).
+Eigen::Matrix3Xd quadraticSurface(const core::SpringNetworkDef& net, const Eigen::Matrix2d& curvature, double x0,
+                                  double y0)
+{
+  Eigen::Matrix3Xd x = columns(net.positions);
+  for (int i = 0; i < x.cols(); ++i)
+  {
+    const Eigen::Vector2d p(x(0, i) - x0, x(1, i) - y0);
+    x(2, i) = 0.5 * p.dot(curvature * p);
+  }
+  return x;
+}
+}  // namespace
+
+TEST(ClothMaterialConversion, GridBendingIsAnIsotropicPlateForEveryUniformCurvature)
+{
+  // An isotropic plate of Poisson ratio 0 stores B/2 (κ₁² + κ₂²) = B/2 (κ_uu² + κ_vv² + 2 κ_uv²) per
+  // area under a uniform curvature, whatever its orientation. A material grid cloth bends with rods
+  // along its grid lines (κ_uu, κ_vv) and hinges on its cells' diagonals (κ_uv) (cloth_grid.cpp): the
+  // rods centred on the vertices of a block of m x m' vertices and the hinges of its m x m' cells hold
+  // B/2 (...) times the block's area, for any curvature, up to the small-angle error (relative
+  // O((κ L)²) ≈ 1e-5 here). Checked on square and on rectangular cells, for cylinders at several
+  // angles to the grid and for a saddle. Then, as a control, the hinges of every edge with the
+  // discrete-shells weight (what a Baraff–Witkin mesh cloth gets) store, for square cells,
+  // B/2 [(κ_uu + κ_uv)² + (κ_vv + κ_uv)² + 4 κ_uv²]: bending couples to twist.
+  const core::ClothMaterial denim = *core::findClothPreset("denim");
+  const double kappa = 0.02;  // [1/m] small: the angles stay linear
+  for (const auto& [nu, nv] : {std::pair<int, int>{25, 25}, std::pair<int, int>{25, 17}})
+  {
+    const core::SpringNetworkDef net =
+        core::buildClothGrid(materialGrid(core::ClothModel::BaraffWitkin, nu, nv, denim));
+    const double hu = kWidthU / (nu - 1), hv = kWidthV / (nv - 1);
+    // The block: vertices and cells [4, 4 + m) along u and [4, 4 + m') along v, found by the midpoint
+    // of a hinge's edge or a rod's centre vertex in half cells (whole for vertices, odd for cells).
+    const int mu = nu - 9, mv = nv - 9;
+    auto inBlock = [&](const Eigen::Vector3d& point) {
+      const long cu = std::lround(2.0 * point.x() / hu), cv = std::lround(2.0 * point.y() / hv);
+      return cu >= 8 && cu < 8 + 2 * mu && cv >= 8 && cv < 8 + 2 * mv;
+    };
+    core::SpringNetworkDef block = net;
+    block.rod_bending.bends.clear();
+    for (const core::RodBend& rod : net.rod_bending.bends)
+    {
+      if (inBlock(net.positions[rod.v[1]])) block.rod_bending.bends.push_back(rod);
+    }
+    for (std::size_t k = 0; k < block.baraff_witkin.bends.size(); ++k)
+    {
+      const core::BwBend& b = block.baraff_witkin.bends[k];
+      if (!inBlock(0.5 * (net.positions[b.v[1]] + net.positions[b.v[2]]))) block.baraff_witkin.bend_weights[k] = 0.0;
+    }
+    const core::BaraffWitkinModel twist = onlyClass(block, core::SpringClass::Bend);
+    const core::RodBendingForce rods(block.rod_bending);
+    const Eigen::VectorXd masses = Eigen::VectorXd::Ones(net.positions.size());
+    const std::vector<char> pinned(net.positions.size(), 0);
+    const core::ForceContext context{masses, pinned, Eigen::Vector3d::Zero(), core::AirDef(), 0.0};
+    const double area = mu * hu * mv * hv;
+    for (double degrees : {0.0, 17.0, 30.0, 45.0, 60.0, 90.0, 135.0})
+    {
+      for (const Eigen::Vector2d& principal : {Eigen::Vector2d(kappa, 0.0), Eigen::Vector2d(kappa, -0.6 * kappa)})
+      {
+        const Eigen::Matrix2d r = Eigen::Rotation2Dd(degrees * M_PI / 180.0).toRotationMatrix();
+        const Eigen::Matrix2d curvature = r * principal.asDiagonal() * r.transpose();
+        const double expected = 0.5 * denim.bending_rigidity * principal.squaredNorm() * area;
+        const Eigen::Matrix3Xd x = quadraticSurface(net, curvature, kWidthU / 2, kWidthV / 2);
+        double energy = twist.energy(x);
+        rods.addEnergy(context, x, energy);
+        EXPECT_NEAR(energy, expected, 1e-4 * expected)
+            << nu << " x " << nv << ", principal curvatures " << principal.transpose() << " at " << degrees << "°";
+      }
+    }
+  }
+
+  // The control, on square cells: Baraff–Witkin hinges on every edge (as a mesh cloth of the same
+  // grid gets them), block of whole 1 x 1 periods (every cell split alike).
+  const int n = 25;
+  const double h = kWidthU / (n - 1);
+  core::ClothGridDef def = materialGrid(core::ClothModel::BaraffWitkin, n, n, denim);
+  def.edge_v = Eigen::Vector3d(0.0, kWidthU, 0.0);
+  core::MeshClothDef mesh(core::ClothModel::BaraffWitkin);
+  mesh.name = "mesh";
+  const core::SpringNetworkDef grid = core::buildClothGrid(def);
+  mesh.vertices = grid.positions;
+  mesh.triangles = grid.triangles;
+  for (const Eigen::Vector3d& p : grid.positions)
+    mesh.uvs.emplace_back(p.x(), p.y());
+  mesh.material = denim;
+  core::SpringNetworkDef hinges = core::buildMeshCloth(mesh);
+  for (std::size_t k = 0; k < hinges.baraff_witkin.bends.size(); ++k)
+  {
+    const core::BwBend& b = hinges.baraff_witkin.bends[k];
+    const Eigen::Vector3d mid = 0.5 * (hinges.positions[b.v[1]] + hinges.positions[b.v[2]]);
+    const long cu = std::lround(2.0 * mid.x() / h), cv = std::lround(2.0 * mid.y() / h);
+    if (!(cu >= 8 && cu < 8 + 2 * (n - 9) && cv >= 8 && cv < 8 + 2 * (n - 9)))
+      hinges.baraff_witkin.bend_weights[k] = 0.0;
+  }
+  const core::BaraffWitkinModel every_edge = onlyClass(hinges, core::SpringClass::Bend);
+  const double area = std::pow((n - 9) * h, 2);
+  for (const Eigen::Matrix2d& k : {Eigen::Matrix2d(Eigen::Vector2d(kappa, 0.0).asDiagonal()),
+                                   Eigen::Matrix2d((Eigen::Matrix2d() << 0.0, kappa, kappa, 0.0).finished())})
+  {
+    const double uu = k(0, 0), vv = k(1, 1), uv = k(0, 1);
+    const double expected =
+        0.5 * denim.bending_rigidity * ((uu + uv) * (uu + uv) + (vv + uv) * (vv + uv) + 4.0 * uv * uv) * area;
+    EXPECT_NEAR(every_edge.energy(quadraticSurface(hinges, k, kWidthU / 2, kWidthU / 2)), expected, 1e-4 * expected);
   }
 }
 

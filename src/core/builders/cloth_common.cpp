@@ -127,14 +127,25 @@ std::vector<double> lumpedClothMasses(const std::vector<Eigen::Vector3d>& x,
 // - simple shear γ stores k_h γ²/2 per area: the shear flow is k_h γ per width, G·t·γ when
 //   k_h = G·t [N/m];
 // - bending: a bend element of rest edge e between triangles of areas a₁, a₂ stores
-//   k_b |e|²/(a₁ + a₂) θ²/2. On the grid's right triangles (cells h_u × h_v, diagonal (0,0)–(1,1)),
-//   bent into a cylinder of curvature κ about an axis along v, the two triangles of a cell stay
-//   coplanar (their P1 slopes along u are equal), the diagonal and u-edges keep θ = 0, and each
-//   v-edge (length h_v, a₁ + a₂ = h_u h_v) turns by θ = κ h_u: per cell (area h_u h_v) the energy is
-//   k_b h_v²/(h_u h_v) (κ h_u)²/2 = k_b κ² h_u h_v / 2, i.e. k_b κ²/2 per area, the plate's B κ²/2
-//   when k_b = B: the factor is exactly 1, at any h (alike for an axis along u). Bent along a direction at
-//   angle φ to u the same computation gives (1 + sin 2φ + sin² 2φ) B κ²/2 (0.75 to 3 times): the
-//   regular triangulation's known anisotropy of the discrete-shells energy, not a resolution effect.
+//   k_b |e|²/(a₁ + a₂) θ²/2. On a grid of cells h_u × h_v bent into a cylinder of curvature κ about an
+//   axis along v, the two triangles of a cell stay coplanar (their P1 slopes along u are equal), the
+//   diagonals and u-edges keep θ = 0, and each v-edge (length h_v, a₁ + a₂ = h_u h_v) turns by
+//   θ = κ h_u: per cell (area h_u h_v) the energy is k_b h_v²/(h_u h_v) (κ h_u)²/2 = k_b κ² h_u h_v / 2,
+//   i.e. k_b κ²/2 per area, the plate's B κ²/2 when k_b = B: the factor is exactly 1, at any h.
+//   Other curvatures show what hinges on a regular grid cannot do. With every cell split along the
+//   (0,0)–(1,1) diagonal, a uniform curvature (κ_uu, κ_vv, κ_uv) stores, per area and for square
+//   cells, k_b/2 [(κ_uu + κ_uv)² + (κ_vv + κ_uv)² + 4 κ_uv²]: bending couples to twist. Alternating
+//   the diagonals (union jack) cancels that coupling for uniform curvatures, but not for a twist
+//   whose sign alternates from cell to cell, which the hinges of the grid lines see as bending and
+//   price only by the diagonals: a clamped strip then bends as if its rigidity were 2/3 B (4/5 B with
+//   one-way diagonals, where a uniform twist does it), at any resolution. So a material grid cloth (cloth_grid.cpp)
+//   bends differently: a discrete rod along every grid line (forces/rod_bending.h, k = B h⊥ / h∥) carries κ_uu and
+//   κ_vv, and only the diagonal hinges remain, weighted α = 2 h_u² h_v² / (h_u² + h_v²)² of the discrete-shells weight,
+//   for the twist. Any uniform curvature then stores B/2 (κ_uu² + κ_vv² + 2 κ_uv²) = B/2 (κ₁² + κ₂²)
+//   per area, the isotropic plate of Poisson ratio 0, at any resolution and cell aspect ratio; a
+//   rod sees every zig-zag of its line, so no mode bends for less; and a clamped strip is the
+//   discrete elastica (tested in cloth_material_test.cpp and validation_cloth_test.cpp). A mesh
+//   cloth keeps the hinges of every edge, with their anisotropy on regular meshes.
 ClothClassConstants baraffWitkinMaterialConstants(const ClothMaterial& material, double area)
 {
   const ClothDampingTimes beta = clothDampingTimes(material, area);

@@ -6,6 +6,7 @@
 #include <optional>
 
 #include "particle_sim/core/builders/pins.h"
+#include "particle_sim/core/forces/rod_bending.h"
 #include "particle_sim/core/validation.h"
 
 namespace particle_sim
@@ -89,6 +90,48 @@ GridMaterialSprings gridMaterialSprings(const ClothGridDef& def, const ClothMate
   springs.v.damping = beta.stretch * springs.v.stiffness;
   springs.diagonal.damping = beta.shear * springs.diagonal.stiffness;
   return springs;
+}
+
+// The bending of a material grid cloth (cloth_common.cpp explains why not the hinges of every edge):
+// a discrete rod along every grid line (forces/rod_bending.h), k = B h⊥ / h∥ (half on the border
+// lines, which carry half a cell's width), for κ_uu and κ_vv; and Baraff–Witkin's dihedral hinges on
+// the cells' diagonals only, each weighted α |e|²/(a₁ + a₂) = 2 h_u h_v / (h_u² + h_v²), for the
+// twist: per area B/2 (κ_uu² + κ_vv² + 2 κ_uv²), the isotropic plate of Poisson ratio 0. `bend` is
+// the Baraff–Witkin bend constants of the material (stiffness B, damping β B).
+void addGridPlateBending(const ClothGridDef& def, const SpringConstants& bend, SpringNetworkDef& net)
+{
+  const int nu = def.nu, nv = def.nv;
+  auto index = [nu](int a, int b) { return b * nu + a; };
+  const double hu = def.edge_u.norm() / (nu - 1), hv = def.edge_v.norm() / (nv - 1);
+  auto rod = [&bend](int i, int j, int k, double stiffness) {
+    return RodBend{{i, j, k}, stiffness, bend.damping / bend.stiffness * stiffness};
+  };
+  for (int b = 0; b < nv && bend.stiffness > 0.0; ++b)
+  {
+    const double width = (b == 0 || b == nv - 1) ? 0.5 * hv : hv;
+    for (int a = 1; a + 1 < nu; ++a)
+      net.rod_bending.bends.push_back(rod(index(a - 1, b), index(a, b), index(a + 1, b), bend.stiffness * width / hu));
+  }
+  for (int a = 0; a < nu && bend.stiffness > 0.0; ++a)
+  {
+    const double width = (a == 0 || a == nu - 1) ? 0.5 * hu : hu;
+    for (int b = 1; b + 1 < nv; ++b)
+      net.rod_bending.bends.push_back(rod(index(a, b - 1), index(a, b), index(a, b + 1), bend.stiffness * width / hv));
+  }
+
+  // Keep the diagonal hinges, reweighted; drop those of the grid lines (the rods bend those).
+  BaraffWitkinDef& bw = net.baraff_witkin;
+  const double alpha = 2.0 * hu * hu * hv * hv / ((hu * hu + hv * hv) * (hu * hu + hv * hv));
+  std::size_t kept = 0;
+  for (std::size_t k = 0; k < bw.bends.size(); ++k)
+  {
+    const int p = bw.bends[k].v[1], q = bw.bends[k].v[2];  // the hinge's edge
+    if (p % nu == q % nu || p / nu == q / nu) continue;
+    bw.bends[kept] = bw.bends[k];
+    bw.bend_weights[kept++] = alpha * bw.bend_weights[k];
+  }
+  bw.bends.resize(kept);
+  bw.bend_weights.resize(kept);
 }
 
 // `c` halved for a spring on the border (issue 17's material springs), else `c`.
@@ -193,7 +236,18 @@ SpringNetworkDef buildClothGrid(const ClothGridDef& def)
     }
   }
 
-  if (def.material) net.masses = lumpedClothMasses(x, net.triangles, def.material->areal_density);
+  // A material's masses: a quarter of each cell's area at each of its corners (a third of each
+  // triangle would give the grid's two corners on the diagonal twice the mass of the other two).
+  if (def.material)
+  {
+    const double quarter =
+        def.material->areal_density * def.edge_u.cross(def.edge_v).norm() / (4.0 * (nu - 1) * (nv - 1));
+    net.masses.assign(n, 0.0);
+    for (int b = 0; b + 1 < nv; ++b)
+      for (int a = 0; a + 1 < nu; ++a)
+        for (int corner : {index(a, b), index(a + 1, b), index(a, b + 1), index(a + 1, b + 1)})
+          net.masses[corner] += quarter;
+  }
 
   // Baraff–Witkin: (u, v) of each particle are its rest coordinates in the cloth's plane, u along
   // edge_u and v perpendicular to it, so the cloth starts at rest.
@@ -208,6 +262,7 @@ SpringNetworkDef buildClothGrid(const ClothGridDef& def)
     {
       const ClothClassConstants c = baraffWitkinMaterialConstants(*def.material, clothArea(x, net.triangles));
       addBaraffWitkin(uvs, c.stretch, c.shear, c.bend, def.b_u, def.b_v, net);
+      addGridPlateBending(def, c.bend, net);
     }
     else
       addBaraffWitkin(uvs, stretch, shear, bend, def.b_u, def.b_v, net);

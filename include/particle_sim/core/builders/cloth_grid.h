@@ -14,7 +14,9 @@ namespace core
 /// A regular grid cloth after Provot (1995): particle (a, b), a in [0, nu), b in [0, nv), sits at
 /// origin + a/(nu−1) edge_u + b/(nv−1) edge_v and has index b·nu + a. Stretch springs join grid
 /// neighbours, shear springs the two diagonals of each cell, bend springs particles two apart
-/// along u and v. Each cell is split into two surface triangles.
+/// along u and v. Each cell is split into two surface triangles along its (0,0)–(1,1) diagonal. A
+/// Baraff–Witkin cloth given by its material bends by rods along its grid lines and hinges on the
+/// diagonals (cloth_common.cpp), an isotropic plate.
 ///
 ///      edge_v
 ///        ^   corner_01 ---- edge_v1 ---- corner_11
@@ -50,7 +52,7 @@ struct ClothGridDef
   BodyIntegratorDef integrator;    ///< what the body sets; the rest is the world's default
   double contact_thickness = 0.0;  ///< [m] in limits::kContactThickness: kept from ground and spheres (0 = touch)
   /// The cloth's material in physical units (issue 17). Set, it gives the particle masses (areal
-  /// density, lumped: a third of each triangle's rest area to each corner; `mass` is then unused) and
+  /// density, lumped: a quarter of each cell's rest area to each corner; `mass` is then unused) and
   /// every constant, for the mesh built (cloth_common.h); no stretch, shear or bend constant may be
   /// set beside it. Unset: `mass` and the constants, as before.
   std::optional<ClothMaterial> material;
