@@ -8,6 +8,9 @@
 // whitespace-separated columns) and CASE.gp (a gnuplot script run in that folder that draws
 // CASE.png); otherwise nothing is written.
 
+#include <gtest/gtest.h>
+
+#include <cmath>
 #include <cstdlib>
 #include <fstream>
 #include <string>
@@ -61,6 +64,35 @@ inline bool writeValidationCase(const ValidationCase& c)
   if (!c.plot_data.empty()) std::ofstream(stem + ".dat") << c.plot_data;
   if (!c.plot_script.empty()) std::ofstream(stem + ".gp") << c.plot_script;
   return static_cast<bool>(csv);
+}
+
+// Relative error estimates of a sequence of runs refined by `ratio` each time, for a method of formal
+// order `order` (Richardson): run i's error is (v_i − v_{i+1}) / (1 − ratio^−order), and the finest
+// run's is (v_{n−2} − v_{n−1}) / (ratio^order − 1).
+inline std::vector<double> richardsonErrors(const std::vector<double>& values, double reference, double ratio,
+                                            double order)
+{
+  const double r = std::pow(ratio, order);
+  std::vector<double> estimates;
+  for (std::size_t i = 0; i + 1 < values.size(); ++i)
+    estimates.push_back(std::abs(values[i] - values[i + 1]) * r / (r - 1.0) / std::abs(reference));
+  const std::size_t n = values.size();
+  estimates.push_back(std::abs(values[n - 2] - values[n - 1]) / (r - 1.0) / std::abs(reference));
+  return estimates;
+}
+
+// Asserts what every case asserts (the finest run within its tolerance, errors shrinking with
+// refinement), then reports the case.
+inline void checkAndReport(const ValidationCase& c)
+{
+  ASSERT_EQ(c.runs.size(), 3u);
+  const ValidationRun& finest = c.runs.back();
+  EXPECT_LE(std::abs(finest.error), finest.tolerance)
+      << c.id << " at " << finest.resolution << ": " << finest.value << " " << c.unit << " against " << c.reference;
+  for (std::size_t i = 0; i + 1 < c.runs.size(); ++i)
+    EXPECT_LT(std::abs(c.runs[i + 1].error), std::abs(c.runs[i].error))
+        << c.id << ": the error does not shrink from " << c.runs[i].resolution << " to " << c.runs[i + 1].resolution;
+  particle_sim_test::writeValidationCase(c);
 }
 
 }  // namespace particle_sim_test

@@ -20,6 +20,8 @@
 #include "validation_report.h"
 
 using namespace particle_sim::core;
+using particle_sim_test::checkAndReport;
+using particle_sim_test::richardsonErrors;
 using particle_sim_test::ValidationCase;
 using particle_sim_test::ValidationRun;
 
@@ -50,34 +52,6 @@ double maxSpeed(const SpringNetworkBody& body)
 {
   const ParticlePool& p = body.particles();
   return p.velocity.leftCols(p.size()).colwise().norm().maxCoeff();
-}
-
-// Relative error estimates of a sequence of runs refined by `ratio` each time, for a method of formal
-// order `order` (Richardson): run i's error is (v_i − v_{i+1}) / (1 − ratio^−order), and the finest
-// run's is (v_{n−2} − v_{n−1}) / (ratio^order − 1).
-std::vector<double> richardsonErrors(const std::vector<double>& values, double reference, double ratio, double order)
-{
-  const double r = std::pow(ratio, order);
-  std::vector<double> estimates;
-  for (std::size_t i = 0; i + 1 < values.size(); ++i)
-    estimates.push_back(std::abs(values[i] - values[i + 1]) * r / (r - 1.0) / std::abs(reference));
-  const std::size_t n = values.size();
-  estimates.push_back(std::abs(values[n - 2] - values[n - 1]) / (r - 1.0) / std::abs(reference));
-  return estimates;
-}
-
-// Asserts what every case asserts (the finest run within its tolerance, errors shrinking with
-// refinement), then reports the case.
-void checkAndReport(const ValidationCase& c)
-{
-  ASSERT_EQ(c.runs.size(), 3u);
-  const ValidationRun& finest = c.runs.back();
-  EXPECT_LE(std::abs(finest.error), finest.tolerance)
-      << c.id << " at " << finest.resolution << ": " << finest.value << " " << c.unit << " against " << c.reference;
-  for (std::size_t i = 0; i + 1 < c.runs.size(); ++i)
-    EXPECT_LT(std::abs(c.runs[i + 1].error), std::abs(c.runs[i].error))
-        << c.id << ": the error does not shrink from " << c.runs[i].resolution << " to " << c.runs[i + 1].resolution;
-  particle_sim_test::writeValidationCase(c);
 }
 
 std::string formatted(double value)
