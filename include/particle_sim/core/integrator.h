@@ -59,13 +59,15 @@ std::string integratorTypeNames();
 /// How the implicit methods solve their linear system each step.
 enum class LinearSolverType
 {
-  Auto,               ///< direct where its factorization costs at most kDirectSolverCgIterations CG iterations, else CG
+  Auto,               ///< the cheaper of the two, from flop counts and the CG iterations measured (see below)
   ConjugateGradient,  ///< Baraff & Witkin's modified preconditioned conjugate gradient, to cg_tolerance
   Direct,             ///< sparse block L D Lᵀ in a fill-reducing order (exact; O(n) on a rope)
 };
 /// `auto` picks the direct solver when one factorization and solve cost at most this many
 /// conjugate-gradient iterations, counted in floating-point operations from the pattern: true of
-/// ropes and chains (no fill) and of small sheets; large sheets and lattices stay with CG.
+/// ropes and chains (no fill) and of small sheets. Larger sheets and lattices start with CG, and
+/// switch to the direct solver for good once a CG solve takes more iterations than the direct solve
+/// costs (stiff sheets at large steps).
 inline constexpr double kDirectSolverCgIterations = 40.0;
 
 /// "auto", "cg", "direct".

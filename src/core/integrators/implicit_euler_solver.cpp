@@ -46,6 +46,7 @@ void ImplicitEulerSolver::setPattern(int particles, const std::vector<std::pair<
   blocks_.assign(block_row_.size(), Eigen::Matrix3d::Zero());
   direct_ = SparseBlockLdlt();
   auto_choice_ = DirectChoice::Undecided;
+  direct_in_cg_iterations_ = 0.0;
   inverse_diagonal_.assign(particles, Eigen::Matrix3d::Identity());
   for (Eigen::Matrix3Xd* m : {&delta_v_, &rhs_, &residual_, &direction_, &product_, &preconditioned_})
     m->setZero(3, particles);
@@ -101,12 +102,12 @@ bool ImplicitEulerSolver::usesDirect(LinearSolverType solver)
   if (solver == LinearSolverType::Auto && auto_choice_ == DirectChoice::Undecided)
   {
     // One CG iteration: a product with A (18 flops a block) and about 40 flops a particle of vector
-    // passes (residual, direction, preconditioner, dots).
+    // passes (residual, direction, preconditioner, dots). The direct solve's cost in CG iterations
+    // decides now (kDirectSolverCgIterations) and again after each CG solve (solve()).
     const SparseBlockLdlt::Cost direct = SparseBlockLdlt::estimateCost(row_start_, block_column_);
     const double cg_iteration = 18.0 * static_cast<double>(blocks_.size()) + 40.0 * diagonal_block_.size();
-    auto_choice_ = direct.factor_flops + direct.solve_flops <= kDirectSolverCgIterations * cg_iteration
-                       ? DirectChoice::Cheaper
-                       : DirectChoice::Dearer;
+    direct_in_cg_iterations_ = (direct.factor_flops + direct.solve_flops) / cg_iteration;
+    auto_choice_ = direct_in_cg_iterations_ <= kDirectSolverCgIterations ? DirectChoice::Cheaper : DirectChoice::Dearer;
   }
   if (solver == LinearSolverType::Auto && auto_choice_ == DirectChoice::Dearer) return false;
   if (!direct_.analyzed()) direct_.analyze(row_start_, block_column_);
@@ -127,6 +128,11 @@ SolverReport ImplicitEulerSolver::solve(const std::vector<char>& pinned, const I
     report.direct = true;
   }
   conjugateGradient(pinned, settings.cg_tolerance, settings.cg_max_iterations, report);
+  // `auto` measured CG: when a solve took more iterations than the direct solve costs, the direct
+  // solver takes over from the next solve on (for good: no switching back and forth).
+  if (settings.linear_solver == LinearSolverType::Auto && !report.direct &&
+      report.iterations > direct_in_cg_iterations_)
+    auto_choice_ = DirectChoice::Cheaper;
 
   // v1 = v0 + Δv, x1 = x0 + h v1.
   v += delta_v_;

@@ -54,8 +54,9 @@ public:
   /// velocity in v (the one that carries them to their target).
   SolverReport solve(const std::vector<char>& pinned, const IntegratorDef& settings, Eigen::Matrix3Xd& x,
                      Eigen::Matrix3Xd& v);
-  /// Whether `solver` means the direct solver for this pattern (`auto` compares the flop counts of
-  /// one factorization and solve with kDirectSolverCgIterations CG iterations; analysed once).
+  /// Whether `solver` means the direct solver for this pattern. `auto` compares the flop count of one
+  /// factorization and solve with kDirectSolverCgIterations CG iterations (analysed once), and
+  /// switches to the direct solver for good once a CG solve took more iterations than that count.
   bool usesDirect(LinearSolverType solver);
   /// Forgets the warm start (after a reset or a jump of the state).
   void clearWarmStart() { delta_v_.setZero(); }
@@ -78,6 +79,7 @@ private:
     Cheaper,
     Dearer
   } auto_choice_ = DirectChoice::Undecided;
+  double direct_in_cg_iterations_ = 0.0;  // one factorization and solve, in CG iterations (flops)
   double h_ = 0.0;
   const Eigen::Matrix3Xd* v0_ = nullptr;
   Eigen::Matrix3Xd delta_v_, rhs_, residual_, direction_, product_, preconditioned_;
