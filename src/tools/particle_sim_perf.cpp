@@ -1,0 +1,428 @@
+// particle_sim_perf: the performance bench of issue 13. Times the core's step on bodies built in
+// code at a sweep of sizes and writes one CSV row per case and size: ropes and cloths solved
+// implicitly (both linear solvers), Bullet's test cloth ("hang64"), explicit springs against the
+// machine's memory bandwidth (a STREAM-like triad), and emitters. scripts/bench --performance runs
+// it and scripts/performance_report.py turns the CSV into docs/performance.md and its plots.
+//
+//   particle_sim_perf [--out FILE] [--quick] [--only CASE,...]
+//
+// Every time is wall time of the step alone (steady_clock), after warm-up steps, over `repeats`
+// runs of `steps` steps: the CSV gives the minimum, median and maximum per step over the repeats.
+
+#include <Eigen/Core>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <functional>
+#include <iostream>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "particle_sim/core/builders/cloth_grid.h"
+#include "particle_sim/core/builders/rope.h"
+#include "particle_sim/core/emitter.h"
+#include "particle_sim/core/integrators/implicit_euler.h"
+#include "particle_sim/core/integrators/sparse_block_ldlt.h"
+#include "particle_sim/core/integrators/symplectic_euler.h"
+#include "particle_sim/core/spring_network.h"
+#include "particle_sim/core/world.h"
+
+namespace core = particle_sim::core;
+using Clock = std::chrono::steady_clock;
+
+namespace
+{
+const char* kUsage =
+    "usage: particle_sim_perf [--out FILE] [--quick] [--only CASE,...]\n"
+    "  --out FILE    CSV output (default performance.csv)\n"
+    "  --quick       fewer sizes, steps and repeats: a smoke run, not a report\n"
+    "  --only CASES  run only these cases: rope, cloth, hang64, springs, emitters\n";
+
+struct Timing
+{
+  double min = 0.0, median = 0.0, max = 0.0;  // [ms] per step
+};
+
+// Runs `warmup` steps, then `repeats` times `steps` steps; the time per step of each repeat.
+Timing timeSteps(const std::function<void()>& step, int warmup, int steps, int repeats)
+{
+  for (int i = 0; i < warmup; ++i)
+    step();
+  std::vector<double> per_step;
+  for (int r = 0; r < repeats; ++r)
+  {
+    const auto start = Clock::now();
+    for (int i = 0; i < steps; ++i)
+      step();
+    per_step.push_back(std::chrono::duration<double, std::milli>(Clock::now() - start).count() / steps);
+  }
+  std::sort(per_step.begin(), per_step.end());
+  return {per_step.front(), per_step[per_step.size() / 2], per_step.back()};
+}
+
+// One CSV row: case, variant, size (the sweep's parameter), elements (what the cost should grow
+// with: particles, segments, springs), timing [ms per step], and free-form detail.
+struct Row
+{
+  std::string case_name, variant;
+  double size = 0.0;
+  double elements = 0.0;
+  Timing timing;
+  double iterations = 0.0;  // mean CG iterations per step (implicit cases), else 0
+  std::string detail;
+};
+
+void writeRow(std::ostream& out, const Row& r)
+{
+  out << r.case_name << ',' << r.variant << ',' << r.size << ',' << r.elements << ',' << r.timing.min << ','
+      << r.timing.median << ',' << r.timing.max << ',' << r.iterations << ",\"" << r.detail << "\"\n";
+  out.flush();
+  std::fprintf(stderr, "%-8s %-22s size %-8g %.4g ms/step (min; median %.4g, max %.4g)%s%s\n", r.case_name.c_str(),
+               r.variant.c_str(), r.size, r.timing.min, r.timing.median, r.timing.max, r.detail.empty() ? "" : "; ",
+               r.detail.c_str());
+}
+
+core::Environment noGround()
+{
+  core::Environment env;
+  env.ground.enabled = false;
+  return env;
+}
+
+// Steps a body `warmup` + `repeats` × `steps` times at dt; mean CG iterations over the timed steps.
+Row timeBody(core::SpringNetworkBody& body, double dt, int warmup, int steps, int repeats)
+{
+  const core::Environment env = noGround();
+  long long iterations = 0, counted = 0;
+  Row row;
+  row.timing = timeSteps(
+      [&] {
+        body.step(dt, env);
+        iterations += body.lastSolve().iterations;
+        ++counted;
+      },
+      warmup, steps, repeats);
+  row.iterations = counted > 0 ? static_cast<double>(iterations) / counted : 0.0;
+  if (body.frozen()) row.detail = "FROZE: " + body.frozenReason();
+  return row;
+}
+
+// --- Ropes: the hard case of config/scenes/hard/long_rope.yaml at every size: 5 m, 1 kg, stretch
+// springs of 20000 N/m, pinned at one end and released from horizontal, implicit Euler at
+// dt = 1/60 with each linear solver.
+void ropes(std::ostream& out, bool quick)
+{
+  const std::vector<int> sizes = quick ? std::vector<int>{100, 1000} : std::vector<int>{100, 300, 1000, 3000, 10000};
+  for (const char* solver : {"direct", "cg"})
+  {
+    for (int segments : sizes)
+    {
+      const bool cg = std::strcmp(solver, "cg") == 0;
+      if (cg && segments > (quick ? 1000 : 3000)) continue;  // seconds per step
+      core::RopeDef def;
+      def.name = "rope";
+      def.particles = segments + 1;
+      def.start = {0.0, 0.0, 6.0};
+      def.end = {5.0, 0.0, 6.0};
+      def.mass = 1.0;
+      def.stretch_stiffness = 20000.0;
+      def.stretch_damping = 0.0;
+      def.pins = {0};
+      def.integrator.type = core::kImplicitEulerIntegrator;
+      def.integrator.linear_solver = cg ? core::LinearSolverType::ConjugateGradient : core::LinearSolverType::Direct;
+      def.integrator.cg_tolerance = 1e-8;
+      def.integrator.cg_max_iterations = 100000;
+      core::SpringNetworkBody body(core::buildRope(def));
+      const int steps = quick ? 5 : (cg ? std::max(5, 20000 / segments) : std::max(30, 300000 / segments));
+      Row row = timeBody(body, 1.0 / 60.0, 10, steps, quick ? 2 : 5);
+      row.case_name = "rope";
+      row.variant = std::string("implicit_euler ") + solver;
+      row.size = segments;
+      row.elements = segments;
+      if (body.stabilityEvents() > 0)
+        row.detail += (row.detail.empty() ? "" : "; ") + std::to_string(body.stabilityEvents()) + " stability events";
+      writeRow(out, row);
+    }
+  }
+}
+
+// --- Cloth: a 1 m square spring cloth of n x n particles (Provot: structural, shear and bend
+// springs, 1000 N/m, 0.01 N·s/m; 1 kg), horizontal, hanging from two adjacent corners; implicit
+// Euler at dt = 1/60, relative CG tolerance 1e-6.
+core::ClothGridDef squareCloth(int n, core::LinearSolverType solver)
+{
+  core::ClothGridDef def(core::ClothModel::Springs);
+  def.name = "cloth";
+  def.origin = {0.0, 0.0, 2.0};
+  def.edge_u = {1.0, 0.0, 0.0};
+  def.edge_v = {0.0, 1.0, 0.0};
+  def.nu = def.nv = n;
+  def.mass = 1.0;
+  def.stretch.stiffness = 1000.0;
+  def.stretch.damping = 0.01;
+  def.shear.stiffness = 1000.0;
+  def.shear.damping = 0.01;
+  def.bend.stiffness = 100.0;
+  def.bend.damping = 0.01;
+  def.named_pins = {"corner_00", "corner_10"};
+  def.integrator.type = core::kImplicitEulerIntegrator;
+  def.integrator.linear_solver = solver;
+  def.integrator.cg_tolerance = 1e-6;
+  def.integrator.cg_max_iterations = 100000;
+  return def;
+}
+
+void cloths(std::ostream& out, bool quick)
+{
+  const std::vector<int> sizes = quick ? std::vector<int>{32} : std::vector<int>{32, 64, 128, 256};
+  for (const core::LinearSolverType solver :
+       {core::LinearSolverType::ConjugateGradient, core::LinearSolverType::Direct})
+  {
+    for (int n : sizes)
+    {
+      if (solver == core::LinearSolverType::Direct && n > 64) continue;  // the factor's fill: seconds
+      core::SpringNetworkBody body(core::buildClothGrid(squareCloth(n, solver)));
+      const int steps = quick ? 3 : std::max(3, 40000 / (n * n));
+      Row row = timeBody(body, 1.0 / 60.0, quick ? 3 : 10, steps, quick ? 2 : 3);
+      row.case_name = "cloth";
+      row.variant = std::string("implicit_euler ") + core::toString(solver);
+      row.size = n;
+      row.elements = static_cast<double>(n) * n;
+      writeRow(out, row);
+    }
+  }
+}
+
+// --- hang64: Bullet's soft-body test cloth, rebuilt exactly: 64 x 64 particles on a 1 m square,
+// horizontal, two adjacent corners pinned, 1 kg; structural springs and one shear diagonal per
+// quad, alternating like btSoftBodyHelpers::CreatePatch; k = 1000 N/m, damping 0.01 N·s/m.
+core::SpringNetworkDef hang64(int n)
+{
+  core::SpringNetworkDef def;
+  def.name = "hang64";
+  def.shape = core::NetworkShape::Cloth;
+  auto index = [n](int a, int b) { return b * n + a; };
+  for (int b = 0; b < n; ++b)
+    for (int a = 0; a < n; ++a)
+      def.positions.emplace_back(static_cast<double>(a) / (n - 1), static_cast<double>(b) / (n - 1), 2.0);
+  def.masses.assign(static_cast<std::size_t>(n) * n, 1.0 / (n * n));
+  auto spring = [&](int i, int j, core::SpringClass spring_class) {
+    core::Spring s;
+    s.i = i;
+    s.j = j;
+    s.rest_length = (def.positions[i] - def.positions[j]).norm();
+    s.stiffness = 1000.0;
+    s.damping = 0.01;
+    s.spring_class = spring_class;
+    def.springs.push_back(s);
+  };
+  for (int b = 0; b < n; ++b)
+    for (int a = 0; a < n; ++a)
+    {
+      if (a + 1 < n) spring(index(a, b), index(a + 1, b), core::SpringClass::Stretch);
+      if (b + 1 < n) spring(index(a, b), index(a, b + 1), core::SpringClass::Stretch);
+      if (a + 1 < n && b + 1 < n)
+      {
+        if ((a + b) % 2 == 0)
+          spring(index(a, b), index(a + 1, b + 1), core::SpringClass::Shear);
+        else
+          spring(index(a + 1, b), index(a, b + 1), core::SpringClass::Shear);
+        def.triangles.emplace_back(index(a, b), index(a + 1, b), index(a + 1, b + 1));
+        def.triangles.emplace_back(index(a, b), index(a + 1, b + 1), index(a, b + 1));
+      }
+    }
+  def.pins = {index(0, 0), index(n - 1, 0)};
+  return def;
+}
+
+void hang(std::ostream& out, bool quick)
+{
+  for (const core::LinearSolverType solver :
+       {core::LinearSolverType::ConjugateGradient, core::LinearSolverType::Direct})
+  {
+    for (double tolerance : {1e-6, 1e-4})
+    {
+      if (solver == core::LinearSolverType::Direct && tolerance != 1e-6) continue;
+      core::SpringNetworkDef def = hang64(64);
+      def.integrator.type = core::kImplicitEulerIntegrator;
+      def.integrator.linear_solver = solver;
+      def.integrator.cg_tolerance = tolerance;
+      def.integrator.cg_max_iterations = 100000;
+      core::SpringNetworkBody body(def);
+      Row row = timeBody(body, 1.0 / 60.0, quick ? 3 : 10, quick ? 5 : 60, quick ? 1 : 3);
+      if (solver == core::LinearSolverType::Direct)
+      {
+        // The factorization's size, from the pattern of the implicit system (one block per spring).
+        std::vector<std::vector<int>> columns(def.positions.size());
+        for (std::size_t i = 0; i < columns.size(); ++i)
+          columns[i].push_back(static_cast<int>(i));
+        for (const core::Spring& spring : def.springs)
+        {
+          columns[spring.i].push_back(spring.j);
+          columns[spring.j].push_back(spring.i);
+        }
+        std::vector<int> row_start = {0}, block_column;
+        for (std::vector<int>& c : columns)
+        {
+          std::sort(c.begin(), c.end());
+          block_column.insert(block_column.end(), c.begin(), c.end());
+          row_start.push_back(static_cast<int>(block_column.size()));
+        }
+        const core::SparseBlockLdlt::Cost cost = core::SparseBlockLdlt::estimateCost(row_start, block_column);
+        std::ostringstream detail;
+        detail.precision(3);
+        detail << "factorization " << cost.factor_flops / 1e6 << " Mflop (" << cost.factor_blocks
+               << " blocks of L), solve " << cost.solve_flops / 1e6 << " Mflop";
+        row.detail = detail.str() + (row.detail.empty() ? "" : "; " + row.detail);
+      }
+      row.case_name = "hang64";
+      row.variant =
+          std::string("implicit_euler ") + core::toString(solver) +
+          (solver == core::LinearSolverType::ConjugateGradient ? (tolerance == 1e-6 ? " tol 1e-6" : " tol 1e-4") : "");
+      row.size = 64;
+      row.elements = 64 * 64;
+      writeRow(out, row);
+    }
+  }
+}
+
+// --- Explicit springs against the memory roof: symplectic Euler on an n x n spring cloth (forces
+// of every spring once per substep), in ns per spring per force pass; and the machine's triad
+// bandwidth a[i] = b[i] + s c[i] over arrays far larger than the caches.
+double triadBandwidth(bool quick)
+{
+  const std::size_t n = quick ? (1u << 22) : (1u << 24);  // 3 arrays of 32 or 128 MB
+  std::vector<double> a(n, 0.0), b(n, 1.0), c(n, 2.0);
+  const double s = 3.0;
+  double best = 0.0;
+  for (int r = 0; r < (quick ? 3 : 10); ++r)
+  {
+    const auto start = Clock::now();
+    for (std::size_t i = 0; i < n; ++i)
+      a[i] = b[i] + s * c[i];
+    const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
+    best = std::max(best, 3.0 * sizeof(double) * n / seconds);
+    b[r % n] += a[(r * 7919) % n];  // keep the loop's result alive
+  }
+  return best;  // [bytes/s]
+}
+
+void explicitSprings(std::ostream& out, bool quick)
+{
+  const double bandwidth = triadBandwidth(quick);
+  Row roof;
+  roof.case_name = "springs";
+  roof.variant = "triad bandwidth";
+  roof.size = 0;
+  roof.elements = 0;
+  roof.timing = {bandwidth / 1e9, bandwidth / 1e9, bandwidth / 1e9};
+  roof.detail =
+      "GB/s (best of repeats), a[i] = b[i] + s c[i] over 3 arrays of " + std::to_string(quick ? 32 : 128) + " MB";
+  writeRow(out, roof);
+  for (int n : quick ? std::vector<int>{64} : std::vector<int>{64, 128, 256})
+  {
+    core::ClothGridDef def = squareCloth(n, core::LinearSolverType::Auto);
+    def.integrator.type = core::kSymplecticEulerIntegrator;
+    def.integrator.max_substeps = 1;
+    core::SpringNetworkBody body(core::buildClothGrid(def));
+    const double dt = 0.5 * 2.0 / body.frequencyBound();  // half the explicit limit: one force pass a step
+    Row row = timeBody(body, dt, 5, quick ? 5 : std::max(10, 2000000 / (n * n)), quick ? 2 : 5);
+    const double springs = static_cast<double>(body.springs().size());
+    row.case_name = "springs";
+    row.variant = "symplectic_euler";
+    row.size = n;
+    row.elements = springs;
+    std::ostringstream detail;
+    detail.precision(3);
+    detail << row.timing.min * 1e6 / springs << " ns per spring per step (min)";
+    row.detail = detail.str() + (row.detail.empty() ? "" : "; " + row.detail);
+    writeRow(out, row);
+  }
+}
+
+// --- Emitters: a fountain holding N live particles (rate N / lifetime), stepped at dt = 1/60.
+void emitters(std::ostream& out, bool quick)
+{
+  for (int n : quick ? std::vector<int>{1000, 100000} : std::vector<int>{1000, 10000, 100000, 1000000})
+  {
+    core::WorldDef world_def;
+    world_def.dt = 1.0 / 60.0;
+    world_def.max_particles_per_body = n;
+    world_def.max_particles_per_world = n;
+    core::World world(world_def);
+    core::EmitterDef fountain;
+    fountain.name = "fountain";
+    fountain.max_particles = n;
+    fountain.lifetime = 2.0;
+    fountain.rate = n / fountain.lifetime;
+    if (core::Status s = world.addEmitter(fountain); !s)
+    {
+      std::cerr << "emitter of " << n << ": " << s.message << "\n";
+      continue;
+    }
+    Row row;
+    row.timing = timeSteps([&] { world.step(); }, 150, quick ? 10 : std::max(10, 20000000 / n), quick ? 2 : 5);
+    row.case_name = "emitters";
+    row.variant = "fountain";
+    row.size = n;
+    row.elements = world.particleCount();
+    std::ostringstream detail;
+    detail.precision(3);
+    detail << world.particleCount() / (row.timing.min * 1e-3) / 1e6 << " M particle-steps/s (min time)";
+    row.detail = detail.str();
+    writeRow(out, row);
+  }
+}
+}  // namespace
+
+int main(int argc, char** argv)
+{
+  std::string out_path = "performance.csv";
+  bool quick = false;
+  std::vector<std::string> only;
+  for (int i = 1; i < argc; ++i)
+  {
+    const std::string arg = argv[i];
+    if (arg == "--help" || arg == "-h")
+    {
+      std::cout << kUsage;
+      return 0;
+    }
+    if (arg == "--out" && i + 1 < argc)
+      out_path = argv[++i];
+    else if (arg == "--quick")
+      quick = true;
+    else if (arg == "--only" && i + 1 < argc)
+    {
+      std::stringstream list(argv[++i]);
+      for (std::string name; std::getline(list, name, ',');)
+        only.push_back(name);
+    }
+    else
+    {
+      std::cerr << kUsage;
+      return 2;
+    }
+  }
+  std::ofstream out(out_path);
+  if (!out)
+  {
+    std::cerr << "particle_sim_perf: cannot write " << out_path << "\n";
+    return 1;
+  }
+  out << "case,variant,size,elements,ms_min,ms_median,ms_max,cg_iterations,detail\n";
+  auto wanted = [&only](const char* name) {
+    return only.empty() || std::find(only.begin(), only.end(), name) != only.end();
+  };
+  if (wanted("rope")) ropes(out, quick);
+  if (wanted("cloth")) cloths(out, quick);
+  if (wanted("hang64")) hang(out, quick);
+  if (wanted("springs")) explicitSprings(out, quick);
+  if (wanted("emitters")) emitters(out, quick);
+  return 0;
+}
