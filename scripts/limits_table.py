@@ -34,6 +34,7 @@ RANGE_TEXT = {
     "kGlobalDamping": "global damping (`world.global_damping`, live `global_damping`)",
     "kRealTimeFactor": "real-time factor (`~real_time_factor`, live; 0 = as fast as possible)",
     "kPublishRate": "publish rate (`~rate`, live)",
+    "kMarkerPoints": "points of one particle marker (`~max_marker_points`; more live particles are decimated evenly)",
     "kContactThickness": "distance a body keeps from ground and spheres (`contact_thickness`)",
     "kParticlesPerBody": "particles of one body: the cap itself (`world.max_particles_per_body`, "
     "`~max_particles_per_body`)",

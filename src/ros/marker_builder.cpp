@@ -40,6 +40,12 @@ visualization_msgs::Marker makeMarker(const std::string& ns, int id, const ros::
   return marker;
 }
 
+// Every k-th of `count` particles keeps a marker within `max_points`: k = ⌈count / max_points⌉.
+int decimationStride(int count, int max_points)
+{
+  return max_points > 0 && count > max_points ? (count + max_points - 1) / max_points : 1;
+}
+
 // Colour of an emitter particle by its age fraction s in [0, 1]: pale yellow when new, through
 // orange, to dark red when about to be recycled.
 std_msgs::ColorRGBA ageColor(double s)
@@ -137,13 +143,16 @@ void addSpringBody(const core::SpringNetworkBody& body, const ros::Time& stamp, 
   pins.type = visualization_msgs::Marker::SPHERE_LIST;
   pins.scale.x = pins.scale.y = pins.scale.z = 2.0 * style.particle_size;
   pins.color = rgba(1.0f, 0.25f, 0.2f);
-  free.points.reserve(has_surface ? 0 : n);
+  // Free particles beyond style.max_points: every k-th of them.
+  const int stride = has_surface ? 1 : decimationStride(n - body.pinnedCount(), style.max_points);
+  free.points.reserve(has_surface ? 0 : n / stride + 1);
+  int free_index = 0;
   for (int i = 0; i < n; ++i)
   {
     // Cloth and jelly are drawn by their surface; only their pinned particles get spheres.
     if (body.isPinned(i))
       pins.points.push_back(toPoint(p.position.col(i)));
-    else if (!has_surface)
+    else if (!has_surface && free_index++ % stride == 0)
       free.points.push_back(toPoint(p.position.col(i)));
   }
   deleteIfEmpty(free);
@@ -192,10 +201,12 @@ void addEmitter(const core::EmitterBody& emitter, const ros::Time& stamp, const 
   visualization_msgs::Marker marker = makeMarker(emitter.name(), kParticlesMarkerId, stamp, style);
   marker.type = visualization_msgs::Marker::POINTS;
   marker.scale.x = marker.scale.y = style.particle_size;
-  marker.points.reserve(p.size());
-  marker.colors.reserve(p.size());
+  // Every k-th live particle when there are more than style.max_points.
+  const int stride = decimationStride(p.size(), style.max_points);
+  marker.points.reserve(p.size() / stride + 1);
+  marker.colors.reserve(p.size() / stride + 1);
   const double lifetime = emitter.definition().lifetime;
-  for (int i = 0; i < p.size(); ++i)
+  for (int i = 0; i < p.size(); i += stride)
   {
     const auto x = p.position.col(i);
     if (!x.allFinite()) continue;  // never publish NaN; such a body is reported elsewhere

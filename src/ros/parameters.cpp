@@ -36,6 +36,7 @@ NodeSettings readNodeSettings(const ros::NodeHandle& private_node)
   private_node.param(names::kFrameOffsetParam, s.frame_offset, s.frame_offset);
   private_node.param(names::kPublishClockParam, s.publish_clock, s.publish_clock);
   private_node.param(names::kParticleSizeParam, s.particle_size, s.particle_size);
+  private_node.param(names::kMaxMarkerPointsParam, s.max_marker_points, s.max_marker_points);
   private_node.param(names::kMaxParticlesParam, s.max_particles_per_body, s.max_particles_per_body);
   private_node.param(names::kMaxWorldParticlesParam, s.max_particles_per_world, s.max_particles_per_world);
   private_node.param(names::kStatusPeriodParam, s.status_period, s.status_period);
@@ -60,6 +61,9 @@ core::Status validate(const NodeSettings& s)
                            " (0 = as fast as possible; negative values have no meaning)");
   if (!(s.particle_size > 0.0 && std::isfinite(s.particle_size)))
     return Status::failure("~particle_size = " + formatReceived(s.particle_size) + " must be > 0 m");
+  if (!(s.max_marker_points >= core::limits::kMarkerPoints.min &&
+        s.max_marker_points <= core::limits::kMarkerPoints.max))
+    return Status::failure(outOfRange("~max_marker_points", s.max_marker_points, core::limits::kMarkerPoints));
   if (s.frame_id.empty()) return Status::failure("~frame_id is empty");
   if (s.parent_frame_id.empty() || s.parent_frame_id == s.frame_id)
     return Status::failure("~parent_frame_id = " + quoteName(s.parent_frame_id) +

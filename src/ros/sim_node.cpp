@@ -118,6 +118,7 @@ bool SimNode::initialize()
   paused_ = s.paused;
   style_.frame_id = s.frame_id;
   style_.particle_size = s.particle_size;
+  style_.max_points = s.max_marker_points;
   style_.color_by_strain = s.color_by_strain;
   style_.strain_color_max = s.strain_color_max;
 

@@ -19,4 +19,6 @@ expect_refused "~real_time_factor = -1 is out of range: must be in [0, 1000] -" 
 expect_refused "~real_time_factor = 1e+300 is out of range" _real_time_factor:=1.0e+300
 expect_refused "~rate = 0 is out of range: must be in [0.1, 1000] Hz" _rate:=0.0
 expect_refused "~rate = nan is out of range" _rate:=nan
+expect_refused "~max_marker_points = 0 is out of range: must be in [1, 1e+07] points" _max_marker_points:=0 \
+  _rate:=50 _real_time_factor:=1.0  # (the private parameters of the runs above stay on the master)
 echo "node_parameters: passed"

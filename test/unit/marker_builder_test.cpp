@@ -126,6 +126,53 @@ TEST(MarkerBuilder, ParticlesAreColouredByAge)
   EXPECT_LT(m.colors[oldest].g, m.colors[youngest].g);
 }
 
+TEST(MarkerBuilder, AParticleMarkerHoldsAtMostMaxPointsEveryKthParticle)
+{
+  // An emitter with about 100 live particles, markers capped at 30 points: every ⌈n/30⌉ = 4th
+  // particle, 25 points, each where its particle is; a cap at the count draws them all.
+  core::World world{core::WorldDef{}};
+  core::EmitterDef e;
+  e.name = "f";
+  e.rate = 100.0;
+  e.lifetime = 10.0;
+  ASSERT_TRUE(world.addEmitter(e).ok);
+  for (int k = 0; k < 1000; ++k)
+    world.step();
+  const auto& p = world.findBody("f")->particles();
+  ASSERT_GT(p.size(), 90);
+  ASSERT_LE(p.size(), 120);
+  ros_interface::MarkerStyle style;
+  style.max_points = 30;
+  const Marker capped = ros_interface::buildMarkers(world, ros::Time(1.0), style, false, {}).markers[0];
+  const std::size_t expected = (p.size() + 3) / 4;  // ⌈n / 4⌉ points
+  ASSERT_EQ(capped.points.size(), expected);
+  ASSERT_EQ(capped.colors.size(), expected);
+  for (std::size_t k = 0; k < capped.points.size(); ++k)
+  {
+    EXPECT_EQ(capped.points[k].x, p.position(0, 4 * k));
+    EXPECT_EQ(capped.points[k].z, p.position(2, 4 * k));
+  }
+  style.max_points = p.size();
+  EXPECT_EQ(ros_interface::buildMarkers(world, ros::Time(1.0), style, false, {}).markers[0].points.size(),
+            static_cast<std::size_t>(p.size()));
+
+  // A network's free particles alike (its pinned ones always all drawn).
+  core::World net_world{core::WorldDef{}};
+  core::SpringNetworkDef net;
+  net.name = "n";
+  for (int i = 0; i < 10; ++i)
+  {
+    net.positions.emplace_back(0.1 * i, 0.0, 1.0);
+    net.masses.push_back(0.1);
+  }
+  net.pins = {0};
+  ASSERT_TRUE(net_world.addSpringNetwork(net).ok);
+  style.max_points = 4;  // 9 free particles: every 3rd, 3 points
+  const auto markers = ros_interface::buildMarkers(net_world, ros::Time(1.0), style, false, {}).markers;
+  EXPECT_EQ(markers[ros_interface::kParticlesMarkerId].points.size(), 3u);
+  EXPECT_EQ(markers[ros_interface::kPinsMarkerId].points.size(), 1u);
+}
+
 TEST(MarkerBuilder, RopeIsALineStripWithFreeAndPinnedParticlesApart)
 {
   core::World world{core::WorldDef{}};

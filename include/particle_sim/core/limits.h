@@ -29,6 +29,7 @@ constexpr Range kWindComponent{-100.0, 100.0, "m/s"};
 constexpr Range kGlobalDamping{0.0, 100.0, "1/s"};
 constexpr Range kRealTimeFactor{0.0, 1000.0, "-"};     // 0 = as fast as possible
 constexpr Range kPublishRate{0.1, 1000.0, "Hz"};
+constexpr Range kMarkerPoints{1, 1e7, "points"};       // points per particle marker (~max_marker_points)
 constexpr Range kContactThickness{0.0, 1.0, "m"};      // distance a body keeps from ground and spheres
 constexpr Range kParticlesPerBody{1, 1e8, "particles"};  // the cap world.max_particles_per_body itself
 constexpr Range kParticlesPerWorld{1, 1e9, "particles"};  // the cap world.max_particles_per_world itself

@@ -20,6 +20,10 @@ struct MarkerStyle
   double line_width = 0.02;       ///< [m] rope and spring lines
   bool color_by_strain = false;   ///< colour cloth and jelly surfaces by strain instead of shading them
   double strain_color_max = 0.1;  ///< [-] strain drawn fully red (0 is blue)
+  /// Most points in one particle marker (an emitter's POINTS, a network's free particles): a body
+  /// with more live particles is drawn by every k-th of them, k = ⌈count / max_points⌉ (evenly in
+  /// index order, the same particles every tick while the count holds).
+  int max_points = 200000;
 };
 
 /// Turns the world's state into one MarkerArray: one namespace per body (the body name) with
@@ -32,6 +36,7 @@ struct MarkerStyle
 ///     vertex normal (or coloured by strain when style.color_by_strain); rviz draws triangle lists
 ///     from both sides; and their pins;
 ///   - an emitter with no live particle gets a DELETE instead of an empty POINTS list;
+///   - a particle marker holds at most style.max_points points (decimated evenly);
 ///   - sphere colliders are drawn in the namespace "_colliders".
 /// Every marker passes rviz's checks: unit quaternion, non-zero scale, alpha > 0, one colour per
 /// point, finite values (non-finite particles are left out).

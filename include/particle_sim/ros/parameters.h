@@ -24,6 +24,7 @@ struct NodeSettings
   std::vector<double> frame_offset = {0.0, 0.0, 0.0};  ///< ~frame_offset [m]: frame_id's origin in parent_frame_id
   bool publish_clock = true;                           ///< ~publish_clock: publish /clock from sim time
   double particle_size = 0.05;                         ///< ~particle_size [m]
+  int max_marker_points = 200000;                      ///< ~max_marker_points: most points of one particle marker
   int max_particles_per_body = 0;                      ///< ~max_particles_per_body; 0 = the scene's value
   int max_particles_per_world = 0;                     ///< ~max_particles_per_world; 0 = the scene's value
   double status_period = 1.0;          ///< ~status_period [s] of wall time between status lines; 0 = none
