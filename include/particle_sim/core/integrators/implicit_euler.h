@@ -15,7 +15,10 @@ namespace core
 ///  1. one linearisation at (x0, v0), solved by the modified PCG of ImplicitEulerSolver;
 ///  2. when nothing does work on the body (no wind, no moving pin) and that step gained energy
 ///     (large rotations or stretches in one step), Newton iterations of full backward Euler:
-///     (M − h ∂f/∂v − h² ∂f/∂x) δ = h f(x_k, v_k) − M (v_k − v0) at x_k = x0 + h v_k, v_{k+1} = v_k + δ;
+///     (M − h ∂f/∂v − h² ∂f/∂x) δ = h f(x_k, v_k) − M (v_k − v0) at x_k = x0 + h v_k,
+///     v_{k+1} = v_k + δ, while the energy is above its value before the step; should that still
+///     gain energy, Newton iterations with a line search on backward Euler's incremental potential
+///     (convergedBackwardEuler()), until the residual force is 1e-8 of the step's force;
 ///  3. energy still gained is taken out of the kinetic energy, and reported as an event.
 class ImplicitEulerMethod : public IntegrationMethod
 {
@@ -32,9 +35,18 @@ public:
   void restart() override { solver_.clearWarmStart(); }
 
 private:
+  // Newton iterations of full backward Euler after those of step() left the energy above its value
+  // before the step; `newton` counts them on, `report` is their last solve's.
+  void convergedBackwardEuler(double h, DynamicSystem& system, const IntegratorDef& settings, int& newton,
+                              SolverReport& report);
+
   static constexpr int kNewtonIterations = 8;
+  static constexpr int kConvergedNewtonIterations = 30;
+  static constexpr double kNewtonTolerance = 1e-8;  // residual force / force at v0
+  static constexpr int kLineSearchHalvings = 12;    // α down to 1/4096
   ImplicitEulerSolver solver_;
-  Eigen::Matrix3Xd force_, x0_, v0_;  // work arrays; (x0, v0) = state at the start of the (sub)step
+  // Work arrays: (x0, v0) = state at the start of the (sub)step; v_k and δ of a Newton iteration.
+  Eigen::Matrix3Xd force_, x0_, v0_, v_newton_, delta_;
 };
 
 /// Implicit Euler as a body's IntegratorDef::type.
