@@ -186,6 +186,7 @@ void SpringNetworkBody::reset()
   guard_.clear();
   updateStabilityBound();
   last_substeps_ = 1;
+  last_dt_ = 0.0;
   last_solve_ = SolverReport{};
   frozen_reason_.clear();
   restartMethods();
@@ -402,6 +403,7 @@ void SpringNetworkBody::step(double dt, const Environment& env)
   }
   last_substeps_ = substeps;
   last_integrator_ = type;
+  last_dt_ = dt;
   for (int i = 0; i < n; ++i)
     p.age[i] += dt;
   p.previous_position = saved_position_;
@@ -414,6 +416,51 @@ void SpringNetworkBody::step(double dt, const Environment& env)
     p.velocity = saved_velocity_;
     frozen_reason_ = guard_.freezeReason(type, dt, last_solve_.breakdown);
   }
+}
+
+void SpringNetworkBody::pinReactions(Eigen::Matrix3Xd& reactions) const
+{
+  // r_i = m_i a_i − f_i at the current state, for pinned particles only.
+  const ParticlePool& p = particles_;
+  const int n = p.size();
+  computeForces(p.position.leftCols(n), p.velocity.leftCols(n), gravity_, reactions);
+  for (int i = 0; i < n; ++i)
+  {
+    if (!pinned_[i])
+    {
+      reactions.col(i).setZero();
+      continue;
+    }
+    const Eigen::Vector3d acceleration = last_dt_ > 0.0
+                                             ? Eigen::Vector3d((p.velocity.col(i) - saved_velocity_.col(i)) / last_dt_)
+                                             : Eigen::Vector3d::Zero();
+    reactions.col(i) = mass_[i] * acceleration - reactions.col(i);
+  }
+}
+
+SpringNetworkBody::PinLoad SpringNetworkBody::pinLoad(const std::vector<int>& indices,
+                                                      const Eigen::Vector3d& about) const
+{
+  Eigen::Matrix3Xd reactions(3, particles_.size());
+  pinReactions(reactions);
+  PinLoad load;
+  auto add = [&](int i) {
+    load.force += reactions.col(i);
+    load.torque += (particles_.position.col(i) - about).cross(Eigen::Vector3d(reactions.col(i)));
+  };
+  if (indices.empty())
+  {
+    for (int i = 0; i < particles_.size(); ++i)
+    {
+      if (pinned_[i]) add(i);
+    }
+  }
+  else
+  {
+    for (int i : indices)
+      add(i);
+  }
+  return load;
 }
 
 void SpringNetworkBody::substep(double h, IntegratorType type, const Environment& env)

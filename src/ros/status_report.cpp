@@ -77,6 +77,13 @@ SimStatus buildSimStatus(const core::World& world, const ros::Time& stamp, const
       b.last_stability_event = spring_body.lastStabilityEvent();
       b.max_strain = spring_body.maxStrain();
       b.pinned_count = static_cast<std::uint32_t>(spring_body.pinnedCount());
+      if (b.pinned_count > 0)
+      {
+        const Eigen::Vector3d force = spring_body.pinLoad({}, Eigen::Vector3d::Zero()).force;
+        b.pin_force.x = force.x();
+        b.pin_force.y = force.y();
+        b.pin_force.z = force.z();
+      }
       if (core::isImplicit(integratorThatRan(spring_body)))
         b.linear_solver = spring_body.lastSolve().direct ? "direct" : "cg";
       b.solver_iterations = static_cast<std::uint32_t>(std::max(0, spring_body.lastSolve().iterations));

@@ -102,6 +102,12 @@ TEST(StatusConversions, SimStatusDescribesTheWorldAndEveryBody)
   EXPECT_EQ(rope.last_integrator, "implicit_euler");
   EXPECT_EQ(rope.particle_count, 10u);
   EXPECT_EQ(rope.pinned_count, 2u);
+  // The pins' reactions, as the core gives them (pin_force_test.cpp tests their physics).
+  const auto& taut = static_cast<const core::SpringNetworkBody&>(*world.bodies()[1]);
+  const Eigen::Vector3d pin_force = taut.pinLoad({}, Eigen::Vector3d::Zero()).force;
+  EXPECT_EQ(rope.pin_force.x, pin_force.x());
+  EXPECT_EQ(rope.pin_force.z, pin_force.z());
+  EXPECT_GT(rope.pin_force.z, 0.0);                     // they hold it up
   EXPECT_NEAR(rope.mass, core::RopeDef().mass, 1e-12);  // [kg] the rope's total, pinned ends included
   EXPECT_FALSE(rope.frozen);
   EXPECT_TRUE(rope.frozen_reason.empty());

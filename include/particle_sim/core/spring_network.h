@@ -110,6 +110,22 @@ public:
   /// Index of the particle nearest to `point`.
   int nearestParticle(const Eigen::Vector3d& point) const;
 
+  /// The force [N] each pin exerts on its particle to keep it on its course: the reaction
+  /// r_i = m_i a_i − f_i(x, v), f_i the force of every element (springs, gravity, air, damping) on
+  /// particle i at the current state and a_i its acceleration over the last step, (v − v_before) / dt
+  /// (0 before the first step). It is what the held particles need in order to follow their targets
+  /// against the body, gravity and their own inertia; 0 for free particles. Computed on call (one
+  /// force evaluation, nothing in the step); `reactions` is set to 3 × particles.
+  void pinReactions(Eigen::Matrix3Xd& reactions) const;
+  /// The sum of the pins' reactions over `indices` (every pinned particle when empty) [N] and its
+  /// torque about `about` [N·m], Σ (x_i − about) × r_i.
+  struct PinLoad
+  {
+    Eigen::Vector3d force = Eigen::Vector3d::Zero();
+    Eigen::Vector3d torque = Eigen::Vector3d::Zero();
+  };
+  PinLoad pinLoad(const std::vector<int>& indices, const Eigen::Vector3d& about) const;
+
   // Force elements ---------------------------------------------------------------------------
   const ForceSet& forces() const { return forces_; }
   /// Read-only views of two elements, for drawing and status: the springs with their current
@@ -219,6 +235,7 @@ private:
   std::vector<std::pair<IntegratorType, std::unique_ptr<IntegrationMethod>>> methods_;  // one per registered integrator
   StrainLimit strain_limit_;  // Provot's constraint, applied after the integrator
   Eigen::Matrix3Xd saved_position_, saved_velocity_;
+  double last_dt_ = 0.0;          // [s] of the last step (pinReactions' accelerations); 0 before the first
   Eigen::Matrix3Xd step_target_;  // pin targets at the end of the whole step (substeps approach them)
 };
 
