@@ -1,6 +1,7 @@
 // particle_sim_run: runs a scene with no ROS master and writes particle states as CSV.
 //
 //   particle_sim_run SCENE.yaml --duration T [--dt DT] [--integrator NAME] [--output states.csv] [--every N]
+//                    [--pin-forces forces.csv]
 
 #include <algorithm>
 #include <chrono>
@@ -20,7 +21,7 @@ namespace
 const std::string kUsage =
     std::string(
         "usage: particle_sim_run SCENE.yaml --duration T [--dt DT] [--integrator NAME] [--output states.csv] "
-        "[--every N]\n"
+        "[--every N] [--pin-forces forces.csv]\n"
         "  SCENE.yaml       scene file (see README, 'Scene files')\n"
         "  --duration T     sim time to run [s], > 0; duration / dt must give 1 to 2^64 - 1 steps\n"
         "  --dt DT          physics step [s], overrides the scene's world.dt, in (0, 0.1]\n"
@@ -29,7 +30,10 @@ const std::string kUsage =
     particle_sim::core::integratorTypeNames() +
     "\n"
     "  --output FILE    write time,body,index,x,y,z,vx,vy,vz rows for every live particle\n"
-    "  --every N        write every N-th step (default 1); the initial state is always written\n";
+    "  --every N        write every N-th step (default 1); the initial state is always written\n"
+    "  --pin-forces FILE  write time,body,pinned,fx,fy,fz,tx,ty,tz rows: per spring body with pins, the\n"
+    "                   sum of the pins' reactions [N] and its torque about the origin [N m], at the\n"
+    "                   steps --output writes (every N-th)\n";
 
 int usageError(const std::string& message)
 {
@@ -42,6 +46,22 @@ bool parseNumber(const std::string& text, double& value)
   char* end = nullptr;
   value = std::strtod(text.c_str(), &end);
   return !text.empty() && end == text.c_str() + text.size() && std::isfinite(value);
+}
+
+// Per spring body with pins: the sum of the pins' reactions and its torque about the origin.
+void writePinForces(std::ostream& out, const particle_sim::core::World& world)
+{
+  char line[320];
+  for (const auto& body : world.bodies())
+  {
+    const auto* spring_body = dynamic_cast<const particle_sim::core::SpringNetworkBody*>(body.get());
+    if (spring_body == nullptr || spring_body->pinnedCount() == 0) continue;
+    const auto load = spring_body->pinLoad({}, Eigen::Vector3d::Zero());
+    std::snprintf(line, sizeof(line), "%.9g,%s,%d,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g\n", world.simTime(),
+                  body->name().c_str(), spring_body->pinnedCount(), load.force.x(), load.force.y(), load.force.z(),
+                  load.torque.x(), load.torque.y(), load.torque.z());
+    out << line;
+  }
 }
 
 void writeStates(std::ostream& out, const particle_sim::core::World& world)
@@ -64,7 +84,7 @@ void writeStates(std::ostream& out, const particle_sim::core::World& world)
 
 int main(int argc, char** argv)
 {
-  std::string scene_path, output_path, integrator_name;
+  std::string scene_path, output_path, integrator_name, pin_forces_path;
   double duration = -1.0, dt = 0.0, every = 1.0;
   for (int i = 1; i < argc; ++i)
   {
@@ -98,6 +118,11 @@ int main(int argc, char** argv)
       if (i + 1 >= argc || !particle_sim::core::parseIntegratorType(argv[i + 1], type))
         return usageError(std::string("--integrator needs one of: ") + particle_sim::core::integratorTypeNames());
       integrator_name = argv[++i];
+    }
+    else if (arg == "--pin-forces")
+    {
+      if (i + 1 >= argc) return usageError("--pin-forces needs a file name");
+      pin_forces_path = argv[++i];
     }
     else if (arg == "--output")
     {
@@ -158,6 +183,17 @@ int main(int argc, char** argv)
     output << "time,body,index,x,y,z,vx,vy,vz\n";
     writeStates(output, *world);
   }
+  std::ofstream pin_forces;
+  if (!pin_forces_path.empty())
+  {
+    pin_forces.open(pin_forces_path);
+    if (!pin_forces)
+    {
+      std::cerr << "particle_sim_run: cannot write '" << pin_forces_path << "'\n";
+      return 1;
+    }
+    pin_forces << "time,body,pinned,fx,fy,fz,tx,ty,tz\n";
+  }
 
   // Report progress on stderr every second of wall time.
   const auto write_every = static_cast<std::uint64_t>(every);
@@ -176,6 +212,7 @@ int main(int argc, char** argv)
     int max_iterations = 0;
     double worst_residual = 0.0;
     long long unconverged = 0;
+    long long direct = 0;  // steps whose last solve was direct
   };
   struct BodyStats
   {
@@ -207,8 +244,10 @@ int main(int argc, char** argv)
       method->max_iterations = std::max(method->max_iterations, report.iterations);
       method->worst_residual = std::max(method->worst_residual, report.relative_residual);
       method->unconverged += report.converged ? 0 : 1;
+      method->direct += report.direct ? 1 : 0;
     }
     if (output.is_open() && (k % write_every == 0 || k == steps)) writeStates(output, *world);
+    if (pin_forces.is_open() && (k % write_every == 0 || k == steps)) writePinForces(pin_forces, *world);
     if (after - last_progress > std::chrono::seconds(1))
     {
       std::fprintf(stderr, "particle_sim_run: %.1f%% (sim time %.3f s of %.3f s)\n", 100.0 * k / steps,
@@ -259,9 +298,11 @@ int main(int argc, char** argv)
       else
         std::printf("%s", particle_sim::core::toString(method.method));
       if (implicit)
-        std::printf(": CG iterations mean %.1f, max %d; worst relative residual %.2e; %lld steps not converged",
-                    static_cast<double>(method.iterations) / method.steps, method.max_iterations, method.worst_residual,
-                    method.unconverged);
+        std::printf(
+            ": CG iterations mean %.1f, max %d; worst relative residual %.2e; %lld steps not converged; %lld of %lld "
+            "solved directly",
+            static_cast<double>(method.iterations) / method.steps, method.max_iterations, method.worst_residual,
+            method.unconverged, method.direct, method.steps);
       std::printf("\n");
     }
   }

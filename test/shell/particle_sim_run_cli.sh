@@ -125,6 +125,25 @@ invoke "$work/world_default.yaml" --duration 0.01
 [ "$status" -eq 0 ] || fail "world default bdf2: exit status $status: $err"
 expect_every_spring_body "the world's bdf2" "bdf2: CG iterations"
 
+# 5. --pin-forces: the rope hangs from its pinned ends; the pins hold its weight, so the vertical force
+# is positive at every row written, and the file has its header.
+cat >"$work/hanging.yaml" <<'EOF'
+world: {dt: 0.001, ground: {enabled: false}}
+bodies:
+  - {name: rope, kind: rope, particles: 11, start: [0, 0, 1], end: [1, 0, 1], mass: 0.5, pins: [0, -1]}
+  - {name: spray, kind: emitter, type: fountain, rate: 10}
+EOF
+invoke "$work/hanging.yaml" --duration 0.05 --every 10 --pin-forces "$work/forces.csv"
+[ "$status" -eq 0 ] || fail "--pin-forces: exit status $status: $err"
+header="$(head -n 1 "$work/forces.csv")"
+[ "$header" = "time,body,pinned,fx,fy,fz,tx,ty,tz" ] || fail "--pin-forces: header $header"
+rows="$(tail -n +2 "$work/forces.csv")"
+[ "$(wc -l <<<"$rows")" -eq 5 ] || fail "--pin-forces: expected 5 rows (steps 10..50), got:"$'\n'"$rows"
+awk -F, '$2 != "rope" || $3 != 2 || !($6 > 0) { bad = 1 } END { exit bad }' <<<"$rows" ||
+  fail "--pin-forces: every row is the rope's 2 pins holding it up:"$'\n'"$rows"
+expect_refusal "--pin-forces without a file" "--pin-forces needs a file name" "$work/hanging.yaml" --duration 0.01 \
+  --pin-forces
+
 if [ "$failures" -ne 0 ]; then
   echo "particle_sim_run_cli: $failures check(s) failed" >&2
   exit 1
