@@ -103,8 +103,9 @@ void buildDiagnostics(const core::World& world, const LoopFigures& loop, double 
 {
   using diagnostic_msgs::DiagnosticStatus;
 
-  // Over the spring bodies: the last implicit solves, strain and frozen bodies.
-  int iterations = 0, not_converged = 0;
+  // Over the spring bodies: the last implicit solves (how many, how many direct, most CG iterations,
+  // worst residual), strain and frozen bodies.
+  int iterations = 0, not_converged = 0, implicit_solves = 0, direct_solves = 0;
   double residual = 0.0, max_strain = 0.0;
   std::string strained_body;
   std::vector<std::string> frozen;
@@ -120,6 +121,8 @@ void buildDiagnostics(const core::World& world, const LoopFigures& loop, double 
     }
     if (core::isImplicit(integratorThatRan(spring_body)))
     {
+      ++implicit_solves;
+      direct_solves += spring_body.lastSolve().direct ? 1 : 0;
       iterations = std::max(iterations, spring_body.lastSolve().iterations);
       residual = std::max(residual, spring_body.lastSolve().relative_residual);
       if (!spring_body.lastSolve().converged) ++not_converged;
@@ -170,6 +173,8 @@ void buildDiagnostics(const core::World& world, const LoopFigures& loop, double 
   stat.add("steps per tick", loop.steps_per_tick);
   stat.add("live particles", world.particleCount());
   stat.add("bodies", static_cast<int>(world.bodies().size()));
+  stat.add("implicit solves (last step)", implicit_solves);
+  stat.add("direct solves (last step)", direct_solves);
   stat.add("solver iterations (max, last step)", iterations);
   stat.add("solver residual (max, last step)", residual);
   stat.add("max strain", max_strain);

@@ -40,7 +40,7 @@ TOPICS = {
 SERVICES = ["spawn_emitter", "spawn_rope", "spawn_cloth", "spawn_jelly", "set_wind", "set_spring_constants",
             "pin_particle", "unpin_particle", "remove_body", "step", "pause_physics", "unpause_physics", "reset",
             "set_parameters"]
-EXECUTABLES = {"particle_sim_node", "particle_sim_run", "particle_sim_bench"}
+EXECUTABLES = {"particle_sim_node", "particle_sim_run", "particle_sim_bench", "particle_sim_perf"}
 
 
 def run(args, timeout=60.0):

@@ -161,9 +161,34 @@ TEST(StatusConversions, DiagnosticsAreOkWhenRunningOnTimeAndListEveryFigure)
   EXPECT_EQ(*findValue(stat, "frozen bodies"), "0");
   EXPECT_EQ(*findValue(stat, "paused"), "False");
   for (const char* key : {"sim time [s]", "real-time factor", "target real-time factor", "step time [us]",
+                          "implicit solves (last step)", "direct solves (last step)",
                           "solver iterations (max, last step)", "solver residual (max, last step)", "max strain",
                           "stability events since last report"})
     EXPECT_NE(findValue(stat, key), nullptr) << key;
+}
+
+TEST(StatusConversions, DiagnosticsCountTheImplicitSolvesAndThoseSolvedDirectly)
+{
+  // The rope is the only implicit body: solved directly by auto and direct, iteratively by cg.
+  for (const auto solver : {core::LinearSolverType::Auto, core::LinearSolverType::Direct, core::LinearSolverType::ConjugateGradient})
+  {
+    core::World world = makeWorld(core::kImplicitEulerIntegrator, solver);
+    world.step();
+    diagnostic_updater::DiagnosticStatusWrapper stat;
+    buildDiagnostics(world, runningOnTime(), 0.9, stat);
+    const bool direct = solver != core::LinearSolverType::ConjugateGradient;
+    ASSERT_NE(findValue(stat, "implicit solves (last step)"), nullptr);
+    EXPECT_EQ(*findValue(stat, "implicit solves (last step)"), "1");
+    EXPECT_EQ(*findValue(stat, "direct solves (last step)"), direct ? "1" : "0");
+    EXPECT_EQ(*findValue(stat, "solver iterations (max, last step)") == "0", direct);
+  }
+  // No implicit body: nothing solved.
+  core::World explicit_world = makeWorld(core::kVerletIntegrator);
+  explicit_world.step();
+  diagnostic_updater::DiagnosticStatusWrapper stat;
+  buildDiagnostics(explicit_world, runningOnTime(), 0.9, stat);
+  EXPECT_EQ(*findValue(stat, "implicit solves (last step)"), "0");
+  EXPECT_EQ(*findValue(stat, "direct solves (last step)"), "0");
 }
 
 TEST(StatusConversions, DiagnosticsWarnBelowNinetyPercentOfTheTargetRealTimeFactorOnlyWhileRunning)
