@@ -23,14 +23,14 @@ PARTICLE_SIM_CMAKE_ARGS=()
 # Debian packages the package needs to build, run and test (ROS 1 from Debian's own archive).
 PARTICLE_SIM_PACKAGES=(
   build-essential cmake catkin ros-core-dev libroscpp-dev libtf2-ros-dev ros-visualization-msgs
-  ros-geometry-msgs ros-shape-msgs ros-std-msgs ros-std-srvs libros-rosgraph-msgs-dev ros-message-generation
+  ros-geometry-msgs ros-shape-msgs ros-std-msgs ros-std-srvs ros-sensor-msgs libsensor-msgs-dev libros-rosgraph-msgs-dev ros-message-generation
   libyaml-cpp-dev libeigen3-dev libgtest-dev librostest-dev python3-rostest python3-rospy
   python3-roslaunch python3-rosservice python3-rostopic rosbash
   libdynamic-reconfigure-config-init-mutex-dev python3-dynamic-reconfigure libdiagnostic-updater-dev
   ros-diagnostic-msgs libnodelet-dev libnodeletlib-dev libnodeletlib-tools libbondcpp-dev pluginlib-dev
   librosbag-dev python3-rosbag python3-rosnode python3-tf2-msgs rviz
   python3-std-msgs python3-std-srvs python3-geometry-msgs python3-shape-msgs python3-visualization-msgs
-  python3-rosgraph-msgs python3-diagnostic-msgs
+  python3-rosgraph-msgs python3-diagnostic-msgs python3-sensor-msgs
 )
 
 # Only for scripts/fuzz (libFuzzer comes with clang; the package build and scripts/test use gcc).

@@ -14,6 +14,7 @@
 #include "particle_sim/ros/mesh_builder.h"
 #include "particle_sim/ros/message_text.h"
 #include "particle_sim/ros/names.h"
+#include "particle_sim/ros/point_cloud_builder.h"
 #include "particle_sim/ros/request_conversions.h"
 #include "particle_sim/ros/spring_constants.h"
 #include "particle_sim/ros/status_report.h"
@@ -140,6 +141,7 @@ void SimNode::advertiseInterfaces()
   markers_pub_ = private_node_.advertise<visualization_msgs::MarkerArray>(names::kMarkersTopic, 10);
   meshes_pub_ = private_node_.advertise<ClothMesh>(names::kMeshesTopic, 10);
   status_pub_ = private_node_.advertise<SimStatus>(names::kStatusTopic, 10);
+  points_pub_ = private_node_.advertise<sensor_msgs::PointCloud2>(names::kPointsTopic, 10);
   if (settings_.publish_clock) clock_pub_ = node_.advertise<rosgraph_msgs::Clock>(names::kClockTopic, 10);
   tf_broadcaster_ = std::make_unique<tf2_ros::TransformBroadcaster>();
   // tf is listened to from the start (on the listener's own thread), so that a pin request can be
@@ -409,6 +411,11 @@ void SimNode::publish()
       meshes_pub_.publish(boost::make_shared<ClothMesh>(buildClothMesh(spring_body, stamp, settings_.frame_id)));
     }
   }
+
+  // Every body's particles as one point cloud, only when someone listens.
+  if (points_pub_.getNumSubscribers() > 0)
+    points_pub_.publish(boost::make_shared<sensor_msgs::PointCloud2>(
+        buildPointCloud(*world_, stamp, settings_.frame_id, settings_.points_surface_only)));
 
   // Status, only when someone listens. Messages are published as shared pointers and never
   // touched again, so that a nodelet in the same process gets them without a copy.

@@ -80,6 +80,7 @@ TEST(ApiContract, TopicsServicesAndParametersUnderTheNamespace)
       {ns + "/markers", "visualization_msgs/MarkerArray"},
       {ns + "/meshes", "particle_sim/ClothMesh"},
       {ns + "/status", "particle_sim/SimStatus"},
+      {ns + "/points", "sensor_msgs/PointCloud2"},
       {ns + "/parameter_descriptions", "dynamic_reconfigure/ConfigDescription"},
       {ns + "/parameter_updates", "dynamic_reconfigure/Config"},
       {"/diagnostics", "diagnostic_msgs/DiagnosticArray"},

@@ -31,6 +31,7 @@ TOPICS = {
     NS + "/markers": 'ns: "fountain"',
     NS + "/meshes": "triangles:",
     NS + "/status": 'name: "sheet"',
+    NS + "/points": "name: \"particle\"",
     "/diagnostics": "simulation",
     "/clock": "clock:",
     "/tf": "transforms:",

@@ -160,17 +160,18 @@ TEST(StatusConversions, DiagnosticsAreOkWhenRunningOnTimeAndListEveryFigure)
   EXPECT_EQ(*findValue(stat, "bodies"), "2");
   EXPECT_EQ(*findValue(stat, "frozen bodies"), "0");
   EXPECT_EQ(*findValue(stat, "paused"), "False");
-  for (const char* key : {"sim time [s]", "real-time factor", "target real-time factor", "step time [us]",
-                          "implicit solves (last step)", "direct solves (last step)",
-                          "solver iterations (max, last step)", "solver residual (max, last step)", "max strain",
-                          "stability events since last report"})
+  for (const char* key :
+       {"sim time [s]", "real-time factor", "target real-time factor", "step time [us]", "implicit solves (last step)",
+        "direct solves (last step)", "solver iterations (max, last step)", "solver residual (max, last step)",
+        "max strain", "stability events since last report"})
     EXPECT_NE(findValue(stat, key), nullptr) << key;
 }
 
 TEST(StatusConversions, DiagnosticsCountTheImplicitSolvesAndThoseSolvedDirectly)
 {
   // The rope is the only implicit body: solved directly by auto and direct, iteratively by cg.
-  for (const auto solver : {core::LinearSolverType::Auto, core::LinearSolverType::Direct, core::LinearSolverType::ConjugateGradient})
+  for (const auto solver :
+       {core::LinearSolverType::Auto, core::LinearSolverType::Direct, core::LinearSolverType::ConjugateGradient})
   {
     core::World world = makeWorld(core::kImplicitEulerIntegrator, solver);
     world.step();

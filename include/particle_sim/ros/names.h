@@ -12,6 +12,7 @@ constexpr const char* kMarkersTopic = "markers";           // ~markers, visualiz
 constexpr const char* kClockTopic = "/clock";              // rosgraph_msgs/Clock
 constexpr const char* kMeshesTopic = "meshes";             // ~meshes, particle_sim/ClothMesh
 constexpr const char* kStatusTopic = "status";             // ~status, particle_sim/SimStatus
+constexpr const char* kPointsTopic = "points";             // ~points, sensor_msgs/PointCloud2
 constexpr const char* kDiagnosticsTopic = "/diagnostics";  // diagnostic_msgs/DiagnosticArray (diagnostic_updater)
 // dynamic_reconfigure's own, under the node's private namespace: ~set_parameters (service),
 // ~parameter_descriptions and ~parameter_updates (latched topics).
@@ -43,6 +44,7 @@ constexpr const char* kFrameOffsetParam = "frame_offset";
 constexpr const char* kPublishClockParam = "publish_clock";
 constexpr const char* kParticleSizeParam = "particle_size";
 constexpr const char* kMaxMarkerPointsParam = "max_marker_points";
+constexpr const char* kPointsSurfaceOnlyParam = "points_surface_only";
 constexpr const char* kMaxParticlesParam = "max_particles_per_body";
 constexpr const char* kMaxWorldParticlesParam = "max_particles_per_world";
 constexpr const char* kStatusPeriodParam = "status_period";

@@ -164,6 +164,7 @@ private:
 
   ros::Publisher markers_pub_;
   ros::Publisher meshes_pub_;
+  ros::Publisher points_pub_;
   ros::Publisher clock_pub_;
   ros::Publisher status_pub_;
   core::IntegratorDef default_integrator_;  // of bodies spawned by services (dynamic_reconfigure "integrator")
