@@ -14,6 +14,7 @@
 #include "particle_sim/ros/mesh_builder.h"
 #include "particle_sim/ros/message_text.h"
 #include "particle_sim/ros/names.h"
+#include "particle_sim/ros/pin_wrench.h"
 #include "particle_sim/ros/point_cloud_builder.h"
 #include "particle_sim/ros/request_conversions.h"
 #include "particle_sim/ros/spring_constants.h"
@@ -225,8 +226,10 @@ void SimNode::releaseInterfaces()
   services_.clear();
   frame_followers_.stopListening();
   tf_broadcaster_.reset();
-  for (ros::Publisher* publisher : {&markers_pub_, &meshes_pub_, &clock_pub_, &status_pub_})
+  for (ros::Publisher* publisher : {&markers_pub_, &meshes_pub_, &clock_pub_, &status_pub_, &points_pub_})
     publisher->shutdown();
+  pin_wrench_pubs_.clear();
+  pin_wrench_topic_owner_.clear();
 }
 
 void SimNode::updateSubsteps()
@@ -412,6 +415,8 @@ void SimNode::publish()
     }
   }
 
+  publishPinWrenches(stamp);
+
   // Every body's particles as one point cloud, only when someone listens.
   if (points_pub_.getNumSubscribers() > 0)
     points_pub_.publish(boost::make_shared<sensor_msgs::PointCloud2>(
@@ -430,6 +435,37 @@ void SimNode::publish()
   markers_pub_.publish(markers);
   delete_all_pending_ = false;
   removed_bodies_.clear();
+}
+
+void SimNode::publishPinWrenches(const ros::Time& stamp)
+{
+  for (const auto& body : world_->bodies())
+  {
+    if (body->kind() != core::BodyKind::SpringNetwork) continue;
+    const auto& spring_body = static_cast<const core::SpringNetworkBody&>(*body);
+    auto publisher = pin_wrench_pubs_.find(body->name());
+    if (publisher == pin_wrench_pubs_.end())
+    {
+      // Advertised once the body has a pin; a topic another body's name already maps to is left
+      // to that body (README "Pin wrenches").
+      if (spring_body.pinnedCount() == 0) continue;
+      const std::string topic = pinWrenchTopic(body->name());
+      const auto [owner, first] = pin_wrench_topic_owner_.emplace(topic, body->name());
+      if (!first)
+      {
+        if (owner->second != body->name())
+          ROS_WARN_ONCE_NAMED("topics", "body %s has no ~%s: body %s publishes there", quoteName(body->name()).c_str(),
+                              topic.c_str(), quoteName(owner->second).c_str());
+        continue;
+      }
+      publisher =
+          pin_wrench_pubs_.emplace(body->name(), private_node_.advertise<geometry_msgs::WrenchStamped>(topic, 10))
+              .first;
+    }
+    if (publisher->second.getNumSubscribers() == 0) continue;
+    publisher->second.publish(
+        boost::make_shared<geometry_msgs::WrenchStamped>(buildPinWrench(spring_body, stamp, settings_.frame_id)));
+  }
 }
 
 void SimNode::printStatus()
@@ -614,6 +650,9 @@ void SimNode::forgetBody(const std::string& name)
   body_materials_.erase(name);
   reported_auto_.erase(name);
   frame_followers_.forgetBody(name);
+  pin_wrench_pubs_.erase(name);
+  for (auto topic = pin_wrench_topic_owner_.begin(); topic != pin_wrench_topic_owner_.end();)
+    topic = topic->second == name ? pin_wrench_topic_owner_.erase(topic) : std::next(topic);
   // dynamic_reconfigure shows another body (or none) instead of the removed one.
   reconfigure_->forgetBody(name);
 }

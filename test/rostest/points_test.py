@@ -7,7 +7,9 @@ jelly and steps the world, so that every message after the step describes one st
 - the cloud has the fields x, y, z (float32), body and particle (uint32), is dense and finite;
 - per body, its points are the status's particle_count, with particle indices 0..count-1 in order,
   and its body index is the body's place in ~status;
-- the cloth's and the jelly's points are where ~meshes puts their vertices (float32 rounding).
+- the cloth's and the jelly's points are where ~meshes puts their vertices (float32 rounding);
+- ~pin_wrench/sheet, the cloth's one pin: its force is ~status's pin_force, and its torque about the
+  frame's origin is x × F with x the pinned particle's position in the cloud.
 """
 import math
 import sys
@@ -17,7 +19,7 @@ import unittest
 
 import rospy
 import rostest
-from geometry_msgs.msg import Point, Vector3
+from geometry_msgs.msg import Point, Vector3, WrenchStamped
 from sensor_msgs import point_cloud2
 from sensor_msgs.msg import PointCloud2, PointField
 
@@ -36,6 +38,7 @@ class Points(unittest.TestCase):
         rospy.Subscriber(NS + "/points", PointCloud2, lambda m: self.keep("points", m), queue_size=2)
         rospy.Subscriber(NS + "/status", SimStatus, lambda m: self.keep("status", m), queue_size=2)
         rospy.Subscriber(NS + "/meshes", ClothMesh, self.keep_mesh, queue_size=10)
+        rospy.Subscriber(NS + "/pin_wrench/sheet", WrenchStamped, lambda m: self.keep("wrench", m), queue_size=2)
 
     def keep(self, key, msg):
         with self.lock:
@@ -57,7 +60,7 @@ class Points(unittest.TestCase):
     def test_cloud_matches_status_and_meshes(self):
         for name in ("spawn_cloth", "spawn_jelly", "step"):
             rospy.wait_for_service(NS + "/" + name, timeout=60.0)
-        cloth = SpawnClothRequest(name="sheet", origin=Point(0, 0, 3), edge_u=Vector3(1, 0, 0),
+        cloth = SpawnClothRequest(name="sheet", origin=Point(0.5, -0.5, 3), edge_u=Vector3(1, 0, 0),
                                   edge_v=Vector3(0, 1, 0), nu=6, nv=5, pins=[0])
         answer = rospy.ServiceProxy(NS + "/spawn_cloth", SpawnCloth)(cloth)
         self.assertTrue(answer.success, answer.message)
@@ -71,12 +74,12 @@ class Points(unittest.TestCase):
         stamp = rospy.Time.from_sec(stepped.sim_time)
 
         def current():
-            msgs = [self.latest.get("points"), self.latest.get("status")] + [self.meshes.get(b) for b in ("sheet", "block")]
+            msgs = [self.latest.get(k) for k in ("points", "status", "wrench")] + [self.meshes.get(b) for b in ("sheet", "block")]
             return all(m is not None and m.header.stamp == stamp for m in msgs)
 
-        self.assertTrue(self.wait_for(current), "no cloud, status and meshes of the stepped state within 30 s")
+        self.assertTrue(self.wait_for(current), "no cloud, status, wrench and meshes of the stepped state within 30 s")
         with self.lock:
-            cloud, status = self.latest["points"], self.latest["status"]
+            cloud, status, wrench = self.latest["points"], self.latest["status"], self.latest["wrench"]
             meshes = dict(self.meshes)
 
         # Fields, as a perception pipeline checks them.
@@ -113,6 +116,18 @@ class Points(unittest.TestCase):
         # The cloth hangs from its pin: it has moved, so the cloud is the stepped state, not the spawned one.
         sheet = dict(by_body[names.index("sheet")])
         self.assertLess(min(z for _, _, z in sheet.values()), 3.0 - 0.05)
+
+        # The pin's wrench: the status's pin force, and about the origin x_pin × F (one pin).
+        self.assertEqual(wrench.header.frame_id, status.header.frame_id)
+        body = status.bodies[names.index("sheet")]
+        force = (wrench.wrench.force.x, wrench.wrench.force.y, wrench.wrench.force.z)
+        self.assertEqual(force, (body.pin_force.x, body.pin_force.y, body.pin_force.z))
+        self.assertGreater(force[2], 0.0, "the pin holds the cloth up")
+        x = sheet[0]
+        expected = (x[1] * force[2] - x[2] * force[1], x[2] * force[0] - x[0] * force[2], x[0] * force[1] - x[1] * force[0])
+        scale = max(abs(c) for c in force) * max(abs(c) for c in x)
+        for got, want in zip((wrench.wrench.torque.x, wrench.wrench.torque.y, wrench.wrench.torque.z), expected):
+            self.assertAlmostEqual(got, want, delta=1e-6 * scale)
 
 
 if __name__ == "__main__":

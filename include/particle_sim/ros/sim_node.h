@@ -107,6 +107,8 @@ private:
   // many ran.
   std::uint64_t stepPhysics(std::uint64_t steps, ServeRequests serve);
   void publish();
+  // ~pin_wrench/<body> of every body that has pins, each built only while subscribed.
+  void publishPinWrenches(const ros::Time& stamp);
   void printStatus();
 
   // Forgets everything the node keeps about a body that is gone.
@@ -165,6 +167,10 @@ private:
   ros::Publisher markers_pub_;
   ros::Publisher meshes_pub_;
   ros::Publisher points_pub_;
+  // Per body that has had pins: its ~pin_wrench topic's publisher (advertised when the body first
+  // has a pin, dropped with the body); and which body publishes on which topic.
+  std::map<std::string, ros::Publisher> pin_wrench_pubs_;
+  std::map<std::string, std::string> pin_wrench_topic_owner_;
   ros::Publisher clock_pub_;
   ros::Publisher status_pub_;
   core::IntegratorDef default_integrator_;  // of bodies spawned by services (dynamic_reconfigure "integrator")

@@ -1,0 +1,50 @@
+#include "particle_sim/ros/pin_wrench.h"
+
+#include <algorithm>
+#include <cctype>
+
+namespace particle_sim
+{
+namespace ros_interface
+{
+std::string pinWrenchTopic(const std::string& body_name)
+{
+  // Body names allow letters, digits, '_', '-' and '/' (core/names.cpp); a ROS name's segments
+  // start with a letter and go on with letters, digits and '_'. Empty segments are dropped.
+  std::string topic = "pin_wrench";
+  std::size_t segments = 0;
+  for (std::size_t at = 0; at < body_name.size();)
+  {
+    const std::size_t end = std::min(body_name.find('/', at), body_name.size());
+    if (end > at)
+    {
+      topic += '/';
+      if (!std::isalpha(static_cast<unsigned char>(body_name[at]))) topic += 'b';
+      for (std::size_t k = at; k < end; ++k)
+        topic += body_name[k] == '-' ? '_' : body_name[k];
+      ++segments;
+    }
+    at = end + 1;
+  }
+  if (segments == 0) topic += "/b";  // no name at all (never a valid body name)
+  return topic;
+}
+
+geometry_msgs::WrenchStamped buildPinWrench(const core::SpringNetworkBody& body, const ros::Time& stamp,
+                                            const std::string& frame_id)
+{
+  const core::SpringNetworkBody::PinLoad load = body.pinLoad({}, Eigen::Vector3d::Zero());
+  geometry_msgs::WrenchStamped wrench;
+  wrench.header.stamp = stamp;
+  wrench.header.frame_id = frame_id;
+  wrench.wrench.force.x = load.force.x();
+  wrench.wrench.force.y = load.force.y();
+  wrench.wrench.force.z = load.force.z();
+  wrench.wrench.torque.x = load.torque.x();
+  wrench.wrench.torque.y = load.torque.y();
+  wrench.wrench.torque.z = load.torque.z();
+  return wrench;
+}
+
+}  // namespace ros_interface
+}  // namespace particle_sim
