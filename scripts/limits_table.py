@@ -36,6 +36,10 @@ RANGE_TEXT = {
     "kPublishRate": "publish rate (`~rate`, live)",
     "kMarkerPoints": "points of one particle marker (`~max_marker_points`; more live particles are decimated evenly)",
     "kContactThickness": "distance a body keeps from ground and spheres (`contact_thickness`)",
+    "kGraspSize": "grasp region: a sphere's `radius`, a box's `half_extents` (`~grasp`)",
+    "kGraspOffset": "each component of a grasp region's centre in the gripper frame (`~grasp` `offset`)",
+    "kGraspCount": "particles a `nearest` grasp takes (`~grasp` `count`)",
+    "kBreakawayForce": "force above which a grasp lets go (`~grasp` `breakaway_force`; 0 = never)",
     "kParticlesPerBody": "particles of one body: the cap itself (`world.max_particles_per_body`, "
     "`~max_particles_per_body`)",
     "kDampingRatio": "damping ratio ζ of a rope or cloth material (`material.damping_ratio`)",

@@ -28,16 +28,33 @@ void FrameFollowers::stopListening()
 bool FrameFollowers::lookup(const std::string& frame, const Eigen::Vector3d& offset, Eigen::Vector3d& point,
                             ros::Time& stamp, std::string& error) const
 {
+  Eigen::Isometry3d pose;
+  if (!lookupPose(frame, pose, stamp, error)) return false;
+  point = pose * offset;
+  return true;
+}
+
+bool FrameFollowers::lookupPose(const std::string& frame, Eigen::Isometry3d& pose, ros::Time& stamp,
+                                std::string& error) const
+{
   if (!tf_buffer_->canTransform(sim_frame_, frame, ros::Time(0), &error)) return false;
   try
   {
     const geometry_msgs::TransformStamped t = tf_buffer_->lookupTransform(sim_frame_, frame, ros::Time(0));
     const auto& q = t.transform.rotation;
     const auto& v = t.transform.translation;
-    point = Eigen::Quaterniond(q.w, q.x, q.y, q.z).normalized() * offset + Eigen::Vector3d(v.x, v.y, v.z);
+    const Eigen::Quaterniond rotation(q.w, q.x, q.y, q.z);
+    const Eigen::Vector3d translation(v.x, v.y, v.z);
+    if (!rotation.coeffs().allFinite() || rotation.norm() == 0.0 || !translation.allFinite())
+    {
+      error = "its transform is not finite";
+      return false;
+    }
+    pose = Eigen::Isometry3d::Identity();
+    pose.linear() = rotation.normalized().toRotationMatrix();
+    pose.translation() = translation;
     stamp = t.header.stamp;
-    if (!point.allFinite()) error = "its transform is not finite";
-    return point.allFinite();
+    return true;
   }
   catch (const tf2::TransformException& exception)
   {

@@ -7,11 +7,14 @@ namespace particle_sim
 {
 namespace ros_interface
 {
-std::string pinWrenchTopic(const std::string& body_name)
+namespace
 {
-  // Body names allow letters, digits, '_', '-' and '/' (core/names.cpp); a ROS name's segments
-  // start with a letter and go on with letters, digits and '_'. Empty segments are dropped.
-  std::string topic = "pin_wrench";
+// `prefix` and then `name` made a valid ROS name. Body and grasp names allow letters, digits, '_',
+// '-' and '/' (core/names.cpp); a ROS name's segments start with a letter and go on with letters,
+// digits and '_'. Empty segments are dropped.
+std::string topicFor(const char* prefix, const std::string& body_name)
+{
+  std::string topic = prefix;
   std::size_t segments = 0;
   for (std::size_t at = 0; at < body_name.size();)
   {
@@ -28,6 +31,17 @@ std::string pinWrenchTopic(const std::string& body_name)
   }
   if (segments == 0) topic += "/b";  // no name at all (never a valid body name)
   return topic;
+}
+}  // namespace
+
+std::string pinWrenchTopic(const std::string& body_name)
+{
+  return topicFor("pin_wrench", body_name);
+}
+
+std::string graspWrenchTopic(const std::string& grasp_name)
+{
+  return topicFor("grasp_wrench", grasp_name);
 }
 
 geometry_msgs::WrenchStamped buildPinWrench(const core::SpringNetworkBody& body, const ros::Time& stamp,

@@ -161,6 +161,8 @@ void SimNode::advertiseInterfaces()
   services_.push_back(private_node_.advertiseService(names::kSpawnCloth, &SimNode::spawnCloth, this));
   services_.push_back(private_node_.advertiseService(names::kSpawnJelly, &SimNode::spawnJelly, this));
   services_.push_back(private_node_.advertiseService(names::kSetWind, &SimNode::setWind, this));
+  services_.push_back(private_node_.advertiseService(names::kGrasp, &SimNode::grasp, this));
+  services_.push_back(private_node_.advertiseService(names::kRelease, &SimNode::release, this));
 
   // ~step waits for the loop to run its steps in slices: its callback runs in a thread of its own.
   ros::AdvertiseServiceOptions step_options;
@@ -230,6 +232,7 @@ void SimNode::releaseInterfaces()
     publisher->shutdown();
   pin_wrench_pubs_.clear();
   pin_wrench_topic_owner_.clear();
+  grasp_wrench_pubs_.clear();
 }
 
 void SimNode::updateSubsteps()
@@ -369,7 +372,28 @@ std::uint64_t SimNode::stepPhysics(std::uint64_t steps, ServeRequests serve)
       if (!choice.empty()) ROS_INFO_NAMED("stability", "body '%s' auto: %s", body->name().c_str(), choice.c_str());
     }
   }
+  if (ran > 0 && !grasps_.all().empty()) updateGrasps();
   return ran;
+}
+
+void SimNode::updateGrasps()
+{
+  std::vector<HeldParticle> let_go;
+  const auto pose_of = [this](const std::string& frame, Eigen::Isometry3d& pose) {
+    std::string error;
+    ros::Time stamp;
+    return frame_followers_.lookupPose(frame, pose, stamp, error);
+  };
+  for (const std::string& name : grasps_.update(*world_, pose_of, world_->simTime(), let_go))
+    ROS_WARN_NAMED("grasps", "grasp %s broke away at sim time %.4f s: %s", quoteName(name).c_str(), world_->simTime(),
+                   grasps_.find(name)->release_reason.c_str());
+  unfollow(let_go);
+}
+
+void SimNode::unfollow(const std::vector<HeldParticle>& let_go)
+{
+  for (const auto& [body, index] : let_go)
+    frame_followers_.unfollow(body, index);
 }
 
 void SimNode::publish()
@@ -416,6 +440,13 @@ void SimNode::publish()
   }
 
   publishPinWrenches(stamp);
+  // Each active grasp's wrench in its gripper frame, only while someone listens.
+  for (const GraspState& grasp : grasps_.all())
+  {
+    const auto publisher = grasp_wrench_pubs_.find(grasp.spec.name);
+    if (grasp.released || publisher == grasp_wrench_pubs_.end() || publisher->second.getNumSubscribers() == 0) continue;
+    publisher->second.publish(boost::make_shared<geometry_msgs::WrenchStamped>(buildGraspWrench(grasp, stamp)));
+  }
 
   // Every body's particles as one point cloud, only when someone listens.
   if (points_pub_.getNumSubscribers() > 0)
@@ -425,8 +456,13 @@ void SimNode::publish()
   // Status, only when someone listens. Messages are published as shared pointers and never
   // touched again, so that a nodelet in the same process gets them without a copy.
   if (status_pub_.getNumSubscribers() > 0)
-    status_pub_.publish(boost::make_shared<SimStatus>(
-        buildSimStatus(*world_, stamp, settings_.frame_id, paused_, settings_.real_time_factor, body_materials_)));
+  {
+    auto status = boost::make_shared<SimStatus>(
+        buildSimStatus(*world_, stamp, settings_.frame_id, paused_, settings_.real_time_factor, body_materials_));
+    for (const GraspState& grasp : grasps_.all())
+      status->grasps.push_back(toGraspStatus(grasp));
+    status_pub_.publish(status);
+  }
 
   // Markers are only built when someone listens.
   if (markers_pub_.getNumSubscribers() == 0) return;
@@ -544,6 +580,7 @@ bool SimNode::pinParticle(PinParticle::Request& req, PinParticle::Response& res)
   }
   core::Status status = body->pin(spec.index, spec.point);
   if (!status) return answer(res, status);
+  grasps_.forgetParticle(req.body, spec.index);  // held by this pin now, not by a grasp
 
   // A particle follows at most one frame: this one, or none any more.
   const int index = spec.index;
@@ -563,6 +600,7 @@ bool SimNode::unpinParticle(UnpinParticle::Request& req, UnpinParticle::Response
     return answer(res,
                   core::Status::failure("body = " + quoteName(req.body) + ": no rope or spring network has that name"));
   core::Status status = body->unpin(req.index);
+  if (status) grasps_.forgetParticle(req.body, req.index);
   if (status) status.message = "released particle " + std::to_string(req.index) + " of " + quoteName(req.body);
   return answer(res, status);
 }
@@ -651,6 +689,9 @@ void SimNode::forgetBody(const std::string& name)
   reported_auto_.erase(name);
   frame_followers_.forgetBody(name);
   pin_wrench_pubs_.erase(name);
+  grasps_.forgetBody(name);  // a grasp left holding nothing is gone, with its topic
+  for (auto topic = grasp_wrench_pubs_.begin(); topic != grasp_wrench_pubs_.end();)
+    topic = grasps_.find(topic->first) ? std::next(topic) : grasp_wrench_pubs_.erase(topic);
   for (auto topic = pin_wrench_topic_owner_.begin(); topic != pin_wrench_topic_owner_.end();)
     topic = topic->second == name ? pin_wrench_topic_owner_.erase(topic) : std::next(topic);
   // dynamic_reconfigure shows another body (or none) instead of the removed one.
@@ -660,11 +701,54 @@ void SimNode::forgetBody(const std::string& name)
 bool SimNode::reset(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res)
 {
   world_->reset();
+  grasps_.clear();  // the bodies are as built: nothing is held (the frame followers drop the pins reset undid)
+  grasp_wrench_pubs_.clear();
   delete_all_pending_ = true;
   reconfigure_->showWorld();  // spring constants are back to the built ones
   std::ostringstream message;
   message << "reset every body; sim time goes on from " << world_->simTime() << " s";
   return answer(res, core::Status::success(message.str()));
+}
+
+bool SimNode::grasp(Grasp::Request& req, Grasp::Response& res)
+{
+  res.captured = 0;
+  GraspSpec spec;
+  if (core::Status s = toGraspSpec(req, spec); !s) return answer(res, s);
+  // The gripper's pose now, from what tf knows (never waiting: the loop would stall).
+  Eigen::Isometry3d pose;
+  ros::Time stamp;
+  std::string error;
+  if (!frame_followers_.lookupPose(spec.frame, pose, stamp, error))
+    return answer(res,
+                  core::Status::failure("frame = " + quoteName(spec.frame) + " is unknown to tf: no transform to " +
+                                        quoteName(settings_.frame_id) + " (" + error + ")"));
+  if (core::Status s = grasps_.grasp(*world_, spec, pose); !s) return answer(res, s);
+
+  // The caught particles follow the frame at their places in it: rigidly, orientation included.
+  const GraspState& held = *grasps_.find(spec.name);
+  std::string bodies;
+  for (const GraspState::Hold& hold : held.holds)
+  {
+    for (const core::CapturedParticle& particle : hold.particles)
+      frame_followers_.follow(hold.body, particle.index, spec.frame, particle.offset);
+    bodies += (bodies.empty() ? "" : ", ") + quoteName(hold.body);
+  }
+  grasp_wrench_pubs_[spec.name] =
+      private_node_.advertise<geometry_msgs::WrenchStamped>(graspWrenchTopic(spec.name), 10);
+  res.captured = static_cast<std::uint32_t>(held.particleCount());
+  return answer(res, core::Status::success("grasp " + quoteName(spec.name) + " holds " + std::to_string(res.captured) +
+                                           " particles of " + bodies + " in frame " + quoteName(spec.frame)));
+}
+
+bool SimNode::release(Release::Request& req, Release::Response& res)
+{
+  std::vector<HeldParticle> let_go;
+  const core::Status status = grasps_.release(*world_, req.name, let_go);
+  unfollow(let_go);
+  if (status) grasp_wrench_pubs_.erase(req.name);
+  res.released = static_cast<std::uint32_t>(let_go.size());
+  return answer(res, status);
 }
 
 bool SimNode::pausePhysics(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res)

@@ -11,6 +11,7 @@
 #include <optional>
 
 #include "particle_sim/core/world.h"
+#include "particle_sim/ros/grasps.h"
 #include "particle_sim/ros/request_conversions.h"
 #include "particle_sim/ros/spring_constants.h"
 #include "particle_sim/scene/obj_mesh.h"
@@ -254,6 +255,20 @@ void fields(IO& io, SetSpringConstants::Request& r)
   io.real(r.damping);
 }
 
+template <class IO>
+void fields(IO& io, Grasp::Request& r)
+{
+  io.text(r.name);
+  io.text(r.body);
+  io.text(r.frame);
+  io.choice(r.region, std::numeric_limits<std::uint8_t>::max());
+  xyz(io, r.offset);
+  io.real(r.radius);
+  xyz(io, r.half_extents);
+  io.count(r.count);
+  io.real(r.breakaway_force);
+}
+
 // The node's parameters (scene_path aside: the fuzzed node starts with an empty world).
 template <class IO>
 void fields(IO& io, ros_interface::NodeSettings& s)
@@ -311,6 +326,10 @@ void fields(IO& io, Request& r)
       r.steps = extra + 1u;
       return;
     }
+    case Request::Service::Grasp:
+      return fields(io, r.grasp);
+    case Request::Service::Release:
+      return io.text(r.grasp_name);
     case Request::Service::Reset:
     case Request::Service::Count:
       return;
@@ -327,7 +346,7 @@ void capWork(core::IntegratorDef& integrator)
 }
 
 RequestAnswer serve(const Request& r, const scene::SceneDef& scene, const core::IntegratorDef& default_integrator,
-                    const ros_interface::NodeSettings& settings, core::World& world)
+                    const ros_interface::NodeSettings& settings, core::World& world, ros_interface::Grasps& grasps)
 {
   using namespace ros_interface;
   auto answer = [](const char* service, const core::Status& status) {
@@ -378,15 +397,33 @@ RequestAnswer serve(const Request& r, const scene::SceneDef& scene, const core::
       return answer("set_spring_constants",
                     applySpringConstants(world, q.body, q.spring_class, q.stiffness, q.damping));
     }
-    case Request::Service::RemoveBody:
-      return answer("remove_body", world.removeBody(r.body));
-    case Request::Service::Step:
+    case Request::Service::RemoveBody: {
+      const core::Status removed = world.removeBody(r.body);
+      if (removed) grasps.forgetBody(r.body);
+      return answer("remove_body", removed);
+    }
+    case Request::Service::Step: {
+      // A tick: the steps, then the grasps' forces and breakaways.
       for (std::uint32_t i = 0; i < r.steps; ++i)
         scene::stepScene(scene, world);
+      std::vector<HeldParticle> let_go;
+      grasps.update(
+          world, [](const std::string&, Eigen::Isometry3d&) { return false; }, world.simTime(), let_go);
       return answer("step", core::Status::success());
+    }
+    case Request::Service::Grasp: {
+      GraspSpec spec;
+      if (core::Status s = toGraspSpec(r.grasp, spec); !s) return answer("grasp", s);
+      return answer("grasp", grasps.grasp(world, spec, Eigen::Isometry3d::Identity()));
+    }
+    case Request::Service::Release: {
+      std::vector<HeldParticle> let_go;
+      return answer("release", grasps.release(world, r.grasp_name, let_go));
+    }
     case Request::Service::Reset:
     case Request::Service::Count:
       world.reset();
+      grasps.clear();
       return answer("reset", core::Status::success());
   }
   return answer("?", core::Status::failure("unknown service"));
@@ -467,11 +504,12 @@ std::vector<RequestAnswer> answerRequests(const std::uint8_t* data, std::size_t 
   answers.push_back({"settings", true, ""});
   const core::IntegratorDef default_integrator = world->definition().integrator;
 
+  ros_interface::Grasps grasps;
   for (int i = 0; i < kMaxRequests && !decoder.empty(); ++i)
   {
     Request request;
     fields(decoder, request);
-    answers.push_back(serve(request, scene, default_integrator, settings, *world));
+    answers.push_back(serve(request, scene, default_integrator, settings, *world, grasps));
   }
   return answers;
 }
@@ -599,7 +637,28 @@ std::vector<RequestSeed> requestSeeds()
   towel.spawn_cloth.material.shear_stiffness = 40;
   towel.spawn_cloth.material.bending_rigidity = 1e-4;
 
+  // A grasp of the rope's end near the origin (the fuzzed gripper frame sits there) that breaks away,
+  // and one released by name.
+  Request hand = request(Service::Grasp);
+  hand.grasp.name = "hand";
+  hand.grasp.frame = "gripper";
+  hand.grasp.region = Grasp::Request::REGION_SPHERE;
+  hand.grasp.radius = 0.3;
+  hand.grasp.breakaway_force = 0.5;
+  Request pinch = hand;
+  pinch.grasp.name = "pinch";
+  pinch.grasp.region = Grasp::Request::REGION_NEAREST;
+  pinch.grasp.count = 3;
+  pinch.grasp.breakaway_force = 0.0;
+  Request let_go = request(Service::Release);
+  let_go.grasp_name = "pinch";
+  Request low = line;
+  low.spawn_rope.name = "low";
+  low.spawn_rope.start = point(0, 0, 0.1);
+  low.spawn_rope.end = point(1, 0, 0.1);
+
   return {{"readme_session", {jet, bad, step, line, pin_point, pin_frame, springs, step}},
+          {"grasp_release", {low, hand, step, step, pinch, step, let_go, step}},
           {"spawn_emitter", {jet, step}},
           {"spawn_rope", {line, step}},
           {"spawn_cloth", {cloth, step}},

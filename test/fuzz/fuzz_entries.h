@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "particle_sim/Grasp.h"
 #include "particle_sim/PinParticle.h"
 #include "particle_sim/SetSpringConstants.h"
 #include "particle_sim/SetWind.h"
@@ -77,6 +78,8 @@ struct Request
     RemoveBody,
     Step,
     Reset,
+    Grasp,
+    Release,
     Count  ///< not a service: the number of them
   };
   Service service = Service::Step;
@@ -90,6 +93,8 @@ struct Request
   std::int32_t index = 0;  ///< UnpinParticle
   SetSpringConstants::Request set_spring_constants;
   std::uint32_t steps = 1;  ///< Step, in [1, kMaxSteps]
+  Grasp::Request grasp;     ///< Grasp (the gripper frame is taken to be at the sim frame's origin)
+  std::string grasp_name;   ///< Release
 };
 
 /// The bytes runRequests decodes into `settings` (node parameters; scene_path is not read) and

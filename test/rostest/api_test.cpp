@@ -111,7 +111,7 @@ TEST(ApiContract, TopicsServicesAndParametersUnderTheNamespace)
 
   for (const char* s : {"spawn_emitter", "spawn_rope", "spawn_cloth", "spawn_jelly", "remove_body", "reset",
                         "pause_physics", "unpause_physics", "step", "pin_particle", "unpin_particle",
-                        "set_spring_constants", "set_wind", "set_parameters"})
+                        "set_spring_constants", "set_wind", "set_parameters", "grasp", "release"})
   {
     const std::string service = ns + "/" + s;
     EXPECT_EQ(g.services.count(service) ? g.services.at(service).count(node) : 0u, 1u)

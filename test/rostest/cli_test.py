@@ -40,7 +40,7 @@ TOPICS = {
 }
 SERVICES = ["spawn_emitter", "spawn_rope", "spawn_cloth", "spawn_jelly", "set_wind", "set_spring_constants",
             "pin_particle", "unpin_particle", "remove_body", "step", "pause_physics", "unpause_physics", "reset",
-            "set_parameters"]
+            "set_parameters", "grasp", "release"]
 EXECUTABLES = {"particle_sim_node", "particle_sim_run", "particle_sim_bench", "particle_sim_perf"}
 
 
@@ -128,6 +128,11 @@ class Cli(unittest.TestCase):
         self.bad("pin_particle", "{body: line, index: 99, target: 0}", "99")
         self.good("unpin_particle", "{body: line, index: 7}")
         self.bad("unpin_particle", "{body: line, index: 99}", "99")
+        grasped = self.good("grasp", "{name: hand, body: line, frame: gripper, region: 2, count: 2}")
+        self.assertEqual(grasped["captured"], 2)
+        self.bad("grasp", "{name: bad_hand, frame: gripper, region: 0, radius: 0}", "radius = 0")
+        self.assertEqual(self.good("release", "{name: hand}")["released"], 2)
+        self.bad("release", "{name: nobody}", "nobody")
         self.good("remove_body", "{name: jet}")
         self.bad("remove_body", "{name: nobody}", "nobody")
 

@@ -31,6 +31,10 @@ constexpr Range kRealTimeFactor{0.0, 1000.0, "-"};     // 0 = as fast as possibl
 constexpr Range kPublishRate{0.1, 1000.0, "Hz"};
 constexpr Range kMarkerPoints{1, 1e7, "points"};       // points per particle marker (~max_marker_points)
 constexpr Range kContactThickness{0.0, 1.0, "m"};      // distance a body keeps from ground and spheres
+constexpr Range kGraspSize{1e-6, 100.0, "m"};          // grasp region: sphere radius, box half-extents
+constexpr Range kGraspOffset{-1e4, 1e4, "m"};          // grasp region centre in the gripper frame, each component
+constexpr Range kGraspCount{1, 1e6, "particles"};      // grasp region: the N particles nearest its centre
+constexpr Range kBreakawayForce{0.0, 1e9, "N"};       // a grasp lets go above this force; 0 = never
 constexpr Range kParticlesPerBody{1, 1e8, "particles"};  // the cap world.max_particles_per_body itself
 constexpr Range kParticlesPerWorld{1, 1e9, "particles"};  // the cap world.max_particles_per_world itself
 constexpr Range kDampingRatio{0.0, 10.0, "-"};         // ζ, fraction of critical damping (cloth and rope materials)

@@ -6,6 +6,7 @@
 #include <tf2_ros/transform_listener.h>
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <chrono>
 #include <cstdint>
 #include <map>
@@ -42,6 +43,9 @@ public:
   /// finite). Never waits.
   bool lookup(const std::string& frame, const Eigen::Vector3d& offset, Eigen::Vector3d& point, ros::Time& stamp,
               std::string& error) const;
+  /// The pose of `frame` in the sim frame (x_sim = pose · x_frame), from its latest transform; false
+  /// with the reason in `error` as for lookup(). Never waits.
+  bool lookupPose(const std::string& frame, Eigen::Isometry3d& pose, ros::Time& stamp, std::string& error) const;
 
   /// Particle `index` of `body`, pinned, follows `frame` at `offset` [m] from the next tick on,
   /// instead of any frame it followed before.

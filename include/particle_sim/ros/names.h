@@ -31,6 +31,8 @@ constexpr const char* kSetSpringConstants = "set_spring_constants";
 constexpr const char* kSpawnCloth = "spawn_cloth";
 constexpr const char* kSpawnJelly = "spawn_jelly";
 constexpr const char* kSetWind = "set_wind";
+constexpr const char* kGrasp = "grasp";
+constexpr const char* kRelease = "release";
 
 // Parameters
 constexpr const char* kSceneParam = "scene";

@@ -16,6 +16,8 @@ namespace ros_interface
 /// does not start with a letter gets a leading 'b'). Two body names can map to one topic
 /// ("a-b", "a_b"); the node then publishes only the first body's.
 std::string pinWrenchTopic(const std::string& body_name);
+/// The topic of a grasp's wrench (~grasp): "grasp_wrench/" and its name, made valid the same way.
+std::string graspWrenchTopic(const std::string& grasp_name);
 
 /// What a body's pins exert on it as one wrench in `frame_id` (the sim frame), about that frame's
 /// origin: force = Σ r_i [N], torque = Σ x_i × r_i [N·m] over its pinned particles, with r_i the

@@ -17,7 +17,9 @@
 #include <thread>
 #include <vector>
 
+#include "particle_sim/Grasp.h"
 #include "particle_sim/PinParticle.h"
+#include "particle_sim/Release.h"
 #include "particle_sim/RemoveBody.h"
 #include "particle_sim/SetSpringConstants.h"
 #include "particle_sim/SetWind.h"
@@ -30,6 +32,7 @@
 #include "particle_sim/UnpinParticle.h"
 #include "particle_sim/core/world.h"
 #include "particle_sim/ros/frame_followers.h"
+#include "particle_sim/ros/grasps.h"
 #include "particle_sim/ros/marker_builder.h"
 #include "particle_sim/ros/master_link.h"
 #include "particle_sim/ros/parameters.h"
@@ -122,6 +125,12 @@ private:
   bool spawnCloth(SpawnCloth::Request& req, SpawnCloth::Response& res);
   bool spawnJelly(SpawnJelly::Request& req, SpawnJelly::Response& res);
   bool setWind(SetWind::Request& req, SetWind::Response& res);
+  bool grasp(Grasp::Request& req, Grasp::Response& res);
+  bool release(Release::Request& req, Release::Response& res);
+  // After a tick's steps: the grasps' forces, and those above their breakaway force let go.
+  void updateGrasps();
+  // The frame followers drop particles a grasp let go.
+  void unfollow(const std::vector<HeldParticle>& let_go);
   bool removeBody(RemoveBody::Request& req, RemoveBody::Response& res);
   bool reset(std_srvs::Trigger::Request& req, std_srvs::Trigger::Response& res);
   bool pausePhysics(std_srvs::Trigger::Request& req, std_srvs::Trigger::Response& res);
@@ -181,7 +190,9 @@ private:
   std::unique_ptr<tf2_ros::TransformBroadcaster> tf_broadcaster_;
   std::vector<ros::ServiceServer> services_;
 
-  FrameFollowers frame_followers_;  // tf pins and spheres that follow tf frames
+  FrameFollowers frame_followers_;                           // tf pins and spheres that follow tf frames
+  Grasps grasps_;                                            // ~grasp: captured particles that follow gripper frames
+  std::map<std::string, ros::Publisher> grasp_wrench_pubs_;  // per grasp: ~grasp_wrench/<name>
 
   std::set<std::string> reported_frozen_;             // frozen bodies already logged
   std::map<std::string, long long> reported_events_;  // per body, stability events already logged
