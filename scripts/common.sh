@@ -28,6 +28,7 @@ PARTICLE_SIM_PACKAGES=(
   python3-roslaunch python3-rosservice python3-rostopic rosbash
   libdynamic-reconfigure-config-init-mutex-dev python3-dynamic-reconfigure libdiagnostic-updater-dev
   ros-diagnostic-msgs libnodelet-dev libnodeletlib-dev libnodeletlib-tools libbondcpp-dev pluginlib-dev
+  libinteractive-markers-dev
   librosbag-dev python3-rosbag python3-rosnode python3-tf2-msgs rviz
   python3-std-msgs python3-std-srvs python3-geometry-msgs python3-shape-msgs python3-visualization-msgs
   python3-rosgraph-msgs python3-diagnostic-msgs python3-sensor-msgs

@@ -38,6 +38,7 @@ NodeSettings readNodeSettings(const ros::NodeHandle& private_node)
   private_node.param(names::kParticleSizeParam, s.particle_size, s.particle_size);
   private_node.param(names::kMaxMarkerPointsParam, s.max_marker_points, s.max_marker_points);
   private_node.param(names::kPointsSurfaceOnlyParam, s.points_surface_only, s.points_surface_only);
+  private_node.param(names::kDragMarkersParam, s.drag_markers, s.drag_markers);
   private_node.param(names::kMaxParticlesParam, s.max_particles_per_body, s.max_particles_per_body);
   private_node.param(names::kMaxWorldParticlesParam, s.max_particles_per_world, s.max_particles_per_world);
   private_node.param(names::kStatusPeriodParam, s.status_period, s.status_period);

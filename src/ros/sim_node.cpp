@@ -143,6 +143,8 @@ void SimNode::advertiseInterfaces()
   meshes_pub_ = private_node_.advertise<ClothMesh>(names::kMeshesTopic, 10);
   status_pub_ = private_node_.advertise<SimStatus>(names::kStatusTopic, 10);
   points_pub_ = private_node_.advertise<sensor_msgs::PointCloud2>(names::kPointsTopic, 10);
+  if (settings_.drag_markers)
+    drag_markers_ = std::make_unique<DragMarkers>(private_node_, settings_.frame_id, settings_.particle_size);
   if (settings_.publish_clock) clock_pub_ = node_.advertise<rosgraph_msgs::Clock>(names::kClockTopic, 10);
   tf_broadcaster_ = std::make_unique<tf2_ros::TransformBroadcaster>();
   // tf is listened to from the start (on the listener's own thread), so that a pin request can be
@@ -223,6 +225,7 @@ void SimNode::releaseInterfaces()
   step_queue_.disable();
   step_queue_.clear();
 
+  drag_markers_.reset();
   reconfigure_.reset();
   diagnostics_.reset();
   services_.clear();
@@ -299,6 +302,7 @@ void SimNode::waitForTick(std::chrono::steady_clock::time_point next_tick)
 
 void SimNode::tick()
 {
+  if (drag_markers_) drag_markers_->beginTick(*world_);  // mouse events from rviz, paused or not
   if (step_job_.active)
     runStepSlice();
   else if (!paused_)
@@ -689,6 +693,7 @@ void SimNode::forgetBody(const std::string& name)
   reported_auto_.erase(name);
   frame_followers_.forgetBody(name);
   pin_wrench_pubs_.erase(name);
+  if (drag_markers_) drag_markers_->forgetBody(name);
   grasps_.forgetBody(name);  // a grasp left holding nothing is gone, with its topic
   for (auto topic = grasp_wrench_pubs_.begin(); topic != grasp_wrench_pubs_.end();)
     topic = grasps_.find(topic->first) ? std::next(topic) : grasp_wrench_pubs_.erase(topic);
@@ -701,6 +706,7 @@ void SimNode::forgetBody(const std::string& name)
 bool SimNode::reset(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res)
 {
   world_->reset();
+  if (drag_markers_) drag_markers_->forgetAll();
   grasps_.clear();  // the bodies are as built: nothing is held (the frame followers drop the pins reset undid)
   grasp_wrench_pubs_.clear();
   delete_all_pending_ = true;

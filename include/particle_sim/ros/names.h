@@ -47,6 +47,7 @@ constexpr const char* kPublishClockParam = "publish_clock";
 constexpr const char* kParticleSizeParam = "particle_size";
 constexpr const char* kMaxMarkerPointsParam = "max_marker_points";
 constexpr const char* kPointsSurfaceOnlyParam = "points_surface_only";
+constexpr const char* kDragMarkersParam = "drag_markers";
 constexpr const char* kMaxParticlesParam = "max_particles_per_body";
 constexpr const char* kMaxWorldParticlesParam = "max_particles_per_world";
 constexpr const char* kStatusPeriodParam = "status_period";

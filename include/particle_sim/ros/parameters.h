@@ -25,6 +25,7 @@ struct NodeSettings
   bool publish_clock = true;                           ///< ~publish_clock: publish /clock from sim time
   double particle_size = 0.05;                         ///< ~particle_size [m]
   int max_marker_points = 200000;                      ///< ~max_marker_points: most points of one particle marker
+  bool drag_markers = true;                            ///< ~drag_markers: drag particles in rviz (~drag)
   bool points_surface_only = false;                    ///< ~points_surface_only: ~points without a jelly's interior
   int max_particles_per_body = 0;                      ///< ~max_particles_per_body; 0 = the scene's value
   int max_particles_per_world = 0;                     ///< ~max_particles_per_world; 0 = the scene's value

@@ -31,6 +31,7 @@
 #include "particle_sim/Step.h"
 #include "particle_sim/UnpinParticle.h"
 #include "particle_sim/core/world.h"
+#include "particle_sim/ros/drag_markers.h"
 #include "particle_sim/ros/frame_followers.h"
 #include "particle_sim/ros/grasps.h"
 #include "particle_sim/ros/marker_builder.h"
@@ -192,6 +193,7 @@ private:
 
   FrameFollowers frame_followers_;                           // tf pins and spheres that follow tf frames
   Grasps grasps_;                                            // ~grasp: captured particles that follow gripper frames
+  std::unique_ptr<DragMarkers> drag_markers_;                // ~drag: particles dragged in rviz (~drag_markers)
   std::map<std::string, ros::Publisher> grasp_wrench_pubs_;  // per grasp: ~grasp_wrench/<name>
 
   std::set<std::string> reported_frozen_;             // frozen bodies already logged
