@@ -107,11 +107,13 @@ void DragMarkers::beginTick(core::World& world)
     }
   }
 
-  // One marker per spring body: new bodies get one, removed bodies lose theirs.
-  std::set<std::string> bodies;
+  // One marker per spring body: new bodies get one, removed bodies lose theirs. A tick with no
+  // event, no refresh due and the same bodies as shown does nothing (and allocates nothing).
   const auto now = std::chrono::steady_clock::now();
   const bool refresh = update_listeners_.getNumSubscribers() > 0 &&
                        std::chrono::duration<double>(now - last_refresh_).count() >= kDragMarkerRefreshPeriod;
+  if (!changed && !refresh && sameBodies(world)) return;
+  std::set<std::string> bodies;
   for (const auto& body : world.bodies())
   {
     if (body->kind() != core::BodyKind::SpringNetwork) continue;
@@ -134,6 +136,18 @@ void DragMarkers::beginTick(core::World& world)
   shown_.swap(bodies);
   if (refresh) last_refresh_ = now;
   if (changed) server_->applyChanges();
+}
+
+bool DragMarkers::sameBodies(const core::World& world) const
+{
+  std::size_t count = 0;
+  for (const auto& body : world.bodies())
+  {
+    if (body->kind() != core::BodyKind::SpringNetwork) continue;
+    if (!shown_.count(body->name())) return false;
+    ++count;
+  }
+  return count == shown_.size();
 }
 
 void DragMarkers::forgetBody(const std::string& body)

@@ -45,6 +45,8 @@ public:
 private:
   visualization_msgs::InteractiveMarker bodyMarker(const core::SpringNetworkBody& body) const;
   void feedback(const visualization_msgs::InteractiveMarkerFeedbackConstPtr& feedback);
+  /// The world's spring bodies are those with a marker (names unique, so counting suffices).
+  bool sameBodies(const core::World& world) const;
 
   std::string frame_id_;
   double particle_size_;
