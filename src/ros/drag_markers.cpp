@@ -2,6 +2,9 @@
 
 #include <visualization_msgs/InteractiveMarkerUpdate.h>
 
+#include "particle_sim/ros/eigen_messages.h"
+#include "particle_sim/ros/marker_builder.h"
+
 namespace particle_sim
 {
 namespace ros_interface
@@ -65,15 +68,10 @@ visualization_msgs::InteractiveMarker DragMarkers::bodyMarker(const core::Spring
   points.color.r = points.color.g = points.color.b = 1.0f;
   points.color.a = 0.25f;  // see-through: the body's own markers stay visible
   const core::ParticlePool& p = body.particles();
-  const int stride = p.size() > kMaxDragMarkerPoints ? (p.size() + kMaxDragMarkerPoints - 1) / kMaxDragMarkerPoints : 1;
+  const int stride = decimationStride(p.size(), kMaxDragMarkerPoints);
   for (int i = 0; i < p.size(); i += stride)
   {
-    if (!p.position.col(i).allFinite()) continue;
-    geometry_msgs::Point point;
-    point.x = p.position(0, i);
-    point.y = p.position(1, i);
-    point.z = p.position(2, i);
-    points.points.push_back(point);
+    if (p.position.col(i).allFinite()) points.points.push_back(toPoint(p.position.col(i)));
   }
   visualization_msgs::InteractiveMarkerControl control;
   control.interaction_mode = visualization_msgs::InteractiveMarkerControl::MOVE_3D;

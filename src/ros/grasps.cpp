@@ -7,29 +7,13 @@
 #include "particle_sim/core/limits.h"
 #include "particle_sim/core/names.h"
 #include "particle_sim/core/validation.h"
+#include "particle_sim/ros/eigen_messages.h"
 #include "particle_sim/ros/message_text.h"
 
 namespace particle_sim
 {
 namespace ros_interface
 {
-namespace
-{
-Eigen::Vector3d toEigen(const geometry_msgs::Vector3& v)
-{
-  return {v.x, v.y, v.z};
-}
-
-geometry_msgs::Vector3 toVector3(const Eigen::Vector3d& v)
-{
-  geometry_msgs::Vector3 out;
-  out.x = v.x();
-  out.y = v.y();
-  out.z = v.z();
-  return out;
-}
-}  // namespace
-
 core::Status toGraspSpec(const Grasp::Request& req, GraspSpec& spec)
 {
   namespace limits = core::limits;

@@ -5,6 +5,7 @@
 #include "particle_sim/core/emitter.h"
 #include "particle_sim/core/spring_network.h"
 #include "particle_sim/core/surface.h"
+#include "particle_sim/ros/eigen_messages.h"
 
 namespace particle_sim
 {
@@ -14,6 +15,11 @@ namespace
 {
 std_msgs::ColorRGBA rgba(float r, float g, float b, float a = 1.0f);
 }  // namespace
+
+int decimationStride(int count, int max_points)
+{
+  return max_points > 0 && count > max_points ? (count + max_points - 1) / max_points : 1;
+}
 
 std_msgs::ColorRGBA strainColor(double strain, double max)
 {
@@ -40,12 +46,6 @@ visualization_msgs::Marker makeMarker(const std::string& ns, int id, const ros::
   return marker;
 }
 
-// Every k-th of `count` particles keeps a marker within `max_points`: k = ⌈count / max_points⌉.
-int decimationStride(int count, int max_points)
-{
-  return max_points > 0 && count > max_points ? (count + max_points - 1) / max_points : 1;
-}
-
 // Colour of an emitter particle by its age fraction s in [0, 1]: pale yellow when new, through
 // orange, to dark red when about to be recycled.
 std_msgs::ColorRGBA ageColor(double s)
@@ -67,15 +67,6 @@ std_msgs::ColorRGBA rgba(float r, float g, float b, float a)
   c.b = b;
   c.a = a;
   return c;
-}
-
-geometry_msgs::Point toPoint(const Eigen::Ref<const Eigen::Vector3d>& x)
-{
-  geometry_msgs::Point point;
-  point.x = x.x();
-  point.y = x.y();
-  point.z = x.z();
-  return point;
 }
 
 // Turns `marker` into a DELETE when it has no points (rviz refuses empty lists).

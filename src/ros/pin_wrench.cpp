@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cctype>
 
+#include "particle_sim/ros/eigen_messages.h"
+
 namespace particle_sim
 {
 namespace ros_interface
@@ -51,12 +53,8 @@ geometry_msgs::WrenchStamped buildPinWrench(const core::SpringNetworkBody& body,
   geometry_msgs::WrenchStamped wrench;
   wrench.header.stamp = stamp;
   wrench.header.frame_id = frame_id;
-  wrench.wrench.force.x = load.force.x();
-  wrench.wrench.force.y = load.force.y();
-  wrench.wrench.force.z = load.force.z();
-  wrench.wrench.torque.x = load.torque.x();
-  wrench.wrench.torque.y = load.torque.y();
-  wrench.wrench.torque.z = load.torque.z();
+  wrench.wrench.force = toVector3(load.force);
+  wrench.wrench.torque = toVector3(load.torque);
   return wrench;
 }
 

@@ -3,6 +3,7 @@
 #include <limits>
 
 #include "particle_sim/core/world.h"
+#include "particle_sim/ros/eigen_messages.h"
 #include "particle_sim/ros/material_conversions.h"
 #include "particle_sim/ros/message_text.h"
 
@@ -30,16 +31,6 @@ core::Status readCountOrDefault(const char* field, std::uint32_t value, int& cou
 {
   if (value == 0) return core::Status::success();
   return readCount(field, value, count);
-}
-
-Eigen::Vector3d toEigen(const geometry_msgs::Point& p)
-{
-  return {p.x, p.y, p.z};
-}
-
-Eigen::Vector3d toEigen(const geometry_msgs::Vector3& v)
-{
-  return {v.x, v.y, v.z};
 }
 
 std::string formatVector(const Eigen::Vector3d& v)

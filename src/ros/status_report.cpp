@@ -10,24 +10,13 @@
 
 #include "particle_sim/core/cloth_model.h"
 #include "particle_sim/core/emitter.h"
+#include "particle_sim/ros/eigen_messages.h"
 #include "particle_sim/ros/message_text.h"
 
 namespace particle_sim
 {
 namespace ros_interface
 {
-namespace
-{
-geometry_msgs::Vector3 toVector3(const Eigen::Vector3d& v)
-{
-  geometry_msgs::Vector3 out;
-  out.x = v.x();
-  out.y = v.y();
-  out.z = v.z();
-  return out;
-}
-}  // namespace
-
 core::IntegratorType integratorThatRan(const core::SpringNetworkBody& body)
 {
   return body.integrator().type == core::kAutoIntegrator ? body.lastIntegrator() : body.integrator().type;
@@ -79,10 +68,7 @@ SimStatus buildSimStatus(const core::World& world, const ros::Time& stamp, const
       b.pinned_count = static_cast<std::uint32_t>(spring_body.pinnedCount());
       if (b.pinned_count > 0)
       {
-        const Eigen::Vector3d force = spring_body.pinLoad({}, Eigen::Vector3d::Zero()).force;
-        b.pin_force.x = force.x();
-        b.pin_force.y = force.y();
-        b.pin_force.z = force.z();
+        b.pin_force = toVector3(spring_body.pinLoad({}, Eigen::Vector3d::Zero()).force);
       }
       if (core::isImplicit(integratorThatRan(spring_body)))
         b.linear_solver = spring_body.lastSolve().direct ? "direct" : "cg";

@@ -17,7 +17,7 @@ import unittest
 import rospkg
 import rospy
 import rostest
-from geometry_msgs.msg import Point, Vector3
+from geometry_msgs.msg import Point
 from sensor_msgs import point_cloud2
 from sensor_msgs.msg import PointCloud2
 from visualization_msgs.msg import InteractiveMarkerFeedback, InteractiveMarkerInit

@@ -43,6 +43,10 @@ struct MarkerStyle
 visualization_msgs::MarkerArray buildMarkers(const core::World& world, const ros::Time& stamp, const MarkerStyle& style,
                                              bool delete_all, const std::vector<std::string>& removed);
 
+/// Every k-th of `count` particles keeps a drawing within `max_points`: k = ⌈count / max_points⌉
+/// (1 when they fit).
+int decimationStride(int count, int max_points);
+
 /// Colour of a strain (l − L)/L: blue at 0 (or compressed), through green, to red at `max`.
 std_msgs::ColorRGBA strainColor(double strain, double max);
 
