@@ -23,6 +23,7 @@
 #   wait_for_service NAME [SECONDS]   until the master lists service NAME (default 30 s); 1 if not
 #   wait_for_log SECONDS FILE REGEX   until FILE matches the extended REGEX; 1 if not
 #   contains TEXT REGEX      true if a line of TEXT matches the extended REGEX
+#   running PID              true while process PID exists and is not a zombie
 #   fail "message"           prints "FAIL: message" and the last lines of $work/*.log, exits 1
 
 export PATH="/usr/bin:$PATH"
@@ -80,6 +81,14 @@ nodelet_manager=(rosrun nodelet nodelet manager)
 # True if text $1 has a line matching the extended regex $2 (no pipe: under pipefail, grep -q
 # ending a pipe early fails the writer).
 contains() { grep -Eq -- "$2" <<<"$1"; }
+
+# True while process $1 runs. Its state is read once: a zombie that this shell reaps (on SIGCHLD)
+# between a `kill -0` and a `ps` must not pass for a live process.
+running() {
+  local state
+  state="$(ps -o stat= -p "$1" 2>/dev/null || true)"
+  [ -n "$state" ] && [ "${state:0:1}" != Z ]
+}
 
 start_roscore() {
   local nodes

@@ -31,13 +31,12 @@ for signal in INT TERM; do
   # The signal to the manager's process (rosrun execs it); it must be gone within 1 s.
   start_ns="$(date +%s%N)"
   kill -"$signal" "$manager_pid"
-  while kill -0 "$manager_pid" 2>/dev/null && [ $(($(date +%s%N) - start_ns)) -lt 5000000000 ]; do
-    [ "$(ps -o stat= -p "$manager_pid" 2>/dev/null | cut -c1)" = Z ] && break
+  while running "$manager_pid" && [ $(($(date +%s%N) - start_ns)) -lt 5000000000 ]; do
     sleep 0.01
   done
   elapsed_ms=$((($(date +%s%N) - start_ns) / 1000000))
   code=0
-  if kill -0 "$manager_pid" 2>/dev/null && [ "$(ps -o stat= -p "$manager_pid" | cut -c1)" != Z ]; then
+  if running "$manager_pid"; then
     kill -KILL "$manager_pid" 2>/dev/null || true
     fail "SIG$signal: the manager still ran 5 s after the signal; its log: $(tail -5 "$work/manager_$signal.log")"
   fi

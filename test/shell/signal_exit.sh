@@ -35,9 +35,7 @@ for signal in INT TERM; do
   # The signal, to both at once; the node must be gone within 1 s (the bound issue 16 names).
   start_ns="$(date +%s%N)"
   kill -"$signal" "$node_pid" "$recorder_pid"
-  while kill -0 "$node_pid" 2>/dev/null && [ $(($(date +%s%N) - start_ns)) -lt 5000000000 ]; do
-    # a zombie has exited: only `wait` below reaps it
-    [ "$(ps -o stat= -p "$node_pid" 2>/dev/null | cut -c1)" = Z ] && break
+  while running "$node_pid" && [ $(($(date +%s%N) - start_ns)) -lt 5000000000 ]; do
     sleep 0.01
   done
   elapsed_ms=$((($(date +%s%N) - start_ns) / 1000000))
