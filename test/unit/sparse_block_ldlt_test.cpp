@@ -312,8 +312,50 @@ TEST(SparseBlockLdlt, AutoTurnsDirectWhenCgTakesMoreIterationsThanTheFactorizati
   EXPECT_TRUE(body.lastSolve().converged);
   // A forced CG stays CG.
   def.integrator.linear_solver = LinearSolverType::ConjugateGradient;
+  def.integrator.cg_max_iterations = 5;
   SpringNetworkBody cg(buildClothGrid(def));
   for (int step = 0; step < 3; ++step)
     cg.step(1.0 / 60.0, env);
   EXPECT_FALSE(cg.lastSolve().direct);
+  EXPECT_FALSE(cg.lastSolve().converged) << "5 iterations were enough: the forced CG was not tested";
+}
+
+TEST(SparseBlockLdlt, AutoTurnsDirectWhenCgStopsAtItsIterationCapShortOfTheTolerance)
+{
+  // The same stiff 48 x 48 cloth with CG capped at 5 iterations: fewer than the factorization costs
+  // (the sheet starts with CG), so only the unconverged solve can hand it to the direct solver. The
+  // step after the first CG solve that stops short of the tolerance is direct, exact, and so is
+  // every later step.
+  ClothGridDef def(ClothModel::Springs);
+  def.name = "sheet";
+  def.nu = def.nv = 48;
+  def.mass = 1.0;
+  def.stretch.stiffness = 1000.0;
+  def.shear.stiffness = 1000.0;
+  def.named_pins = {"corner_00", "corner_10"};
+  def.integrator.type = kImplicitEulerIntegrator;
+  def.integrator.linear_solver = LinearSolverType::Auto;
+  def.integrator.cg_max_iterations = 5;
+  SpringNetworkBody body(buildClothGrid(def));
+  Environment env;
+  env.ground.enabled = false;
+  int first_unconverged = -1, first_direct = -1;
+  for (int step = 0; step < 30; ++step)
+  {
+    body.step(1.0 / 60.0, env);
+    const SolverReport report = body.lastSolve();
+    if (report.direct)
+    {
+      if (first_direct < 0) first_direct = step;
+      EXPECT_TRUE(report.converged) << "step " << step;
+    }
+    else
+    {
+      EXPECT_LT(first_direct, 0) << "back to CG at step " << step;
+      EXPECT_LE(report.iterations, 5);
+      if (!report.converged && first_unconverged < 0) first_unconverged = step;
+    }
+  }
+  ASSERT_GE(first_unconverged, 0) << "CG met the tolerance in 5 iterations: nothing was tested";
+  EXPECT_EQ(first_direct, first_unconverged + 1);
 }

@@ -67,7 +67,8 @@ enum class LinearSolverType
 /// conjugate-gradient iterations, counted in floating-point operations from the pattern: true of
 /// ropes and chains (no fill) and of small sheets. Larger sheets and lattices start with CG, and
 /// switch to the direct solver for good once a CG solve takes more iterations than the direct solve
-/// costs (stiff sheets at large steps).
+/// costs, or ends at cg_max_iterations short of cg_tolerance (stiff sheets at large steps, and
+/// large sheets whose direct solve costs more than the iteration cap).
 inline constexpr double kDirectSolverCgIterations = 40.0;
 
 /// "auto", "cg", "direct".

@@ -128,10 +128,11 @@ SolverReport ImplicitEulerSolver::solve(const std::vector<char>& pinned, const I
     report.direct = true;
   }
   conjugateGradient(pinned, settings.cg_tolerance, settings.cg_max_iterations, report);
-  // `auto` measured CG: when a solve took more iterations than the direct solve costs, the direct
-  // solver takes over from the next solve on (for good: no switching back and forth).
+  // `auto` measured CG: when a solve took more iterations than the direct solve costs, or stopped
+  // at the iteration cap short of the tolerance (the direct solve is exact, however dear), the
+  // direct solver takes over from the next solve on (for good: no switching back and forth).
   if (settings.linear_solver == LinearSolverType::Auto && !report.direct &&
-      report.iterations > direct_in_cg_iterations_)
+      (report.iterations > direct_in_cg_iterations_ || !report.converged))
     auto_choice_ = DirectChoice::Cheaper;
 
   // v1 = v0 + Δv, x1 = x0 + h v1.
