@@ -215,7 +215,7 @@ void EmitterBody::step(double dt, const Environment& env)
     p.velocity.col(i) += g_dt;
     p.age[i] += dt;
   }
-  resolveCollisions(env, p, nullptr, &p.previous_position, def_.contact_thickness);
+  resolveCollisions(env, p, nullptr, &p.previous_position, def_.contact_thickness, dt);
 
   // 2. Recycle particles older than their lifetime: the last live particle takes the slot.
   for (int i = 0; i < p.live_count;)

@@ -136,6 +136,7 @@ SpringNetworkBody::SpringNetworkBody(const SpringNetworkDef& def, const Integrat
   pin_target_.setZero(3, n);
   saved_position_.setZero(3, n);
   saved_velocity_.setZero(3, n);
+  substep_start_.setZero(3, n);
   // The implicit system's pattern: the particle pairs every force element couples. The elements
   // look up their block indices once; they depend only on the pattern, which every implicit
   // method's solver is given.
@@ -467,6 +468,9 @@ void SpringNetworkBody::substep(double h, IntegratorType type, const Environment
 {
   ParticlePool& p = particles_;
   const int n = p.size();
+  // Boxes and capsules (thin ones, moving ones) are swept: each particle's path over the substep.
+  const bool swept = !env.boxes.empty() || !env.capsules.empty();
+  if (swept) substep_start_ = p.position;  // preallocated: same size
 
   // Pinned particles travel in a straight line to their target: give them that velocity now
   // (every integrator then moves them there, as their acceleration is 0).
@@ -483,11 +487,12 @@ void SpringNetworkBody::substep(double h, IntegratorType type, const Environment
     if (pinned_[i]) p.position.col(i) = pin_target_.col(i);
   }
   // Restriction forces: collisions, strain limiting, and collisions again for what it moved.
-  resolveCollisions(env, p, &saved_velocity_, nullptr, def_.contact_thickness);
+  const Eigen::Matrix3Xd* path_start = swept ? &substep_start_ : nullptr;
+  resolveCollisions(env, p, &saved_velocity_, path_start, def_.contact_thickness, h);
   if (strain_limit_.enabled())
   {
     strain_limit_.apply(h, p);
-    resolveCollisions(env, p, &saved_velocity_, nullptr, def_.contact_thickness);
+    resolveCollisions(env, p, &saved_velocity_, path_start, def_.contact_thickness, h);
   }
 }
 

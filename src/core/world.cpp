@@ -1,6 +1,7 @@
 #include "particle_sim/core/world.h"
 
 #include <algorithm>
+#include <cmath>
 
 #include "particle_sim/core/fnv1a.h"
 #include "particle_sim/core/validation.h"
@@ -28,9 +29,28 @@ Status validate(const WorldDef& def)
   if (Status s = validate(def.integrator); !s) return s;
   if (Status s = validate(def.ground); !s) return s;
   if (Status s = validate(def.air); !s) return s;
+  std::vector<std::string> names;
   for (const SphereColliderDef& sphere : def.spheres)
   {
     if (Status s = validate(sphere); !s) return s;
+    names.push_back(sphere.name);
+  }
+  for (const BoxColliderDef& box : def.boxes)
+  {
+    if (Status s = validate(box); !s) return s;
+    names.push_back(box.name);
+  }
+  for (const CapsuleColliderDef& capsule : def.capsules)
+  {
+    if (Status s = validate(capsule); !s) return s;
+    names.push_back(capsule.name);
+  }
+  // Boxes and capsules are moved by name, so no two colliders share one.
+  for (std::size_t i = 0; i < names.size(); ++i)
+  {
+    if (std::find(names.begin() + i + 1, names.end(), names[i]) != names.end())
+      return Status::failure("collider name = '" + names[i] +
+                             "' is used twice: sphere, box and capsule names must be unique");
   }
   return Status::success();
 }
@@ -40,6 +60,8 @@ World::World(const WorldDef& def) : def_(def)
   env_.gravity = def.gravity;
   env_.ground = def.ground;
   env_.spheres = def.spheres;
+  env_.boxes = def.boxes;
+  env_.capsules = def.capsules;
   env_.air = def.air;
   env_.damping = def.global_damping;
 }
@@ -54,6 +76,61 @@ Status World::setSphereCenter(const std::string& name, const Eigen::Vector3d& ce
     return Status::success();
   }
   return Status::failure("sphere = " + quoteReceived(name) + ": no sphere collider has that name");
+}
+
+namespace
+{
+// Moves a box or capsule: the motion is the pose change over h.
+template <typename Collider>
+void moveCollider(Collider& collider, const Eigen::Vector3d& center, const Eigen::Quaterniond& orientation, double h)
+{
+  if (h > 0.0)
+  {
+    const Eigen::AngleAxisd turn(orientation * collider.orientation.conjugate());
+    double angle = turn.angle();
+    if (angle > M_PI) angle -= 2.0 * M_PI;  // the short way round
+    collider.motion.velocity = (center - collider.center) / h;
+    collider.motion.angular_velocity = turn.axis() * angle / h;
+  }
+  else
+    collider.motion = ColliderMotion();
+  collider.center = center;
+  collider.orientation = orientation;
+}
+}  // namespace
+
+Status World::setColliderPose(const std::string& name, const Eigen::Vector3d& center,
+                              const Eigen::Quaterniond& orientation, double h)
+{
+  if (Status s = checkFinite("center", center); !s) return s;
+  if (Status s = validateOrientation("collider '" + name + "'", orientation); !s) return s;
+  if (Status s = checkMin("h", h, 0.0); !s) return s;
+  for (BoxColliderDef& box : env_.boxes)
+  {
+    if (box.name != name) continue;
+    moveCollider(box, center, orientation, h);
+    return Status::success();
+  }
+  for (CapsuleColliderDef& capsule : env_.capsules)
+  {
+    if (capsule.name != name) continue;
+    moveCollider(capsule, center, orientation, h);
+    return Status::success();
+  }
+  return Status::failure("collider = " + quoteReceived(name) + ": no box or capsule collider has that name");
+}
+
+const Eigen::Quaterniond* World::colliderOrientation(const std::string& name) const
+{
+  for (const BoxColliderDef& box : env_.boxes)
+  {
+    if (box.name == name) return &box.orientation;
+  }
+  for (const CapsuleColliderDef& capsule : env_.capsules)
+  {
+    if (capsule.name == name) return &capsule.orientation;
+  }
+  return nullptr;
 }
 
 Status World::setWind(const Eigen::Vector3d& wind)

@@ -119,6 +119,12 @@ Status buildWorld(const SceneDef& scene, std::unique_ptr<core::World>& world)
       return Status::failure("sphere '" + follower.sphere + "' follows frame '" + follower.frame +
                              "' but does not exist");
   }
+  for (const FrameColliderDef& follower : scene.frame_colliders)
+  {
+    if (!built->colliderOrientation(follower.collider))
+      return Status::failure("collider '" + follower.collider + "' follows frame '" + follower.frame +
+                             "' but does not exist");
+  }
   if (Status s = applyScriptedFrames(scene, 0.0, *built); !s) return s;
   world = std::move(built);
   return Status::success();

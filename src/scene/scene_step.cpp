@@ -25,7 +25,7 @@ const ScriptedFrameDef* findFrame(const SceneDef& scene, const std::string& name
   return nullptr;
 }
 
-core::Status applyScriptedFrames(const SceneDef& scene, double t, core::World& world)
+core::Status applyScriptedFrames(const SceneDef& scene, double t, core::World& world, double h)
 {
   for (const FramePinDef& pin : scene.frame_pins)
   {
@@ -41,13 +41,20 @@ core::Status applyScriptedFrames(const SceneDef& scene, double t, core::World& w
       if (core::Status s = world.setSphereCenter(follower.sphere, frame->position(t)); !s) return s;
     }
   }
+  for (const FrameColliderDef& follower : scene.frame_colliders)
+  {
+    const ScriptedFrameDef* frame = findFrame(scene, follower.frame);
+    const Eigen::Quaterniond* orientation = frame ? world.colliderOrientation(follower.collider) : nullptr;
+    if (!orientation) continue;
+    if (core::Status s = world.setColliderPose(follower.collider, frame->position(t), *orientation, h); !s) return s;
+  }
   return core::Status::success();
 }
 
 core::Status stepScene(const SceneDef& scene, core::World& world)
 {
   // Pins and spheres that follow scripted frames go where the frames are at the end of the step.
-  const core::Status moved = applyScriptedFrames(scene, world.simTime() + world.dt(), world);
+  const core::Status moved = applyScriptedFrames(scene, world.simTime() + world.dt(), world, world.dt());
   world.step();
   return moved;
 }

@@ -130,6 +130,9 @@ std::vector<std::string> tfOnlyFollowers(const scene::SceneDef& scene_def)
   for (const scene::FrameSphereDef& sphere : scene_def.frame_spheres)
     if (!scene::findFrame(scene_def, sphere.frame))
       notes.push_back("sphere '" + sphere.sphere + "' follows frame '" + sphere.frame + "'");
+  for (const scene::FrameColliderDef& collider : scene_def.frame_colliders)
+    if (!scene::findFrame(scene_def, collider.frame))
+      notes.push_back("collider '" + collider.collider + "' follows frame '" + collider.frame + "'");
   return notes;
 }
 

@@ -618,3 +618,68 @@ TEST(SceneFiles, EchoedValuesAreCutAtACharacterBoundary)
   const std::string kind = refusal("bodies:\n  - {name: a, kind: " + long_value + "}\n");
   EXPECT_TRUE(contains(kind, "(200 characters) is not a body kind")) << kind;
 }
+
+TEST(SceneFiles, ReadsBoxesAndCapsulesFollowingFramesAndWritesThemBack)
+{
+  const std::string text =
+      "world:\n  dt: 0.01\n"
+      "  boxes:\n    - {name: table, center: [0, 0, 0.4], size: [1.2, 0.8, 0.05], friction: 0.6}\n"
+      "    - {name: pad, center: [0, 0, 2], size: [0.1, 0.02, 0.1], orientation: [0, 0, 0.7071067811865476, "
+      "0.7071067811865476], frame: gripper}\n"
+      "  capsules:\n    - {name: finger, center: [1, 0, 1], length: 0.3, radius: 0.02, frame: tool0}\n"
+      "frames:\n  - {name: gripper, center: [0, 0, 2], radius: 0.5, period: 4}\n";
+  const scene::SceneDef def = parseOk(text);
+  ASSERT_EQ(def.world.boxes.size(), 2u);
+  EXPECT_EQ(def.world.boxes[0].half_extents, Eigen::Vector3d(0.6, 0.4, 0.025));
+  EXPECT_EQ(def.world.boxes[0].contact.friction, 0.6);
+  EXPECT_NEAR(def.world.boxes[1].orientation.angularDistance(
+                  Eigen::Quaterniond(Eigen::AngleAxisd(M_PI / 2.0, Eigen::Vector3d::UnitZ()))),
+              0.0, 1e-12);
+  ASSERT_EQ(def.world.capsules.size(), 1u);
+  EXPECT_EQ(def.world.capsules[0].half_length, 0.15);
+  EXPECT_EQ(def.world.capsules[0].radius, 0.02);
+  ASSERT_EQ(def.frame_colliders.size(), 2u);
+  EXPECT_EQ(def.frame_colliders[0].collider, "pad");
+  EXPECT_EQ(def.frame_colliders[1].frame, "tool0");
+
+  // Written and read again: the same colliders and followers.
+  const scene::SceneDef again = parseOk(scene::toYaml(def));
+  ASSERT_EQ(again.world.boxes.size(), 2u);
+  EXPECT_EQ(again.world.boxes[1].center, def.world.boxes[1].center);
+  EXPECT_EQ(again.world.boxes[1].half_extents, def.world.boxes[1].half_extents);
+  EXPECT_EQ(again.world.boxes[1].orientation.coeffs(), def.world.boxes[1].orientation.coeffs());
+  EXPECT_EQ(again.world.capsules[0].half_length, def.world.capsules[0].half_length);
+  ASSERT_EQ(again.frame_colliders.size(), 2u);
+  EXPECT_EQ(again.frame_colliders[0].frame, "gripper");
+
+  // Built, the pad starts on the scripted frame at rest; each step moves it to the frame's next
+  // position with the frame's velocity (the circle's, 2π · 0.5 m / 4 s, to the chord's accuracy),
+  // keeping its own orientation. The tf-only capsule stays where the file puts it.
+  std::unique_ptr<core::World> world;
+  ASSERT_TRUE(scene::buildWorld(def, world).ok);
+  const core::BoxColliderDef& pad = world->environment().boxes[1];
+  EXPECT_LT((pad.center - def.frames[0].position(0.0)).norm(), 1e-15);
+  EXPECT_EQ(pad.motion.velocity, Eigen::Vector3d::Zero());
+  ASSERT_TRUE(scene::stepScene(def, *world).ok);
+  EXPECT_LT((pad.center - def.frames[0].position(0.01)).norm(), 1e-15);
+  const double speed = 2.0 * M_PI * 0.5 / 4.0;
+  EXPECT_NEAR(pad.motion.velocity.norm(), speed, 1e-4);
+  EXPECT_NEAR(pad.motion.velocity.y(), speed, 1e-3);  // at t = 0 the circle runs along +y
+  EXPECT_EQ(pad.orientation.coeffs(), def.world.boxes[1].orientation.coeffs());
+  EXPECT_EQ(world->environment().capsules[0].center, Eigen::Vector3d(1, 0, 1));
+}
+
+TEST(SceneFiles, RefusesBadBoxesAndCapsulesNamingTheField)
+{
+  EXPECT_TRUE(contains(refusal("world:\n  boxes: [{center: [0, 0, 0]}]\n"), "world.boxes[0] needs the key 'size'"));
+  EXPECT_TRUE(contains(refusal("world:\n  boxes: [{center: [0, 0, 0], size: [1, 1, 0]}]\n"),
+                       "box 'box_0'.half_extents[2] = 0 is out of range"));
+  EXPECT_TRUE(contains(refusal("world:\n  boxes: [{center: [0, 0, 0], size: [1, 1, 1], orientation: [0, 0, 0, 2]}]\n"),
+                       "is not a unit quaternion"));
+  EXPECT_TRUE(contains(refusal("world:\n  boxes: [{center: [0, 0, 0], size: [1, 1, 1], orientation: [0, 0, 1]}]\n"),
+                       "world.boxes[0].orientation must be a list of 4 numbers [x, y, z, w]"));
+  EXPECT_TRUE(contains(refusal("world:\n  capsules: [{center: [0, 0, 0], length: 1, radius: 0.1, colour: red}]\n"),
+                       "world.capsules[0].colour is not a known key"));
+  EXPECT_TRUE(contains(refusal("world:\n  capsules: [{center: [0, 0, 0], length: -1, radius: 0.1}]\n"),
+                       "capsule 'capsule_0'.half_length = -0.5 is out of range"));
+}

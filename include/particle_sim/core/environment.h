@@ -1,6 +1,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <string>
 #include <vector>
 
@@ -36,6 +37,39 @@ struct SphereColliderDef
   ContactDef contact;
 };
 
+/// How a collider's frame moves: the rigid velocity at a point p is velocity + angular_velocity ×
+/// (p − center). Contacts respond to the particle's velocity relative to it, so a moving link pushes
+/// what it meets instead of passing through. Set by World::setColliderPose from successive poses.
+struct ColliderMotion
+{
+  Eigen::Vector3d velocity = Eigen::Vector3d::Zero();          ///< [m/s] of the centre
+  Eigen::Vector3d angular_velocity = Eigen::Vector3d::Zero();  ///< [rad/s]
+};
+
+/// A box, oriented; particles stay outside it (a table, a robot link, a finger pad).
+struct BoxColliderDef
+{
+  std::string name;
+  Eigen::Vector3d center = Eigen::Vector3d::Zero();                 ///< [m]
+  Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();  ///< the box's axes in the sim frame (unit)
+  Eigen::Vector3d half_extents = Eigen::Vector3d(0.5, 0.5, 0.5);    ///< [m] > 0, along the box's axes
+  ContactDef contact;
+  ColliderMotion motion;
+};
+
+/// A capsule: every point within `radius` of the segment center ± half_length · a, where a is the
+/// orientation's x axis; particles stay outside it (a finger, a forearm, a rod).
+struct CapsuleColliderDef
+{
+  std::string name;
+  Eigen::Vector3d center = Eigen::Vector3d::Zero();                 ///< [m]
+  Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();  ///< the axis is its x axis (unit)
+  double half_length = 0.5;                                         ///< [m] >= 0, of the axis segment
+  double radius = 0.1;                                              ///< [m] > 0
+  ContactDef contact;
+  ColliderMotion motion;
+};
+
 /// Air around cloth and jelly: each surface triangle of area A and unit normal n, moving at the
 /// mean velocity v of its corners, feels f = drag · A · ((wind − v)·n) n, shared equally by its
 /// three corners (only the normal component: a sheet moving in its own plane feels none).
@@ -49,6 +83,10 @@ Status validate(const ContactDef& def, const std::string& where);
 Status validate(const AirDef& def);
 Status validate(const GroundPlaneDef& def);
 Status validate(const SphereColliderDef& def);
+Status validate(const BoxColliderDef& def);
+/// A finite unit quaternion (norm 1 within 1e-6), named `where`.orientation in the message.
+Status validateOrientation(const std::string& where, const Eigen::Quaterniond& q);
+Status validate(const CapsuleColliderDef& def);
 
 /// What every body feels: gravity and the colliders. Bodies read it; only the world changes it.
 struct Environment
@@ -56,6 +94,8 @@ struct Environment
   Eigen::Vector3d gravity = Eigen::Vector3d(0.0, 0.0, -9.81);  ///< [m/s^2], z up (REP-103)
   GroundPlaneDef ground;
   std::vector<SphereColliderDef> spheres;
+  std::vector<BoxColliderDef> boxes;
+  std::vector<CapsuleColliderDef> capsules;
   AirDef air;
   double damping = 0.0;  ///< [N·s/m per kg = 1/s] >= 0: global damping, f = −damping · m · v on spring-body particles
 };
@@ -77,10 +117,12 @@ struct Environment
 /// The result is always outside the collider that was handled.
 ///
 /// `start_position`, when given, is each particle's position at the start of the step: a particle
-/// whose straight path crossed a sphere (fast particles that would tunnel through it) is put back
-/// on the sphere where the path first met it and bounces there.
+/// whose straight path crossed a sphere, box or capsule (fast particles, or thin boxes, that it
+/// would tunnel through) is put back where the path first met the collider and responds there.
+/// For a moving box or capsule the path is taken relative to it (its motion over `h` [s], the
+/// step, undone at the start), and the response uses the velocity relative to its surface.
 void resolveCollisions(const Environment& env, ParticlePool& pool, const Eigen::Matrix3Xd* start_velocity = nullptr,
-                       const Eigen::Matrix3Xd* start_position = nullptr, double thickness = 0.0);
+                       const Eigen::Matrix3Xd* start_position = nullptr, double thickness = 0.0, double h = 0.0);
 
 }  // namespace core
 }  // namespace particle_sim

@@ -235,8 +235,9 @@ private:
   std::vector<std::pair<IntegratorType, std::unique_ptr<IntegrationMethod>>> methods_;  // one per registered integrator
   StrainLimit strain_limit_;  // Provot's constraint, applied after the integrator
   Eigen::Matrix3Xd saved_position_, saved_velocity_;
-  double last_dt_ = 0.0;          // [s] of the last step (pinReactions' accelerations); 0 before the first
-  Eigen::Matrix3Xd step_target_;  // pin targets at the end of the whole step (substeps approach them)
+  Eigen::Matrix3Xd substep_start_;  // positions at the start of a substep, when boxes or capsules sweep
+  double last_dt_ = 0.0;            // [s] of the last step (pinReactions' accelerations); 0 before the first
+  Eigen::Matrix3Xd step_target_;    // pin targets at the end of the whole step (substeps approach them)
 };
 
 }  // namespace core

@@ -37,6 +37,8 @@ struct WorldDef
   IntegratorDef integrator;
   GroundPlaneDef ground;
   std::vector<SphereColliderDef> spheres;
+  std::vector<BoxColliderDef> boxes;
+  std::vector<CapsuleColliderDef> capsules;
   AirDef air;
 };
 
@@ -64,6 +66,13 @@ public:
 
   /// Moves the sphere collider called `name` to `center` [m] (a sphere carried by a robot's tool).
   Status setSphereCenter(const std::string& name, const Eigen::Vector3d& center);
+  /// Moves the box or capsule called `name` to a new pose that it reaches over the next `h` [s] >= 0
+  /// (a link following its frame): its motion (ColliderMotion) becomes the displacement and the
+  /// turn over h, which the contacts of the next step answer; h = 0 places it at rest.
+  Status setColliderPose(const std::string& name, const Eigen::Vector3d& center, const Eigen::Quaterniond& orientation,
+                         double h);
+  /// The orientation of the box or capsule called `name`, or null.
+  const Eigen::Quaterniond* colliderOrientation(const std::string& name) const;
   /// Sets the wind velocity [m/s] felt by cloth and jelly from the next step; each component in
   /// limits::kWindComponent, else refused (nothing changes).
   Status setWind(const Eigen::Vector3d& wind);

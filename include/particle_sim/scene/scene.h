@@ -53,6 +53,14 @@ struct FrameSphereDef
   std::string frame;
 };
 
+/// A box or capsule collider that follows a frame: its centre is the frame's origin; a tf frame
+/// also gives its orientation (a scripted frame has none: the collider keeps its own).
+struct FrameColliderDef
+{
+  std::string collider;
+  std::string frame;
+};
+
 /// A whole scene: world settings, named bodies in file order, and what follows frames.
 struct SceneDef
 {
@@ -61,15 +69,17 @@ struct SceneDef
   std::vector<ScriptedFrameDef> frames;
   std::vector<FramePinDef> frame_pins;
   std::vector<FrameSphereDef> frame_spheres;
+  std::vector<FrameColliderDef> frame_colliders;
 };
 
 /// The scripted frame called `name`, or null.
 const ScriptedFrameDef* findFrame(const SceneDef& scene, const std::string& name);
 
 /// Moves everything that follows a scripted frame to where the frame is at sim time `t`: pin
-/// targets (frame position + offset) and sphere centres. Frames that are not scripted are left to
-/// the caller (the node looks them up on tf).
-core::Status applyScriptedFrames(const SceneDef& scene, double t, core::World& world);
+/// targets (frame position + offset), sphere centres, and box and capsule centres, which move
+/// there over the next `h` [s] (their velocity in contacts; 0 places them at rest). Frames that are
+/// not scripted are left to the caller (the node looks them up on tf).
+core::Status applyScriptedFrames(const SceneDef& scene, double t, core::World& world, double h = 0.0);
 
 /// The one step every front-end shares (the node, the nodelet, particle_sim_run, particle_sim_bench,
 /// the golden test): moves what follows scripted frames to where the frames are at the end of the

@@ -15,6 +15,53 @@ void readContact(MapReader& reader, core::ContactDef& contact)
   reader.read("bounce_speed", contact.bounce_speed);
 }
 
+// `orientation: [x, y, z, w]`, a unit quaternion (ROS's order).
+void readOrientation(MapReader& reader, Eigen::Quaterniond& orientation)
+{
+  const YAML::Node node = reader.child("orientation");
+  if (!node) return;
+  if (!node.IsSequence() || node.size() != 4)
+    reader.fail(node, reader.field("orientation") + " must be a list of 4 numbers [x, y, z, w] (a unit quaternion)");
+  double c[4];
+  for (int i = 0; i < 4; ++i)
+  {
+    try
+    {
+      c[i] = node[i].as<double>();
+    }
+    catch (const YAML::Exception&)
+    {
+      reader.fail(node[i], reader.field("orientation") + "[" + std::to_string(i) + "] must be a number");
+    }
+  }
+  orientation = Eigen::Quaterniond(c[3], c[0], c[1], c[2]);
+}
+
+YAML::Node orientation(const Eigen::Quaterniond& q)
+{
+  YAML::Node node;
+  node.SetStyle(YAML::EmitterStyle::Flow);
+  for (double c : {q.x(), q.y(), q.z(), q.w()})
+    node.push_back(c);
+  return node;
+}
+
+// The frame a box or capsule follows, if any (the node's tf frame or a scripted frame).
+void readColliderFrame(MapReader& reader, const std::string& collider, SceneDef& scene)
+{
+  std::string frame;
+  reader.read("frame", frame);
+  if (!frame.empty()) scene.frame_colliders.push_back({collider, frame});
+}
+
+void writeColliderFrame(YAML::Node node, const std::string& collider, const SceneDef& scene)
+{
+  for (const FrameColliderDef& follower : scene.frame_colliders)
+  {
+    if (follower.collider == collider) node["frame"] = follower.frame;
+  }
+}
+
 YAML::Node contact(YAML::Node node, const core::ContactDef& c)
 {
   node["restitution"] = c.restitution;
@@ -62,6 +109,49 @@ void readWorld(const YAML::Node& node, const std::string& source, SceneDef& scen
       s.finish();
       check(s, "", core::validate(sphere));
       world.spheres.push_back(sphere);
+    }
+  }
+  if (const YAML::Node boxes = reader.child("boxes"))
+  {
+    if (!boxes.IsSequence()) reader.fail(boxes, "world.boxes must be a list of boxes");
+    for (std::size_t i = 0; i < boxes.size(); ++i)
+    {
+      MapReader b(boxes[i], "world.boxes[" + std::to_string(i) + "]", source);
+      core::BoxColliderDef box;
+      box.name = "box_" + std::to_string(i);
+      b.read("name", box.name);
+      b.require("center", box.center);
+      Eigen::Vector3d size;
+      b.require("size", size);
+      box.half_extents = 0.5 * size;
+      readOrientation(b, box.orientation);
+      readContact(b, box.contact);
+      readColliderFrame(b, box.name, scene);
+      b.finish();
+      check(b, "", core::validate(box));
+      world.boxes.push_back(box);
+    }
+  }
+  if (const YAML::Node capsules = reader.child("capsules"))
+  {
+    if (!capsules.IsSequence()) reader.fail(capsules, "world.capsules must be a list of capsules");
+    for (std::size_t i = 0; i < capsules.size(); ++i)
+    {
+      MapReader c(capsules[i], "world.capsules[" + std::to_string(i) + "]", source);
+      core::CapsuleColliderDef capsule;
+      capsule.name = "capsule_" + std::to_string(i);
+      c.read("name", capsule.name);
+      c.require("center", capsule.center);
+      double length = 0.0;
+      c.require("length", length);
+      capsule.half_length = 0.5 * length;
+      c.require("radius", capsule.radius);
+      readOrientation(c, capsule.orientation);
+      readContact(c, capsule.contact);
+      readColliderFrame(c, capsule.name, scene);
+      c.finish();
+      check(c, "", core::validate(capsule));
+      world.capsules.push_back(capsule);
     }
   }
   if (const YAML::Node air = reader.child("air"))
@@ -125,6 +215,27 @@ void writeWorld(YAML::Node root, const SceneDef& scene)
       if (follower.sphere == s.name) sphere["frame"] = follower.frame;
     }
     world["spheres"].push_back(contact(sphere, s.contact));
+  }
+  for (const core::BoxColliderDef& b : w.boxes)
+  {
+    YAML::Node box;
+    box["name"] = b.name;
+    box["center"] = vector3(b.center);
+    box["size"] = vector3(2.0 * b.half_extents);
+    box["orientation"] = orientation(b.orientation);
+    writeColliderFrame(box, b.name, scene);
+    world["boxes"].push_back(contact(box, b.contact));
+  }
+  for (const core::CapsuleColliderDef& c : w.capsules)
+  {
+    YAML::Node capsule;
+    capsule["name"] = c.name;
+    capsule["center"] = vector3(c.center);
+    capsule["length"] = 2.0 * c.half_length;
+    capsule["radius"] = c.radius;
+    capsule["orientation"] = orientation(c.orientation);
+    writeColliderFrame(capsule, c.name, scene);
+    world["capsules"].push_back(contact(capsule, c.contact));
   }
   world["air"]["drag"] = w.air.drag;
   world["air"]["wind"] = vector3(w.air.wind);
