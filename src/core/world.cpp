@@ -120,17 +120,22 @@ Status World::setColliderPose(const std::string& name, const Eigen::Vector3d& ce
   return Status::failure("collider = " + quoteReceived(name) + ": no box or capsule collider has that name");
 }
 
-const Eigen::Quaterniond* World::colliderOrientation(const std::string& name) const
+bool World::colliderPose(const std::string& name, Eigen::Vector3d& center, Eigen::Quaterniond& orientation) const
 {
+  auto found = [&](const auto& collider) {
+    center = collider.center;
+    orientation = collider.orientation;
+    return true;
+  };
   for (const BoxColliderDef& box : env_.boxes)
   {
-    if (box.name == name) return &box.orientation;
+    if (box.name == name) return found(box);
   }
   for (const CapsuleColliderDef& capsule : env_.capsules)
   {
-    if (capsule.name == name) return &capsule.orientation;
+    if (capsule.name == name) return found(capsule);
   }
-  return nullptr;
+  return false;
 }
 
 Status World::setWind(const Eigen::Vector3d& wind)

@@ -89,6 +89,7 @@ void FrameFollowers::beginTick(core::World& world, const scene::SceneDef& scene)
 {
   updateFramePins(world);
   updateFrameSpheres(world, scene);
+  updateFrameColliders(world, scene);
 }
 
 void FrameFollowers::moveTargets(core::World& world, std::uint64_t step, std::uint64_t steps) const
@@ -98,6 +99,13 @@ void FrameFollowers::moveTargets(core::World& world, std::uint64_t step, std::ui
   {
     const double s = static_cast<double>(step + 1) / static_cast<double>(steps);
     world.findSpringBody(pins_[k].body)->setPinTarget(pins_[k].index, start_[k] + s * (goal_[k] - start_[k]));
+  }
+  // Boxes and capsules likewise, one step's worth of their frame's motion at a time.
+  for (const ColliderMove& move : collider_moves_)
+  {
+    const double s = static_cast<double>(step + 1) / static_cast<double>(steps);
+    world.setColliderPose(move.name, move.start_center + s * (move.goal_center - move.start_center),
+                          move.start_orientation.slerp(s, move.goal_orientation), world.dt());
   }
 }
 
@@ -165,6 +173,34 @@ void FrameFollowers::updateFrameSpheres(core::World& world, const scene::SceneDe
       ROS_WARN_THROTTLE_NAMED(5.0, "colliders",
                               "sphere %s follows frame %s, which is not available: %s; it holds still",
                               quoteName(follower.sphere).c_str(), quoteName(follower.frame).c_str(), error.c_str());
+  }
+}
+
+void FrameFollowers::updateFrameColliders(const core::World& world, const scene::SceneDef& scene)
+{
+  const auto now = std::chrono::steady_clock::now();
+  std::size_t k = 0;
+  for (const scene::FrameColliderDef& follower : scene.frame_colliders)
+  {
+    if (scene::findFrame(scene, follower.frame)) continue;  // scripted: applied every step
+    if (k == collider_moves_.size()) collider_moves_.push_back({follower.collider, {}, {}, {}, {}, FrameAge()});
+    ColliderMove& move = collider_moves_[k++];
+    if (!world.colliderPose(follower.collider, move.start_center, move.start_orientation)) continue;
+    move.goal_center = move.start_center;
+    move.goal_orientation = move.start_orientation;
+    // A collider whose frame is not available (unknown, or its transform stopped) holds still.
+    Eigen::Isometry3d pose;
+    std::string error;
+    ros::Time stamp;
+    if (lookupPose(follower.frame, pose, stamp, error) && stillFresh(move.age, stamp, now, error))
+    {
+      move.goal_center = pose.translation();
+      move.goal_orientation = Eigen::Quaterniond(pose.rotation()).normalized();
+    }
+    else
+      ROS_WARN_THROTTLE_NAMED(5.0, "colliders",
+                              "collider %s follows frame %s, which is not available: %s; it holds still",
+                              quoteName(follower.collider).c_str(), quoteName(follower.frame).c_str(), error.c_str());
   }
 }
 

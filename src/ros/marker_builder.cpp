@@ -236,21 +236,42 @@ visualization_msgs::MarkerArray buildMarkers(const core::World& world, const ros
       out.markers.push_back(gone);
     }
   }
-  // Sphere colliders, drawn translucent so that particles behind them stay visible.
-  const auto& spheres = world.environment().spheres;
-  for (std::size_t i = 0; i < spheres.size(); ++i)
+  // Colliders, drawn translucent so that particles behind them stay visible: spheres, boxes, and
+  // capsules as a cylinder (its axis is the marker's z, the capsule's x) between two spheres.
+  int collider_id = 0;
+  auto collider = [&](int type, const Eigen::Vector3d& center, const Eigen::Quaterniond& orientation,
+                      const Eigen::Vector3d& scale) {
+    visualization_msgs::Marker marker = makeMarker(kCollidersNamespace, collider_id++, stamp, style);
+    marker.type = type;
+    marker.action = visualization_msgs::Marker::ADD;
+    marker.pose.position = toPoint(center);
+    marker.pose.orientation.x = orientation.x();
+    marker.pose.orientation.y = orientation.y();
+    marker.pose.orientation.z = orientation.z();
+    marker.pose.orientation.w = orientation.w();
+    marker.scale = toVector3(scale);
+    marker.color.r = marker.color.g = 0.55f;
+    marker.color.b = 0.65f;
+    marker.color.a = 0.6f;
+    out.markers.push_back(marker);
+  };
+  const core::Environment& env = world.environment();
+  for (const core::SphereColliderDef& sphere : env.spheres)
+    collider(visualization_msgs::Marker::SPHERE, sphere.center, Eigen::Quaterniond::Identity(),
+             Eigen::Vector3d::Constant(2.0 * sphere.radius));
+  for (const core::BoxColliderDef& box : env.boxes)
+    collider(visualization_msgs::Marker::CUBE, box.center, box.orientation, 2.0 * box.half_extents);
+  for (const core::CapsuleColliderDef& capsule : env.capsules)
   {
-    visualization_msgs::Marker sphere = makeMarker(kCollidersNamespace, static_cast<int>(i), stamp, style);
-    sphere.type = visualization_msgs::Marker::SPHERE;
-    sphere.action = visualization_msgs::Marker::ADD;
-    sphere.pose.position.x = spheres[i].center.x();
-    sphere.pose.position.y = spheres[i].center.y();
-    sphere.pose.position.z = spheres[i].center.z();
-    sphere.scale.x = sphere.scale.y = sphere.scale.z = 2.0 * spheres[i].radius;
-    sphere.color.r = sphere.color.g = 0.55f;
-    sphere.color.b = 0.65f;
-    sphere.color.a = 0.6f;
-    out.markers.push_back(sphere);
+    const Eigen::Vector3d axis = capsule.orientation * Eigen::Vector3d::UnitX();
+    const Eigen::Quaterniond z_along_axis =
+        capsule.orientation * Eigen::Quaterniond(Eigen::AngleAxisd(M_PI / 2.0, Eigen::Vector3d::UnitY()));
+    const double diameter = 2.0 * capsule.radius;
+    collider(visualization_msgs::Marker::CYLINDER, capsule.center, z_along_axis,
+             Eigen::Vector3d(diameter, diameter, 2.0 * capsule.half_length));
+    for (double end : {-1.0, 1.0})
+      collider(visualization_msgs::Marker::SPHERE, capsule.center + end * capsule.half_length * axis,
+               Eigen::Quaterniond::Identity(), Eigen::Vector3d::Constant(diameter));
   }
   for (const auto& body : world.bodies())
   {

@@ -121,7 +121,9 @@ Status buildWorld(const SceneDef& scene, std::unique_ptr<core::World>& world)
   }
   for (const FrameColliderDef& follower : scene.frame_colliders)
   {
-    if (!built->colliderOrientation(follower.collider))
+    Eigen::Vector3d center;
+    Eigen::Quaterniond orientation;
+    if (!built->colliderPose(follower.collider, center, orientation))
       return Status::failure("collider '" + follower.collider + "' follows frame '" + follower.frame +
                              "' but does not exist");
   }

@@ -44,9 +44,10 @@ core::Status applyScriptedFrames(const SceneDef& scene, double t, core::World& w
   for (const FrameColliderDef& follower : scene.frame_colliders)
   {
     const ScriptedFrameDef* frame = findFrame(scene, follower.frame);
-    const Eigen::Quaterniond* orientation = frame ? world.colliderOrientation(follower.collider) : nullptr;
-    if (!orientation) continue;
-    if (core::Status s = world.setColliderPose(follower.collider, frame->position(t), *orientation, h); !s) return s;
+    Eigen::Vector3d center;
+    Eigen::Quaterniond orientation;
+    if (!frame || !world.colliderPose(follower.collider, center, orientation)) continue;
+    if (core::Status s = world.setColliderPose(follower.collider, frame->position(t), orientation, h); !s) return s;
   }
   return core::Status::success();
 }

@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <set>
 
 using namespace particle_sim;
 using visualization_msgs::Marker;
@@ -32,6 +33,13 @@ void expectRvizValid(const Marker& m)
   {
     EXPECT_GT(m.scale.x, 0.0);
     EXPECT_GT(m.scale.y, 0.0);
+  }
+  if (m.type == Marker::CUBE || m.type == Marker::CYLINDER)  // shapes: a size on every axis, no points
+  {
+    EXPECT_GT(m.scale.x, 0.0);
+    EXPECT_GT(m.scale.y, 0.0);
+    EXPECT_GT(m.scale.z, 0.0);
+    return;
   }
   EXPECT_FALSE(m.points.empty());
   EXPECT_TRUE(m.colors.empty() || m.colors.size() == m.points.size());
@@ -86,6 +94,54 @@ TEST(MarkerBuilder, EveryMarkerPassesRvizChecksWithOneNamespacePerBody)
   // The empty emitter sends DELETE rather than an empty POINTS list.
   EXPECT_EQ(array.markers[2].ns, "idle");
   EXPECT_EQ(array.markers[2].action, Marker::DELETE);
+}
+
+TEST(MarkerBuilder, BoxesAndCapsulesAreDrawnWhereTheyAreTurnedAsTheyAre)
+{
+  // A turned box is a CUBE of its full size and orientation; a capsule is a CYLINDER whose z axis
+  // (rviz's) lies along the capsule's axis, between two spheres on the axis' ends.
+  core::WorldDef def;
+  core::BoxColliderDef box;
+  box.name = "table";
+  box.center = {0.5, 0.0, 0.4};
+  box.orientation = Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ()));
+  box.half_extents = {0.6, 0.4, 0.025};
+  def.boxes = {box};
+  core::CapsuleColliderDef capsule;
+  capsule.name = "finger";
+  capsule.center = {1.0, 0.0, 1.0};
+  capsule.orientation = Eigen::Quaterniond(Eigen::AngleAxisd(M_PI / 2.0, Eigen::Vector3d::UnitZ()));  // axis along y
+  capsule.half_length = 0.15;
+  capsule.radius = 0.02;
+  def.capsules = {capsule};
+  const core::World world{def};
+  const auto array = ros_interface::buildMarkers(world, ros::Time(1.0), ros_interface::MarkerStyle(), false, {});
+  ASSERT_EQ(array.markers.size(), 4u);
+  for (const Marker& m : array.markers)
+  {
+    expectRvizValid(m);
+    EXPECT_EQ(m.ns, ros_interface::kCollidersNamespace);
+  }
+  const Marker& cube = array.markers[0];
+  EXPECT_EQ(cube.type, Marker::CUBE);
+  EXPECT_EQ(cube.pose.position.x, 0.5);
+  EXPECT_NEAR(cube.pose.orientation.z, std::sin(0.15), 1e-15);
+  EXPECT_EQ(cube.scale.x, 1.2);
+  EXPECT_EQ(cube.scale.z, 0.05);
+  const Marker& cylinder = array.markers[1];
+  EXPECT_EQ(cylinder.type, Marker::CYLINDER);
+  const Eigen::Quaterniond q(cylinder.pose.orientation.w, cylinder.pose.orientation.x, cylinder.pose.orientation.y,
+                             cylinder.pose.orientation.z);
+  EXPECT_LT((q * Eigen::Vector3d::UnitZ() - Eigen::Vector3d::UnitY()).norm(), 1e-12) << "rviz's axis is the capsule's";
+  EXPECT_NEAR(cylinder.scale.z, 0.3, 1e-15);
+  EXPECT_NEAR(cylinder.scale.x, 0.04, 1e-15);
+  EXPECT_EQ(array.markers[2].type, Marker::SPHERE);
+  EXPECT_NEAR(array.markers[2].pose.position.y, -0.15, 1e-12);
+  EXPECT_NEAR(array.markers[3].pose.position.y, 0.15, 1e-12);
+  std::set<int> ids;
+  for (const Marker& m : array.markers)
+    ids.insert(m.id);
+  EXPECT_EQ(ids.size(), 4u) << "one id per marker";
 }
 
 TEST(MarkerBuilder, DeleteAllComesFirstOnlyWhenAskedAndRemovedBodiesGetDelete)

@@ -71,8 +71,8 @@ public:
   /// turn over h, which the contacts of the next step answer; h = 0 places it at rest.
   Status setColliderPose(const std::string& name, const Eigen::Vector3d& center, const Eigen::Quaterniond& orientation,
                          double h);
-  /// The orientation of the box or capsule called `name`, or null.
-  const Eigen::Quaterniond* colliderOrientation(const std::string& name) const;
+  /// The pose of the box or capsule called `name`; false when there is none.
+  bool colliderPose(const std::string& name, Eigen::Vector3d& center, Eigen::Quaterniond& orientation) const;
   /// Sets the wind velocity [m/s] felt by cloth and jelly from the next step; each component in
   /// limits::kWindComponent, else refused (nothing changes).
   Status setWind(const Eigen::Vector3d& wind);

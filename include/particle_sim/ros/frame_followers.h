@@ -57,10 +57,11 @@ public:
 
   /// Before a tick's steps: drops pins whose body or pin is gone, looks every followed frame up
   /// (a frame not available holds its particles still, with a warning) and moves the spheres that
-  /// follow frames the scene does not script.
+  /// follow frames the scene does not script; boxes and capsules that do get this tick's goal.
   void beginTick(core::World& world, const scene::SceneDef& scene);
-  /// Before step `step` (0-based) of the tick's `steps`: particles pinned to frames move in
-  /// equal parts from where their targets were towards this tick's frame pose.
+  /// Before step `step` (0-based) of the tick's `steps`: particles pinned to frames, and boxes and
+  /// capsules following tf frames, move in equal parts from where they were towards this tick's
+  /// frame pose (orientations by slerp), so that a collider's velocity is its frame's.
   void moveTargets(core::World& world, std::uint64_t step, std::uint64_t steps) const;
 
 private:
@@ -84,6 +85,7 @@ private:
                          std::string& error);
   void updateFramePins(core::World& world);
   void updateFrameSpheres(core::World& world, const scene::SceneDef& scene);
+  void updateFrameColliders(const core::World& world, const scene::SceneDef& scene);
 
   std::string sim_frame_;
   std::unique_ptr<tf2_ros::Buffer> tf_buffer_;
@@ -91,6 +93,16 @@ private:
   std::vector<FramePin> pins_;
   std::map<std::string, FrameAge> sphere_frames_;  // per sphere that follows a tf frame
   std::vector<Eigen::Vector3d> start_, goal_;      // per pin, this tick
+  // A box or capsule following a tf frame: where it was at the start of this tick and where its
+  // frame is now.
+  struct ColliderMove
+  {
+    std::string name;
+    Eigen::Vector3d start_center, goal_center;
+    Eigen::Quaterniond start_orientation, goal_orientation;
+    FrameAge age;
+  };
+  std::vector<ColliderMove> collider_moves_;  // one per tf-followed collider, kept across ticks
 };
 
 /// The scene's scripted frames at `stamp` (sim time) as transforms under `sim_frame`, for tf.

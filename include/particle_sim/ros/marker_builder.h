@@ -37,7 +37,8 @@ struct MarkerStyle
 ///     from both sides; and their pins;
 ///   - an emitter with no live particle gets a DELETE instead of an empty POINTS list;
 ///   - a particle marker holds at most style.max_points points (decimated evenly);
-///   - sphere colliders are drawn in the namespace "_colliders".
+///   - colliders are drawn in the namespace "_colliders": spheres, boxes (CUBE), and capsules as a
+///     CYLINDER (ids in that order) between two SPHEREs.
 /// Every marker passes rviz's checks: unit quaternion, non-zero scale, alpha > 0, one colour per
 /// point, finite values (non-finite particles are left out).
 visualization_msgs::MarkerArray buildMarkers(const core::World& world, const ros::Time& stamp, const MarkerStyle& style,
