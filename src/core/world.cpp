@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "particle_sim/core/fnv1a.h"
+#include "particle_sim/core/names.h"
 #include "particle_sim/core/validation.h"
 
 namespace particle_sim
@@ -118,6 +119,55 @@ Status World::setColliderPose(const std::string& name, const Eigen::Vector3d& ce
     return Status::success();
   }
   return Status::failure("collider = " + quoteReceived(name) + ": no box or capsule collider has that name");
+}
+
+namespace
+{
+bool hasCollider(const Environment& env, const std::string& name)
+{
+  auto named = [&](const auto& colliders) {
+    return std::any_of(colliders.begin(), colliders.end(), [&](const auto& c) { return c.name == name; });
+  };
+  return named(env.spheres) || named(env.boxes) || named(env.capsules);
+}
+
+template <typename Collider>
+Status addTo(Environment& env, std::vector<Collider>& colliders, const Collider& def)
+{
+  if (Status s = validate(def); !s) return s;
+  if (Status s = validateBodyName(def.name); !s) return s;  // the rules of body names
+  if (hasCollider(env, def.name))
+    return Status::failure("name = " + quoteReceived(def.name) +
+                           " is taken: sphere, box and capsule names must be unique");
+  colliders.push_back(def);
+  return Status::success();
+}
+
+template <typename Collider>
+bool eraseNamed(std::vector<Collider>& colliders, const std::string& name)
+{
+  const auto it = std::find_if(colliders.begin(), colliders.end(), [&](const Collider& c) { return c.name == name; });
+  if (it == colliders.end()) return false;
+  colliders.erase(it);
+  return true;
+}
+}  // namespace
+
+Status World::addCollider(const BoxColliderDef& def)
+{
+  return addTo(env_, env_.boxes, def);
+}
+
+Status World::addCollider(const CapsuleColliderDef& def)
+{
+  return addTo(env_, env_.capsules, def);
+}
+
+Status World::removeCollider(const std::string& name)
+{
+  if (eraseNamed(env_.spheres, name) || eraseNamed(env_.boxes, name) || eraseNamed(env_.capsules, name))
+    return Status::success();
+  return Status::failure("name = " + quoteReceived(name) + ": no sphere, box or capsule collider has that name");
 }
 
 bool World::colliderPose(const std::string& name, Eigen::Vector3d& center, Eigen::Quaterniond& orientation) const

@@ -103,6 +103,7 @@ void FrameFollowers::moveTargets(core::World& world, std::uint64_t step, std::ui
   // Boxes and capsules likewise, one step's worth of their frame's motion at a time.
   for (const ColliderMove& move : collider_moves_)
   {
+    if (move.name.empty()) continue;
     const double s = static_cast<double>(step + 1) / static_cast<double>(steps);
     world.setColliderPose(move.name, move.start_center + s * (move.goal_center - move.start_center),
                           move.start_orientation.slerp(s, move.goal_orientation), world.dt());
@@ -183,9 +184,18 @@ void FrameFollowers::updateFrameColliders(const core::World& world, const scene:
   for (const scene::FrameColliderDef& follower : scene.frame_colliders)
   {
     if (scene::findFrame(scene, follower.frame)) continue;  // scripted: applied every step
-    if (k == collider_moves_.size()) collider_moves_.push_back({follower.collider, {}, {}, {}, {}, FrameAge()});
+    if (k == collider_moves_.size()) collider_moves_.emplace_back();
     ColliderMove& move = collider_moves_[k++];
-    if (!world.colliderPose(follower.collider, move.start_center, move.start_orientation)) continue;
+    if (move.name != follower.collider)  // a new follower (or the list changed under ~remove_collider)
+    {
+      move.name = follower.collider;
+      move.age = FrameAge();
+    }
+    if (!world.colliderPose(follower.collider, move.start_center, move.start_orientation))
+    {
+      move.name.clear();  // no such collider: nothing to move
+      continue;
+    }
     move.goal_center = move.start_center;
     move.goal_orientation = move.start_orientation;
     // A collider whose frame is not available (unknown, or its transform stopped) holds still.
@@ -202,6 +212,7 @@ void FrameFollowers::updateFrameColliders(const core::World& world, const scene:
                               "collider %s follows frame %s, which is not available: %s; it holds still",
                               quoteName(follower.collider).c_str(), quoteName(follower.frame).c_str(), error.c_str());
   }
+  collider_moves_.resize(k);  // followers that are gone move nothing
 }
 
 std::vector<geometry_msgs::TransformStamped> scriptedFrameTransforms(const scene::SceneDef& scene,

@@ -146,6 +146,43 @@ core::Status toJellyDef(const SpawnJelly::Request& req, const core::IntegratorDe
   return parseIntegratorField(req.integrator, def.integrator);
 }
 
+core::Status toColliderDef(const SpawnCollider::Request& req, bool& is_box, core::BoxColliderDef& box,
+                           core::CapsuleColliderDef& capsule)
+{
+  if (req.shape != SpawnCollider::Request::SHAPE_BOX && req.shape != SpawnCollider::Request::SHAPE_CAPSULE)
+    return core::Status::failure("shape = " + quoteName(req.shape) + " is not a collider shape; allowed: box, capsule");
+  is_box = req.shape == SpawnCollider::Request::SHAPE_BOX;
+  const geometry_msgs::Quaternion& q = req.pose.orientation;
+  const Eigen::Quaterniond orientation = q.x == 0.0 && q.y == 0.0 && q.z == 0.0 && q.w == 0.0
+                                             ? Eigen::Quaterniond::Identity()
+                                             : Eigen::Quaterniond(q.w, q.x, q.y, q.z);
+  core::ContactDef contact;
+  contact.restitution = req.restitution;
+  contact.friction = req.friction;
+  const Eigen::Vector3d size = toEigen(req.size);
+  if (is_box)
+  {
+    if (req.length != 0.0 || req.radius != 0.0)
+      return core::Status::failure("length and radius are a capsule's; a box takes size (length = " +
+                                   formatReceived(req.length) + ", radius = " + formatReceived(req.radius) + ")");
+    box.name = req.name;
+    box.center = toEigen(req.pose.position);
+    box.orientation = orientation;
+    box.half_extents = 0.5 * size;
+    box.contact = contact;
+    return core::Status::success();
+  }
+  if (!size.isZero())
+    return core::Status::failure("size = " + formatVector(size) + " is a box's; a capsule takes length and radius");
+  capsule.name = req.name;
+  capsule.center = toEigen(req.pose.position);
+  capsule.orientation = orientation;
+  capsule.half_length = 0.5 * req.length;
+  capsule.radius = req.radius;
+  capsule.contact = contact;
+  return core::Status::success();
+}
+
 core::Status parseSpringClassSelection(const std::string& name, std::optional<core::SpringClass>& spring_class)
 {
   if (name == "all")

@@ -153,6 +153,8 @@ void SimNode::advertiseInterfaces()
 
   services_.push_back(private_node_.advertiseService(names::kSpawnEmitter, &SimNode::spawnEmitter, this));
   services_.push_back(private_node_.advertiseService(names::kRemoveBody, &SimNode::removeBody, this));
+  services_.push_back(private_node_.advertiseService(names::kSpawnCollider, &SimNode::spawnCollider, this));
+  services_.push_back(private_node_.advertiseService(names::kRemoveCollider, &SimNode::removeCollider, this));
   services_.push_back(private_node_.advertiseService(names::kReset, &SimNode::reset, this));
   services_.push_back(private_node_.advertiseService(names::kPausePhysics, &SimNode::pausePhysics, this));
   services_.push_back(private_node_.advertiseService(names::kUnpausePhysics, &SimNode::unpausePhysics, this));
@@ -670,6 +672,43 @@ bool SimNode::removeBody(RemoveBody::Request& req, RemoveBody::Response& res)
     forgetBody(req.name);
     status.message = "removed " + quoteName(req.name);
   }
+  return answer(res, status);
+}
+
+bool SimNode::spawnCollider(SpawnCollider::Request& req, SpawnCollider::Response& res)
+{
+  bool is_box = true;
+  core::BoxColliderDef box;
+  core::CapsuleColliderDef capsule;
+  core::Status status = toColliderDef(req, is_box, box, capsule);
+  if (status) status = is_box ? world_->addCollider(box) : world_->addCollider(capsule);
+  if (!status)
+  {
+    ROS_WARN_NAMED("services", "spawn_collider refused: %s", toMessageText(status.message).c_str());
+    return answer(res, status);
+  }
+  // It follows its tf frame as a scene's collider does (FrameFollowers reads the scene each tick).
+  if (!req.frame.empty()) scene_.frame_colliders.push_back({req.name, req.frame});
+  status.message = "spawned " + req.shape + " " + quoteName(req.name) +
+                   (req.frame.empty() ? std::string() : " following frame " + quoteName(req.frame));
+  return answer(res, status);
+}
+
+bool SimNode::removeCollider(RemoveCollider::Request& req, RemoveCollider::Response& res)
+{
+  core::Status status = world_->removeCollider(req.name);
+  if (!status) return answer(res, status);
+  auto& followers = scene_.frame_colliders;
+  followers.erase(std::remove_if(followers.begin(), followers.end(),
+                                 [&](const scene::FrameColliderDef& f) { return f.collider == req.name; }),
+                  followers.end());
+  auto& spheres = scene_.frame_spheres;
+  spheres.erase(std::remove_if(spheres.begin(), spheres.end(),
+                               [&](const scene::FrameSphereDef& f) { return f.sphere == req.name; }),
+                spheres.end());
+  // The colliders' marker ids are their places in the list: the next array starts afresh.
+  delete_all_pending_ = true;
+  status.message = "removed collider " + quoteName(req.name);
   return answer(res, status);
 }
 

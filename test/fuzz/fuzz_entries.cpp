@@ -3,6 +3,7 @@
 #include <fuzzer/FuzzedDataProvider.h>  // test/fuzz/include: the same copy for clang and gcc
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -269,6 +270,24 @@ void fields(IO& io, Grasp::Request& r)
   io.real(r.breakaway_force);
 }
 
+template <class IO>
+void fields(IO& io, SpawnCollider::Request& r)
+{
+  io.text(r.name);
+  io.text(r.shape);
+  xyz(io, r.pose.position);
+  io.real(r.pose.orientation.x);
+  io.real(r.pose.orientation.y);
+  io.real(r.pose.orientation.z);
+  io.real(r.pose.orientation.w);
+  xyz(io, r.size);
+  io.real(r.length);
+  io.real(r.radius);
+  io.real(r.restitution);
+  io.real(r.friction);
+  io.text(r.frame);
+}
+
 // The node's parameters (scene_path aside: the fuzzed node starts with an empty world).
 template <class IO>
 void fields(IO& io, ros_interface::NodeSettings& s)
@@ -330,6 +349,10 @@ void fields(IO& io, Request& r)
       return fields(io, r.grasp);
     case Request::Service::Release:
       return io.text(r.grasp_name);
+    case Request::Service::SpawnCollider:
+      return fields(io, r.spawn_collider);
+    case Request::Service::RemoveCollider:
+      return io.text(r.collider);
     case Request::Service::Reset:
     case Request::Service::Count:
       return;
@@ -420,6 +443,16 @@ RequestAnswer serve(const Request& r, const scene::SceneDef& scene, const core::
       std::vector<HeldParticle> let_go;
       return answer("release", grasps.release(world, r.grasp_name, let_go));
     }
+    case Request::Service::SpawnCollider: {
+      bool is_box = true;
+      core::BoxColliderDef box;
+      core::CapsuleColliderDef capsule;
+      if (core::Status s = toColliderDef(r.spawn_collider, is_box, box, capsule); !s)
+        return answer("spawn_collider", s);
+      return answer("spawn_collider", is_box ? world.addCollider(box) : world.addCollider(capsule));
+    }
+    case Request::Service::RemoveCollider:
+      return answer("remove_collider", world.removeCollider(r.collider));
     case Request::Service::Reset:
     case Request::Service::Count:
       world.reset();
@@ -657,7 +690,26 @@ std::vector<RequestSeed> requestSeeds()
   low.spawn_rope.start = point(0, 0, 0.1);
   low.spawn_rope.end = point(1, 0, 0.1);
 
+  // A table under the rope, a finger across it, the table removed.
+  Request table = request(Service::SpawnCollider);
+  table.spawn_collider.name = "table";
+  table.spawn_collider.shape = SpawnCollider::Request::SHAPE_BOX;
+  table.spawn_collider.pose.position = point(1, 0, 1.5);
+  table.spawn_collider.size = vector(2.5, 1, 0.1);
+  table.spawn_collider.friction = 0.5;
+  Request finger = request(Service::SpawnCollider);
+  finger.spawn_collider.name = "finger";
+  finger.spawn_collider.shape = SpawnCollider::Request::SHAPE_CAPSULE;
+  finger.spawn_collider.pose.position = point(1, 0, 2.05);
+  finger.spawn_collider.pose.orientation.z = std::sqrt(0.5);
+  finger.spawn_collider.pose.orientation.w = std::sqrt(0.5);
+  finger.spawn_collider.length = 0.2;
+  finger.spawn_collider.radius = 0.02;
+  Request no_table = request(Service::RemoveCollider);
+  no_table.collider = "table";
+
   return {{"readme_session", {jet, bad, step, line, pin_point, pin_frame, springs, step}},
+          {"colliders", {line, table, finger, step, step, no_table, step}},
           {"grasp_release", {low, hand, step, step, pinch, step, let_go, step}},
           {"spawn_emitter", {jet, step}},
           {"spawn_rope", {line, step}},

@@ -10,6 +10,7 @@
 #include "particle_sim/SetSpringConstants.h"
 #include "particle_sim/SetWind.h"
 #include "particle_sim/SpawnCloth.h"
+#include "particle_sim/SpawnCollider.h"
 #include "particle_sim/SpawnEmitter.h"
 #include "particle_sim/SpawnJelly.h"
 #include "particle_sim/SpawnRope.h"
@@ -80,6 +81,8 @@ struct Request
     Reset,
     Grasp,
     Release,
+    SpawnCollider,
+    RemoveCollider,
     Count  ///< not a service: the number of them
   };
   Service service = Service::Step;
@@ -95,6 +98,8 @@ struct Request
   std::uint32_t steps = 1;  ///< Step, in [1, kMaxSteps]
   Grasp::Request grasp;     ///< Grasp (the gripper frame is taken to be at the sim frame's origin)
   std::string grasp_name;   ///< Release
+  SpawnCollider::Request spawn_collider;
+  std::string collider;  ///< RemoveCollider
 };
 
 /// The bytes runRequests decodes into `settings` (node parameters; scene_path is not read) and

@@ -109,9 +109,10 @@ TEST(ApiContract, TopicsServicesAndParametersUnderTheNamespace)
     EXPECT_TRUE(ours) << node << " publishes " << topic << " outside " << ns;
   }
 
-  for (const char* s : {"spawn_emitter", "spawn_rope", "spawn_cloth", "spawn_jelly", "remove_body", "reset",
-                        "pause_physics", "unpause_physics", "step", "pin_particle", "unpin_particle",
-                        "set_spring_constants", "set_wind", "set_parameters", "grasp", "release"})
+  for (const char* s :
+       {"spawn_emitter", "spawn_rope", "spawn_cloth", "spawn_jelly", "remove_body", "reset", "pause_physics",
+        "unpause_physics", "step", "pin_particle", "unpin_particle", "set_spring_constants", "set_wind",
+        "set_parameters", "grasp", "release", "spawn_collider", "remove_collider"})
   {
     const std::string service = ns + "/" + s;
     EXPECT_EQ(g.services.count(service) ? g.services.at(service).count(node) : 0u, 1u)

@@ -40,7 +40,7 @@ TOPICS = {
 }
 SERVICES = ["spawn_emitter", "spawn_rope", "spawn_cloth", "spawn_jelly", "set_wind", "set_spring_constants",
             "pin_particle", "unpin_particle", "remove_body", "step", "pause_physics", "unpause_physics", "reset",
-            "set_parameters", "grasp", "release"]
+            "set_parameters", "grasp", "release", "spawn_collider", "remove_collider"]
 EXECUTABLES = {"particle_sim_node", "particle_sim_run", "particle_sim_bench", "particle_sim_perf"}
 
 
@@ -133,6 +133,11 @@ class Cli(unittest.TestCase):
         self.bad("grasp", "{name: bad_hand, frame: gripper, region: 0, radius: 0}", "radius = 0")
         self.assertEqual(self.good("release", "{name: hand}")["released"], 2)
         self.bad("release", "{name: nobody}", "nobody")
+        self.good("spawn_collider", "{name: cli_table, shape: box, pose: {position: {x: 3, y: 3, z: 0.4}}, "
+                  "size: {x: 0.6, y: 0.4, z: 0.05}, friction: 0.5}")
+        self.bad("spawn_collider", "{name: cli_rod, shape: capsule, length: 0.3, radius: 0}", "radius = 0")
+        self.good("remove_collider", "{name: cli_table}")
+        self.bad("remove_collider", "{name: cli_table}", "cli_table")
         self.good("remove_body", "{name: jet}")
         self.bad("remove_body", "{name: nobody}", "nobody")
 

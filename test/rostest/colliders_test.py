@@ -8,6 +8,8 @@
    along +x.
 3. The capsule `finger` follows the scripted frame `orbit` (broadcast on tf by the node): its
    CYLINDER marker is where tf says the frame is.
+4. ~spawn_collider adds a box (drawn where the request puts it), refuses an unknown shape naming
+   it, and ~remove_collider takes the box away again (its marker goes) and refuses it a second time.
 """
 import math
 import sys
@@ -22,6 +24,8 @@ from sensor_msgs import point_cloud2
 from sensor_msgs.msg import PointCloud2
 from tf2_msgs.msg import TFMessage
 from visualization_msgs.msg import Marker, MarkerArray
+
+from particle_sim.srv import RemoveCollider, SpawnCollider, SpawnColliderRequest
 
 PKG = "particle_sim"
 NS = "/particle_sim"
@@ -44,10 +48,13 @@ class CollidersTest(unittest.TestCase):
             self.latest[key] = msg
 
     def on_markers(self, msg):
+        colliders = [m for m in msg.markers if m.ns == "_colliders" and m.action == Marker.ADD]
         with self.lock:
-            for m in msg.markers:
-                if m.ns == "_colliders" and m.action == Marker.ADD:
-                    self.latest[m.type] = m
+            if colliders:  # every array of the node draws every collider
+                self.latest["colliders"] = colliders
+
+    def drawn(self, kind):
+        return [m for m in self.latest.get("colliders", []) if m.type == kind]
 
     def on_tf(self, msg):
         for t in msg.transforms:
@@ -78,12 +85,12 @@ class CollidersTest(unittest.TestCase):
         return False
 
     def cube_at(self, position, yaw, tolerance=1e-3):
-        cube = self.latest.get(Marker.CUBE)
-        if cube is None:
-            return False
-        p, q = cube.pose.position, cube.pose.orientation
-        return (math.dist((p.x, p.y, p.z), position) < tolerance
-                and abs(q.z - math.sin(yaw / 2.0)) < tolerance and abs(q.w - math.cos(yaw / 2.0)) < tolerance)
+        for cube in self.drawn(Marker.CUBE):
+            p, q = cube.pose.position, cube.pose.orientation
+            if (math.dist((p.x, p.y, p.z), position) < tolerance
+                    and abs(q.z - math.sin(yaw / 2.0)) < tolerance and abs(q.w - math.cos(yaw / 2.0)) < tolerance):
+                return True
+        return False
 
     def jelly(self):
         return [(x, y, z) for x, y, z in point_cloud2.read_points(self.latest["points"], field_names=("x", "y", "z"))]
@@ -94,7 +101,7 @@ class CollidersTest(unittest.TestCase):
         with self.lock:
             self.pose = ((-0.3, 0.0, 0.15), 0.4)
         self.assertTrue(self.wait_for(lambda: self.cube_at((-0.3, 0.0, 0.15), 0.4)), "the box did not follow")
-        cube = self.latest[Marker.CUBE]
+        cube = self.drawn(Marker.CUBE)[0]
         self.assertAlmostEqual(cube.scale.x, 0.2, places=9)
         self.assertAlmostEqual(cube.scale.y, 0.4, places=9)
         with self.lock:
@@ -125,12 +132,38 @@ class CollidersTest(unittest.TestCase):
 
         # 3. The capsule rides its scripted frame (broadcast by the node on tf).
         def capsule_on_orbit():
-            cylinder, orbit = self.latest.get(Marker.CYLINDER), self.latest.get("orbit")
-            if cylinder is None or orbit is None:
+            cylinders, orbit = self.drawn(Marker.CYLINDER), self.latest.get("orbit")
+            if not cylinders or orbit is None:
                 return False
+            cylinder = cylinders[0]
             p, t = cylinder.pose.position, orbit.transform.translation
             return math.dist((p.x, p.y, p.z), (t.x, t.y, t.z)) < 0.02  # one tick of the orbit at 0.8 m/s
         self.assertTrue(self.wait_for(capsule_on_orbit), "the capsule is not on its scripted frame")
+
+        # 4. Added and removed at run time.
+        rospy.wait_for_service(NS + "/spawn_collider", timeout=30.0)
+        spawn = rospy.ServiceProxy(NS + "/spawn_collider", SpawnCollider)
+        remove = rospy.ServiceProxy(NS + "/remove_collider", RemoveCollider)
+        shelf = SpawnColliderRequest(name="shelf", shape=SpawnColliderRequest.SHAPE_BOX, friction=0.3)
+        shelf.pose.position.x, shelf.pose.position.y, shelf.pose.position.z = 0.0, 1.0, 0.5
+        shelf.size = Vector3(0.4, 0.4, 0.02)
+        answer = spawn(shelf)
+        self.assertTrue(answer.success, answer.message)
+        self.assertTrue(self.wait_for(lambda: self.cube_at((0.0, 1.0, 0.5), 0.0)), "the shelf is not drawn")
+        cone = SpawnColliderRequest(name="cone", shape="cone")
+        answer = spawn(cone)
+        self.assertFalse(answer.success)
+        self.assertIn("shape = 'cone' is not a collider shape; allowed: box, capsule", answer.message)
+        answer = spawn(shelf)
+        self.assertFalse(answer.success)
+        self.assertIn("'shelf' is taken", answer.message)
+        answer = remove(name="shelf")
+        self.assertTrue(answer.success, answer.message)
+        self.assertTrue(self.wait_for(lambda: len(self.drawn(Marker.CUBE)) == 1 and not self.cube_at((0.0, 1.0, 0.5), 0.0)),
+                        "the shelf is still drawn")
+        answer = remove(name="shelf")
+        self.assertFalse(answer.success)
+        self.assertIn("no sphere, box or capsule collider has that name", answer.message)
 
 
 if __name__ == "__main__":

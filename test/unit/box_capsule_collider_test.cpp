@@ -404,3 +404,49 @@ TEST(BoxCollider, ABoxPushesAJellyAlongTheGround)
   EXPECT_GT(moved, 0.3);
   EXPECT_LT(moved, 0.45);
 }
+
+TEST(BoxCollider, WorldAddsAndRemovesCollidersByNameAtRunTime)
+{
+  WorldDef def;
+  SphereColliderDef ball;
+  ball.name = "ball";
+  ball.center = {5.0, 0.0, 0.0};
+  def.spheres = {ball};
+  World world(def);
+  BoxColliderDef box;
+  box.name = "table";
+  box.half_extents = {0.5, 0.5, 0.05};
+  ASSERT_TRUE(world.addCollider(box).ok);
+  CapsuleColliderDef capsule;
+  capsule.name = "ball";  // taken by the sphere
+  Status s = world.addCollider(capsule);
+  EXPECT_FALSE(s.ok);
+  EXPECT_NE(s.message.find("'ball' is taken"), std::string::npos) << s.message;
+  capsule.name = "_finger";  // the rules of body names
+  EXPECT_FALSE(world.addCollider(capsule).ok);
+  capsule.name = "finger";
+  capsule.radius = 0.0;
+  s = world.addCollider(capsule);
+  EXPECT_NE(s.message.find("capsule 'finger'.radius"), std::string::npos) << s.message;
+  capsule.radius = 0.02;
+  ASSERT_TRUE(world.addCollider(capsule).ok);
+  EXPECT_EQ(world.environment().boxes.size(), 1u);
+  EXPECT_EQ(world.environment().capsules.size(), 1u);
+
+  // A particle dropped onto the table rests on it; once the table is removed it falls through.
+  ParticlePool pool = oneParticle({0.0, 0.0, 0.04});
+  resolveCollisions(world.environment(), pool);
+  EXPECT_NEAR(pool.position(2, 0), 0.05, 1e-12);
+  ASSERT_TRUE(world.removeCollider("table").ok);
+  ASSERT_TRUE(world.removeCollider("ball").ok);
+  EXPECT_TRUE(world.environment().boxes.empty());
+  EXPECT_TRUE(world.environment().spheres.empty());
+  pool = oneParticle({0.0, 0.0, 0.04});
+  Environment env = world.environment();
+  env.ground.enabled = false;
+  resolveCollisions(env, pool);
+  EXPECT_EQ(pool.position(2, 0), 0.04);
+  s = world.removeCollider("table");
+  EXPECT_FALSE(s.ok);
+  EXPECT_NE(s.message.find("no sphere, box or capsule collider has that name"), std::string::npos) << s.message;
+}

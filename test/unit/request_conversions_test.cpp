@@ -525,3 +525,59 @@ TEST(RequestConversions, CoreRefusalsOfSpawnsNameTheRequestsFieldNotTheDefinitio
   EXPECT_EQ(inRequestTerms(SpawnRequest::Emitter, rate).message, rate.message);
   EXPECT_TRUE(inRequestTerms(SpawnRequest::Rope, core::Status::success()).ok);
 }
+
+TEST(RequestConversions, SpawnColliderGivesABoxOrACapsuleAndRefusesTheOtherShapesFields)
+{
+  SpawnCollider::Request req;
+  req.name = "table";
+  req.shape = "box";
+  req.pose.position = point(1, 2, 0.4);  // orientation all zero: no turn
+  req.size = vector(1.2, 0.8, 0.05);
+  req.friction = 0.6;
+  bool is_box = false;
+  core::BoxColliderDef box;
+  core::CapsuleColliderDef capsule;
+  ASSERT_TRUE(toColliderDef(req, is_box, box, capsule).ok);
+  EXPECT_TRUE(is_box);
+  EXPECT_EQ(box.name, "table");
+  EXPECT_EQ(box.center, Eigen::Vector3d(1, 2, 0.4));
+  EXPECT_EQ(box.half_extents, Eigen::Vector3d(0.6, 0.4, 0.025));
+  EXPECT_EQ(box.orientation.coeffs(), Eigen::Quaterniond::Identity().coeffs());
+  EXPECT_EQ(box.contact.friction, 0.6);
+  EXPECT_EQ(box.contact.restitution, 0.0);  // taken as given
+  EXPECT_TRUE(core::validate(box).ok);
+
+  req.shape = "capsule";
+  req.size = vector(0, 0, 0);
+  req.length = 0.3;
+  req.radius = 0.02;
+  req.pose.orientation.z = std::sin(0.25);
+  req.pose.orientation.w = std::cos(0.25);
+  ASSERT_TRUE(toColliderDef(req, is_box, box, capsule).ok);
+  EXPECT_FALSE(is_box);
+  EXPECT_EQ(capsule.half_length, 0.15);
+  EXPECT_EQ(capsule.radius, 0.02);
+  EXPECT_NEAR(capsule.orientation.angularDistance(Eigen::Quaterniond(Eigen::AngleAxisd(0.5, Eigen::Vector3d::UnitZ()))),
+              0.0, 1e-12);
+
+  // Refusals name the field, the value and what is allowed.
+  req.shape = "cone";
+  core::Status s = toColliderDef(req, is_box, box, capsule);
+  EXPECT_FALSE(s.ok);
+  EXPECT_NE(s.message.find("shape = 'cone' is not a collider shape; allowed: box, capsule"), std::string::npos)
+      << s.message;
+  req.shape = "capsule";
+  req.size = vector(1, 1, 1);
+  s = toColliderDef(req, is_box, box, capsule);
+  EXPECT_NE(s.message.find("size = [1, 1, 1] is a box's"), std::string::npos) << s.message;
+  req.shape = "box";
+  s = toColliderDef(req, is_box, box, capsule);
+  EXPECT_NE(s.message.find("length and radius are a capsule's"), std::string::npos) << s.message;
+  // A non-unit quaternion passes the conversion and is refused by the core, by name.
+  req.length = req.radius = 0.0;
+  req.pose.orientation.w = 3.0;
+  ASSERT_TRUE(toColliderDef(req, is_box, box, capsule).ok);
+  s = core::validate(box);
+  EXPECT_NE(s.message.find("box 'table'.orientation"), std::string::npos) << s.message;
+  EXPECT_NE(s.message.find("is not a unit quaternion"), std::string::npos) << s.message;
+}

@@ -71,6 +71,12 @@ public:
   /// turn over h, which the contacts of the next step answer; h = 0 places it at rest.
   Status setColliderPose(const std::string& name, const Eigen::Vector3d& center, const Eigen::Quaterniond& orientation,
                          double h);
+  /// Validates `def` and adds the box or capsule from the next step on; refuses a name that any
+  /// collider (sphere, box, capsule) has already.
+  Status addCollider(const BoxColliderDef& def);
+  Status addCollider(const CapsuleColliderDef& def);
+  /// Removes the sphere, box or capsule called `name` from the next step on.
+  Status removeCollider(const std::string& name);
   /// The pose of the box or capsule called `name`; false when there is none.
   bool colliderPose(const std::string& name, Eigen::Vector3d& center, Eigen::Quaterniond& orientation) const;
   /// Sets the wind velocity [m/s] felt by cloth and jelly from the next step; each component in

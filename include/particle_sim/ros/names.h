@@ -33,6 +33,8 @@ constexpr const char* kSpawnJelly = "spawn_jelly";
 constexpr const char* kSetWind = "set_wind";
 constexpr const char* kGrasp = "grasp";
 constexpr const char* kRelease = "release";
+constexpr const char* kSpawnCollider = "spawn_collider";
+constexpr const char* kRemoveCollider = "remove_collider";
 
 // Parameters
 constexpr const char* kSceneParam = "scene";

@@ -8,6 +8,7 @@
 #include "particle_sim/PinParticle.h"
 #include "particle_sim/SetWind.h"
 #include "particle_sim/SpawnCloth.h"
+#include "particle_sim/SpawnCollider.h"
 #include "particle_sim/SpawnEmitter.h"
 #include "particle_sim/SpawnJelly.h"
 #include "particle_sim/SpawnRope.h"
@@ -15,6 +16,7 @@
 #include "particle_sim/core/builders/jelly.h"
 #include "particle_sim/core/builders/rope.h"
 #include "particle_sim/core/emitter.h"
+#include "particle_sim/core/environment.h"
 #include "particle_sim/core/integrator.h"
 #include "particle_sim/core/spring.h"
 #include "particle_sim/core/spring_network.h"
@@ -54,6 +56,13 @@ core::Status toClothGridDef(const SpawnCloth::Request& req, const core::Integrat
 /// ~spawn_jelly: the JellyDef a scene file would build.
 core::Status toJellyDef(const SpawnJelly::Request& req, const core::IntegratorDef& default_integrator,
                         core::JellyDef& def);
+
+/// ~spawn_collider: the box (`is_box` true) or the capsule the request describes, as a scene file
+/// would build it. An all-zero quaternion means no turn; any other must be a unit quaternion.
+/// Refuses an unknown shape and a size, length or radius given for the other shape; the core's
+/// validate() checks the ranges when the world adds it.
+core::Status toColliderDef(const SpawnCollider::Request& req, bool& is_box, core::BoxColliderDef& box,
+                           core::CapsuleColliderDef& capsule);
 
 /// Which ~spawn_* request a refusal of the core answers (see inRequestTerms).
 enum class SpawnRequest

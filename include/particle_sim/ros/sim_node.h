@@ -21,10 +21,12 @@
 #include "particle_sim/PinParticle.h"
 #include "particle_sim/Release.h"
 #include "particle_sim/RemoveBody.h"
+#include "particle_sim/RemoveCollider.h"
 #include "particle_sim/SetSpringConstants.h"
 #include "particle_sim/SetWind.h"
 #include "particle_sim/SimStatus.h"
 #include "particle_sim/SpawnCloth.h"
+#include "particle_sim/SpawnCollider.h"
 #include "particle_sim/SpawnEmitter.h"
 #include "particle_sim/SpawnJelly.h"
 #include "particle_sim/SpawnRope.h"
@@ -133,6 +135,8 @@ private:
   // The frame followers drop particles a grasp let go.
   void unfollow(const std::vector<HeldParticle>& let_go);
   bool removeBody(RemoveBody::Request& req, RemoveBody::Response& res);
+  bool spawnCollider(SpawnCollider::Request& req, SpawnCollider::Response& res);
+  bool removeCollider(RemoveCollider::Request& req, RemoveCollider::Response& res);
   bool reset(std_srvs::Trigger::Request& req, std_srvs::Trigger::Response& res);
   bool pausePhysics(std_srvs::Trigger::Request& req, std_srvs::Trigger::Response& res);
   bool unpausePhysics(std_srvs::Trigger::Request& req, std_srvs::Trigger::Response& res);
