@@ -271,10 +271,11 @@ TEST(SparseBlockLdlt, AutoPicksDirectForARopeAndCgForALargeSheet)
   EXPECT_FALSE(rope.usesDirect(LinearSolverType::ConjugateGradient));
 }
 
-TEST(SparseBlockLdlt, AutoTurnsDirectWhenCgTakesMoreIterationsThanTheFactorizationCosts)
+namespace
 {
-  // A stiff 48 x 48 spring cloth at dt = 1/60: too large for `auto` to start directly, but CG needs
-  // hundreds of iterations, more than one factorization costs; from the next step on it is direct.
+// A stiff 48 x 48 spring cloth hanging from two corners, implicit Euler with `auto`.
+ClothGridDef stiffSheetOnAuto()
+{
   ClothGridDef def(ClothModel::Springs);
   def.name = "sheet";
   def.nu = def.nv = 48;
@@ -284,6 +285,15 @@ TEST(SparseBlockLdlt, AutoTurnsDirectWhenCgTakesMoreIterationsThanTheFactorizati
   def.named_pins = {"corner_00", "corner_10"};
   def.integrator.type = kImplicitEulerIntegrator;
   def.integrator.linear_solver = LinearSolverType::Auto;
+  return def;
+}
+}  // namespace
+
+TEST(SparseBlockLdlt, AutoTurnsDirectWhenCgTakesMoreIterationsThanTheFactorizationCosts)
+{
+  // A stiff 48 x 48 spring cloth at dt = 1/60: too large for `auto` to start directly, but CG needs
+  // hundreds of iterations, more than one factorization costs; from the next step on it is direct.
+  ClothGridDef def = stiffSheetOnAuto();
   SpringNetworkBody body(buildClothGrid(def));
   Environment env;
   env.ground.enabled = false;
@@ -326,15 +336,7 @@ TEST(SparseBlockLdlt, AutoTurnsDirectWhenCgStopsAtItsIterationCapShortOfTheToler
   // (the sheet starts with CG), so only the unconverged solve can hand it to the direct solver. The
   // step after the first CG solve that stops short of the tolerance is direct, exact, and so is
   // every later step.
-  ClothGridDef def(ClothModel::Springs);
-  def.name = "sheet";
-  def.nu = def.nv = 48;
-  def.mass = 1.0;
-  def.stretch.stiffness = 1000.0;
-  def.shear.stiffness = 1000.0;
-  def.named_pins = {"corner_00", "corner_10"};
-  def.integrator.type = kImplicitEulerIntegrator;
-  def.integrator.linear_solver = LinearSolverType::Auto;
+  ClothGridDef def = stiffSheetOnAuto();
   def.integrator.cg_max_iterations = 5;
   SpringNetworkBody body(buildClothGrid(def));
   Environment env;

@@ -62,6 +62,20 @@ void writeColliderFrame(YAML::Node node, const std::string& collider, const Scen
   }
 }
 
+// Reads the list world.<key>: `read_one(entry, i)` for each entry, with its own reader.
+template <typename ReadOne>
+void readList(MapReader& reader, const std::string& key, const std::string& source, ReadOne read_one)
+{
+  const YAML::Node list = reader.child(key);
+  if (!list) return;
+  if (!list.IsSequence()) reader.fail(list, "world." + key + " must be a list of " + key);
+  for (std::size_t i = 0; i < list.size(); ++i)
+  {
+    MapReader entry(list[i], "world." + key + "[" + std::to_string(i) + "]", source);
+    read_one(entry, i);
+  }
+}
+
 YAML::Node contact(YAML::Node node, const core::ContactDef& c)
 {
   node["restitution"] = c.restitution;
@@ -91,69 +105,51 @@ void readWorld(const YAML::Node& node, const std::string& source, SceneDef& scen
     readContact(g, world.ground.contact);
     g.finish();
   }
-  if (const YAML::Node spheres = reader.child("spheres"))
-  {
-    if (!spheres.IsSequence()) reader.fail(spheres, "world.spheres must be a list of spheres");
-    for (std::size_t i = 0; i < spheres.size(); ++i)
-    {
-      MapReader s(spheres[i], "world.spheres[" + std::to_string(i) + "]", source);
-      core::SphereColliderDef sphere;
-      sphere.name = "sphere_" + std::to_string(i);
-      s.read("name", sphere.name);
-      s.require("center", sphere.center);
-      s.require("radius", sphere.radius);
-      readContact(s, sphere.contact);
-      std::string frame;
-      s.read("frame", frame);
-      if (!frame.empty()) scene.frame_spheres.push_back({sphere.name, frame});
-      s.finish();
-      check(s, "", core::validate(sphere));
-      world.spheres.push_back(sphere);
-    }
-  }
-  if (const YAML::Node boxes = reader.child("boxes"))
-  {
-    if (!boxes.IsSequence()) reader.fail(boxes, "world.boxes must be a list of boxes");
-    for (std::size_t i = 0; i < boxes.size(); ++i)
-    {
-      MapReader b(boxes[i], "world.boxes[" + std::to_string(i) + "]", source);
-      core::BoxColliderDef box;
-      box.name = "box_" + std::to_string(i);
-      b.read("name", box.name);
-      b.require("center", box.center);
-      Eigen::Vector3d size;
-      b.require("size", size);
-      box.half_extents = 0.5 * size;
-      readOrientation(b, box.orientation);
-      readContact(b, box.contact);
-      readColliderFrame(b, box.name, scene);
-      b.finish();
-      check(b, "", core::validate(box));
-      world.boxes.push_back(box);
-    }
-  }
-  if (const YAML::Node capsules = reader.child("capsules"))
-  {
-    if (!capsules.IsSequence()) reader.fail(capsules, "world.capsules must be a list of capsules");
-    for (std::size_t i = 0; i < capsules.size(); ++i)
-    {
-      MapReader c(capsules[i], "world.capsules[" + std::to_string(i) + "]", source);
-      core::CapsuleColliderDef capsule;
-      capsule.name = "capsule_" + std::to_string(i);
-      c.read("name", capsule.name);
-      c.require("center", capsule.center);
-      double length = 0.0;
-      c.require("length", length);
-      capsule.half_length = 0.5 * length;
-      c.require("radius", capsule.radius);
-      readOrientation(c, capsule.orientation);
-      readContact(c, capsule.contact);
-      readColliderFrame(c, capsule.name, scene);
-      c.finish();
-      check(c, "", core::validate(capsule));
-      world.capsules.push_back(capsule);
-    }
-  }
+  readList(reader, "spheres", source, [&](MapReader& s, std::size_t i) {
+    core::SphereColliderDef sphere;
+    sphere.name = "sphere_" + std::to_string(i);
+    s.read("name", sphere.name);
+    s.require("center", sphere.center);
+    s.require("radius", sphere.radius);
+    readContact(s, sphere.contact);
+    std::string frame;
+    s.read("frame", frame);
+    if (!frame.empty()) scene.frame_spheres.push_back({sphere.name, frame});
+    s.finish();
+    check(s, "", core::validate(sphere));
+    world.spheres.push_back(sphere);
+  });
+  readList(reader, "boxes", source, [&](MapReader& b, std::size_t i) {
+    core::BoxColliderDef box;
+    box.name = "box_" + std::to_string(i);
+    b.read("name", box.name);
+    b.require("center", box.center);
+    Eigen::Vector3d size;
+    b.require("size", size);
+    box.half_extents = 0.5 * size;
+    readOrientation(b, box.orientation);
+    readContact(b, box.contact);
+    readColliderFrame(b, box.name, scene);
+    b.finish();
+    check(b, "", core::validate(box));
+    world.boxes.push_back(box);
+  });
+  readList(reader, "capsules", source, [&](MapReader& c, std::size_t i) {
+    core::CapsuleColliderDef capsule;
+    capsule.name = "capsule_" + std::to_string(i);
+    c.read("name", capsule.name);
+    c.require("center", capsule.center);
+    double length = 0.0;
+    c.require("length", length);
+    capsule.half_length = 0.5 * length;
+    c.require("radius", capsule.radius);
+    readOrientation(c, capsule.orientation);
+    readContact(c, capsule.contact);
+    readColliderFrame(c, capsule.name, scene);
+    c.finish();
+    check(c, "", core::validate(capsule));
+    world.capsules.push_back(capsule);
+  });
   if (const YAML::Node air = reader.child("air"))
   {
     MapReader a(air, "world.air", source);
