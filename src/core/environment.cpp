@@ -110,6 +110,9 @@ double entryOnSegment(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const 
 
 namespace
 {
+// [m] How far inside a box a swept path may end and still be taken as sliding along its face.
+constexpr double kGrazingDepth = 1e-9;
+
 // The first s in (0, 1] where the segment a + s d enters the box |q_k| <= e_k (box coordinates), or
 // −1 when it does not (a inside, or the segment misses it): the slab method. `face` is the axis of
 // the face it enters through.
@@ -223,7 +226,11 @@ void resolveCollisions(const Environment& env, ParticlePool& pool, const Eigen::
       const Eigen::Matrix3d rotation = box.orientation.toRotationMatrix();
       const Eigen::Vector3d extents = box.half_extents.array() + thickness;
       const Eigen::Vector3d q = rotation.transpose() * (Eigen::Vector3d(x) - box.center);
-      if (start_position)
+      const Eigen::Vector3d depth = extents - q.cwiseAbs();
+      // A path that ends inside by no more than rounding (one sliding along a face) is not swept:
+      // its entry, found from a segment parallel to the face, could be anywhere along it.
+      const bool grazing = depth.minCoeff() > 0.0 && depth.minCoeff() <= kGrazingDepth;
+      if (start_position && !grazing)
       {
         // The path relative to the box, from where the particle was against where the box was: one
         // that entered it (and maybe left it again) stops on the face it entered through.
@@ -241,7 +248,6 @@ void resolveCollisions(const Environment& env, ParticlePool& pool, const Eigen::
           continue;
         }
       }
-      const Eigen::Vector3d depth = extents - q.cwiseAbs();
       if (depth.minCoeff() <= 0.0) continue;
       int face = 0;
       depth.minCoeff(&face);

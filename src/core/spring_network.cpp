@@ -137,6 +137,7 @@ SpringNetworkBody::SpringNetworkBody(const SpringNetworkDef& def, const Integrat
   saved_position_.setZero(3, n);
   saved_velocity_.setZero(3, n);
   substep_start_.setZero(3, n);
+  resting_contacts_.reserve(n);
   // The implicit system's pattern: the particle pairs every force element couples. The elements
   // look up their block indices once; they depend only on the pattern, which every implicit
   // method's solver is given.
@@ -479,6 +480,12 @@ void SpringNetworkBody::substep(double h, IntegratorType type, const Environment
     if (pinned_[i]) p.velocity.col(i) = (pin_target_.col(i) - p.position.col(i)) / h;
   }
 
+  // Implicit methods hold the particles resting on colliders inside their solve (stuck, or sliding
+  // along the surface with Coulomb friction).
+  if (isImplicit(type))
+    findRestingContacts(env, p, def_.contact_thickness, resting_contacts_);
+  else
+    resting_contacts_.clear();
   last_solve_ = method(type).step(h, *this, integrator_);
 
   // Pinned particles end exactly on their target.

@@ -199,6 +199,7 @@ private:
   Eigen::Matrix3Xd& velocities() override { return particles_.velocity; }
   const Eigen::VectorXd& masses() const override { return mass_; }
   const std::vector<char>& pinned() const override { return pinned_; }
+  std::vector<RestingContact>& restingContacts() override { return resting_contacts_; }
   void computeForces(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v, Eigen::Matrix3Xd& force) const override
   {
     computeForces(x, v, gravity_, force);
@@ -235,9 +236,10 @@ private:
   std::vector<std::pair<IntegratorType, std::unique_ptr<IntegrationMethod>>> methods_;  // one per registered integrator
   StrainLimit strain_limit_;  // Provot's constraint, applied after the integrator
   Eigen::Matrix3Xd saved_position_, saved_velocity_;
-  Eigen::Matrix3Xd substep_start_;  // positions at the start of a substep, when boxes or capsules sweep
-  double last_dt_ = 0.0;            // [s] of the last step (pinReactions' accelerations); 0 before the first
-  Eigen::Matrix3Xd step_target_;    // pin targets at the end of the whole step (substeps approach them)
+  Eigen::Matrix3Xd substep_start_;                // positions at the start of a substep, when boxes or capsules sweep
+  std::vector<RestingContact> resting_contacts_;  // implicit methods: found before each substep
+  double last_dt_ = 0.0;          // [s] of the last step (pinReactions' accelerations); 0 before the first
+  Eigen::Matrix3Xd step_target_;  // pin targets at the end of the whole step (substeps approach them)
 };
 
 }  // namespace core

@@ -125,7 +125,7 @@ SolverReport Bdf2Method::advance(double h, DynamicSystem& system, const Integrat
   solver_.begin(h_bdf, mass, force_, &w_);
   system.addJacobians(x_predicted_, solver_);
   x = x_hat_;  // the solve sets v = v_p + Δv, x = x̂ + h' v
-  SolverReport report = solver_.solve(pinned, settings, x, v);
+  SolverReport report = solver_.solve(pinned, system.restingContacts(), settings, x, v);
   x_previous_ = x0_;
   v_previous_ = v0_;
   if (!conservative || report.breakdown) return report;

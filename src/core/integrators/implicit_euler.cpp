@@ -40,7 +40,7 @@ SolverReport ImplicitEulerMethod::step(double h, DynamicSystem& system, const In
   system.computeForces(x, v, force_);
   solver_.begin(h, mass, force_, &v0_);
   system.addJacobians(x, solver_);
-  SolverReport report = solver_.solve(pinned, settings, x, v);
+  SolverReport report = solver_.solve(pinned, system.restingContacts(), settings, x, v);
   if (!conservative || report.breakdown) return report;
 
   // 2. If that one linearisation gained energy (large rotations or stretches in one step), Newton
@@ -57,7 +57,7 @@ SolverReport ImplicitEulerMethod::step(double h, DynamicSystem& system, const In
     solver_.begin(h, mass, force_, nullptr);
     system.addJacobians(x, solver_);
     x = x0_;  // the solve sets x = x0 + h v_{k+1}
-    report = solver_.solve(pinned, settings, x, v);
+    report = solver_.solve(pinned, system.restingContacts(), settings, x, v);
     if (report.breakdown) return report;
   }
   if (system.mechanicalEnergy() > energy_before + tolerance)
@@ -143,7 +143,7 @@ void ImplicitEulerMethod::convergedBackwardEuler(double h, DynamicSystem& system
     system.addJacobians(x, solver_);
     v_newton_ = v;  // v_k
     x = x0_;        // the solve sets x = x0 + h v_{k+1}
-    report = solver_.solve(pinned, settings, x, v);
+    report = solver_.solve(pinned, system.restingContacts(), settings, x, v);
     if (report.breakdown) return;
     delta_ = v - v_newton_;
     double alpha = 1.0, trial = incrementalPotential();

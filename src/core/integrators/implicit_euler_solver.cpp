@@ -44,11 +44,14 @@ void ImplicitEulerSolver::setPattern(int particles, const std::vector<std::pair<
     row_start_[i + 1] = static_cast<int>(block_row_.size());
   }
   blocks_.assign(block_row_.size(), Eigen::Matrix3d::Zero());
+  transpose_block_.resize(block_row_.size());
+  for (std::size_t k = 0; k < block_row_.size(); ++k)
+    transpose_block_[k] = blockIndex(block_column_[k], block_row_[k]);
   direct_ = SparseBlockLdlt();
   auto_choice_ = DirectChoice::Undecided;
   direct_in_cg_iterations_ = 0.0;
   inverse_diagonal_.assign(particles, Eigen::Matrix3d::Identity());
-  for (Eigen::Matrix3Xd* m : {&delta_v_, &rhs_, &residual_, &direction_, &product_, &preconditioned_})
+  for (Eigen::Matrix3Xd* m : {&delta_v_, &rhs_, &residual_, &direction_, &product_, &preconditioned_, &held_change_})
     m->setZero(3, particles);
 }
 
@@ -64,6 +67,7 @@ void ImplicitEulerSolver::begin(double h, const Eigen::VectorXd& mass, const Eig
 {
   h_ = h;
   v0_ = v0;
+  mass_ = &mass;
   for (Eigen::Matrix3d& block : blocks_)
     block.setZero();
   for (int i = 0; i < static_cast<int>(diagonal_block_.size()); ++i)
@@ -114,8 +118,142 @@ bool ImplicitEulerSolver::usesDirect(LinearSolverType solver)
   return true;
 }
 
-SolverReport ImplicitEulerSolver::solve(const std::vector<char>& pinned, const IntegratorDef& settings,
-                                        Eigen::Matrix3Xd& x, Eigen::Matrix3Xd& v)
+bool ImplicitEulerSolver::holdContacts(const std::vector<char>& pinned, std::vector<RestingContact>& contacts,
+                                       const Eigen::Matrix3Xd& v, bool keep_system)
+{
+  // Held: a contact not let go in this step whose particle is not leaving the surface; stuck as well
+  // when it has friction and has not slipped in this step; a slipping one gets its friction impulse
+  // in b. With P_i the held directions (n nᵀ, or I
+  // when stuck), S_i = I − P_i, and the change z_i = P_i (u − v_i) that gives them the surface's
+  // velocity u, the system A Δv = b becomes one for the rest y = Δv − z, in which P_i y_i = 0:
+  //   (S A S + m_i P_i on the held rows) y = S (b − A z)
+  // (Baraff & Witkin's filtered system, made definite on the held directions). The original rows
+  // A_ij and b_i are kept first, for the impulses; the whole system too when asked, for a solve
+  // with fewer held.
+  bool any = false;
+  held_rows_.clear();
+  held_rhs_.clear();
+  for (RestingContact& contact : contacts)
+  {
+    const int i = contact.particle;
+    const Eigen::Vector3d& n = contact.normal;
+    // Leaving: faster than the resting distance in one step (rounding leaves |v·n| ~ 1e-17 m/s).
+    const bool leaving = n.dot(v.col(i) - contact.surface_velocity) * h_ > kRestingContactDistance;
+    contact.held = !pinned[i] && !contact.let_go && !leaving;
+    contact.stuck = contact.held && !contact.slipping && contact.friction > 0.0;
+    contact.impulse.setZero();
+    contact.normal_impulse = 0.0;
+    if (!contact.held) continue;
+    any = true;
+    const Eigen::Vector3d change = contact.surface_velocity - v.col(i);
+    held_change_.col(i) = contact.stuck ? change : Eigen::Vector3d(n * n.dot(change));
+    for (int k = row_start_[i]; k < row_start_[i + 1]; ++k)
+      held_rows_.push_back(blocks_[k]);
+    held_rhs_.push_back(rhs_.col(i));
+    if (contact.slipping) rhs_.col(i) += contact.friction_impulse;
+  }
+  if (!any) return false;
+  if (keep_system)
+  {
+    original_blocks_ = blocks_;
+    original_rhs_ = rhs_;
+  }
+  // b −= A z, column by column of the held particles (A_ji is block (j, i)).
+  for (const RestingContact& contact : contacts)
+  {
+    if (!contact.held) continue;
+    const int i = contact.particle;
+    for (int k = row_start_[i]; k < row_start_[i + 1]; ++k)
+      rhs_.col(block_column_[k]).noalias() -= blocks_[transpose_block_[k]] * held_change_.col(i);
+  }
+  // Project the held rows and columns; the diagonal block gets m P back on the held directions.
+  for (const RestingContact& contact : contacts)
+  {
+    if (!contact.held) continue;
+    const int i = contact.particle;
+    const Eigen::Matrix3d held =
+        contact.stuck ? Eigen::Matrix3d::Identity() : Eigen::Matrix3d(contact.normal * contact.normal.transpose());
+    const Eigen::Matrix3d s = Eigen::Matrix3d::Identity() - held;
+    for (int k = row_start_[i]; k < row_start_[i + 1]; ++k)
+      blocks_[k] = s * blocks_[k];
+    for (int k = row_start_[i]; k < row_start_[i + 1]; ++k)
+      blocks_[transpose_block_[k]] = blocks_[transpose_block_[k]] * s;
+    blocks_[diagonal_block_[i]].noalias() += (*mass_)[i] * held;
+    rhs_.col(i) = s * rhs_.col(i);
+    delta_v_.col(i) = s * delta_v_.col(i);  // the warm start, too
+  }
+  return true;
+}
+
+bool ImplicitEulerSolver::reviseHolds(std::vector<RestingContact>& contacts)
+{
+  // Δv = y + z; the impulse J_i = (A Δv − b)_i with the original row: what the surface added. A
+  // surface can only push: a held particle with J_i·n < 0 is let go. A stuck one whose impulse
+  // leaves the friction cone (|J_t| > μ J_n) slips: only its normal is held from now on, and
+  // friction gives it μ J_n along J_t (Coulomb's sliding friction, opposing the slide that sticking
+  // had to stop).
+  bool revised = false;
+  int row = 0, held = 0;
+  for (RestingContact& contact : contacts)
+  {
+    if (!contact.held) continue;
+    const int i = contact.particle;
+    Eigen::Vector3d impulse = -held_rhs_[held++];
+    for (int k = row_start_[i]; k < row_start_[i + 1]; ++k, ++row)
+    {
+      const int j = block_column_[k];
+      impulse.noalias() += held_rows_[row] * (delta_v_.col(j) + held_change_.col(j));
+    }
+    contact.impulse = impulse;
+    contact.normal_impulse = impulse.dot(contact.normal);
+    const Eigen::Vector3d tangential = impulse - contact.normal_impulse * contact.normal;
+    if (contact.normal_impulse < 0.0)
+    {
+      contact.let_go = revised = true;
+    }
+    else if (contact.stuck && tangential.norm() > contact.friction * contact.normal_impulse)
+    {
+      contact.slipping = revised = true;
+      contact.friction_impulse = tangential * (contact.friction * contact.normal_impulse / tangential.norm());
+    }
+  }
+  return revised;
+}
+
+SolverReport ImplicitEulerSolver::solve(const std::vector<char>& pinned, std::vector<RestingContact>& contacts,
+                                        const IntegratorDef& settings, Eigen::Matrix3Xd& x, Eigen::Matrix3Xd& v)
+{
+  // Resting contacts are held (stuck, or along the normal). After each solve, holds that pull are
+  // let go, stuck ones beyond the friction cone slip, and the system is solved again, up to
+  // kContactSolves solves; the collision response after the step answers what a let-go particle
+  // then does.
+  for (RestingContact& contact : contacts)
+    contact.let_go = contact.slipping = false;
+  bool holding = holdContacts(pinned, contacts, v, true);
+  SolverReport report = solveLinear(pinned, settings);
+  for (int solves = 1; holding && reviseHolds(contacts) && solves < kContactSolves; ++solves)
+  {
+    blocks_ = original_blocks_;
+    rhs_ = original_rhs_;
+    for (const RestingContact& contact : contacts)
+      held_change_.col(contact.particle).setZero();
+    holding = holdContacts(pinned, contacts, v, false);
+    report = solveLinear(pinned, settings);
+  }
+  if (holding) reviseHolds(contacts);  // the impulses of the last solve (what it holds stays held)
+
+  // v1 = v0 + Δv (+ z on the held particles), x1 = x0 + h v1.
+  v += delta_v_;
+  for (const RestingContact& contact : contacts)
+  {
+    v.col(contact.particle) += held_change_.col(contact.particle);
+    held_change_.col(contact.particle).setZero();
+  }
+  x += h_ * v;
+  return report;
+}
+
+SolverReport ImplicitEulerSolver::solveLinear(const std::vector<char>& pinned, const IntegratorDef& settings)
 {
   // Directly, when chosen and the factorization succeeds (a singular or non-finite pivot leaves it
   // to CG, from the last step's Δv); then CG, which stops at once when the residual is small enough.
@@ -134,10 +272,6 @@ SolverReport ImplicitEulerSolver::solve(const std::vector<char>& pinned, const I
   if (settings.linear_solver == LinearSolverType::Auto && !report.direct &&
       (report.iterations > direct_in_cg_iterations_ || !report.converged))
     auto_choice_ = DirectChoice::Cheaper;
-
-  // v1 = v0 + Δv, x1 = x0 + h v1.
-  v += delta_v_;
-  x += h_ * v;
   return report;
 }
 

@@ -4,6 +4,7 @@
 #include <utility>
 #include <vector>
 
+#include "particle_sim/core/constraints/resting_contact.h"
 #include "particle_sim/core/integrator.h"
 #include "particle_sim/core/integrators/sparse_block_ldlt.h"
 
@@ -17,7 +18,9 @@ namespace core
 ///
 /// solved by their modified preconditioned conjugate gradient: pinned particles' Δv is held at 0
 /// by filtering every search direction and residual (no huge masses); 3x3 block-Jacobi
-/// preconditioner; warm start from the previous step's Δv. Or, by IntegratorDef::linear_solver,
+/// preconditioner; warm start from the previous step's Δv. Particles resting on a collider are
+/// held the same way along the surface's normal only (RestingContact): their normal velocity is
+/// set to the surface's, and the rest of the system is solved for what remains. Or, by IntegratorDef::linear_solver,
 /// directly (SparseBlockLdlt, the same filtered system), with CG iterations after it only if its
 /// residual misses the tolerance; `auto` decides once per pattern from the two solvers' flop counts.
 ///
@@ -50,10 +53,13 @@ public:
   {
     addBlock(diagonal_block_[i], dfdx, dfdv);
   }
-  /// Solves for Δv with pinned rows filtered, then v += Δv, x += h v. Pinned particles keep the
-  /// velocity in v (the one that carries them to their target).
-  SolverReport solve(const std::vector<char>& pinned, const IntegratorDef& settings, Eigen::Matrix3Xd& x,
-                     Eigen::Matrix3Xd& v);
+  /// Solves for Δv with pinned rows filtered and resting contacts held, then v += Δv, x += h v.
+  /// Pinned particles keep the velocity in v (the one that carries them to their target). Each
+  /// contact whose particle is not leaving its surface is held (RestingContact: stuck, sliding or let
+  /// go, decided by the impulses of up to kContactSolves solves); what was decided and the
+  /// impulses are written back.
+  SolverReport solve(const std::vector<char>& pinned, std::vector<RestingContact>& contacts,
+                     const IntegratorDef& settings, Eigen::Matrix3Xd& x, Eigen::Matrix3Xd& v);
   /// Whether `solver` means the direct solver for this pattern. `auto` compares the flop count of one
   /// factorization and solve with kDirectSolverCgIterations CG iterations (analysed once), and
   /// switches to the direct solver for good once a CG solve took more iterations than that count.
@@ -67,9 +73,20 @@ private:
   void multiply(const Eigen::Matrix3Xd& p, Eigen::Matrix3Xd& out) const;
   static void filter(const std::vector<char>& pinned, Eigen::Matrix3Xd& p);
   void precondition(const Eigen::Matrix3Xd& r, Eigen::Matrix3Xd& out) const;
+  // Decides which contacts are held and turns the system into one for the rest (keeping the
+  // original first when `keep_system`): true when any is.
+  bool holdContacts(const std::vector<char>& pinned, std::vector<RestingContact>& contacts, const Eigen::Matrix3Xd& v,
+                    bool keep_system);
+  // After a solve: each held contact's impulse; those that pull are let go, stuck ones outside the
+  // friction cone slip (true if any was).
+  bool reviseHolds(std::vector<RestingContact>& contacts);
+  // The linear solve of the (filtered) system in blocks_ and rhs_ for delta_v_.
+  SolverReport solveLinear(const std::vector<char>& pinned, const IntegratorDef& settings);
+  static constexpr int kContactSolves = 4;  // most solves a step makes to revise its holds
 
   // Block-sparse rows: row i has blocks row_start_[i] .. row_start_[i + 1] − 1.
   std::vector<int> row_start_, block_row_, block_column_, diagonal_block_;
+  std::vector<int> transpose_block_;  // the index of block (j, i) for block (i, j)
   std::vector<Eigen::Matrix3d> blocks_;
   std::vector<Eigen::Matrix3d> inverse_diagonal_;
   SparseBlockLdlt direct_;
@@ -82,6 +99,14 @@ private:
   double direct_in_cg_iterations_ = 0.0;  // one factorization and solve, in CG iterations (flops)
   double h_ = 0.0;
   const Eigen::Matrix3Xd* v0_ = nullptr;
+  const Eigen::VectorXd* mass_ = nullptr;
+  // Held contacts: the velocity change z each is given (0 elsewhere), and the original rows A_ij of
+  // their particles and b_i (for the impulse), contact after contact.
+  Eigen::Matrix3Xd held_change_;
+  std::vector<Eigen::Matrix3d> held_rows_;
+  std::vector<Eigen::Vector3d> held_rhs_;
+  std::vector<Eigen::Matrix3d> original_blocks_;  // the system before holding, for a solve again
+  Eigen::Matrix3Xd original_rhs_;
   Eigen::Matrix3Xd delta_v_, rhs_, residual_, direction_, product_, preconditioned_;
 };
 

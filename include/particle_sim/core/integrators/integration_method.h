@@ -25,6 +25,9 @@ public:
   virtual Eigen::Matrix3Xd& velocities() = 0;
   virtual const Eigen::VectorXd& masses() const = 0;  ///< [kg], also of pinned particles
   virtual const std::vector<char>& pinned() const = 0;
+  /// The particles resting on colliders at the start of the step, which implicit methods hold in
+  /// their solve (and on which they report what they did); empty for explicit methods.
+  virtual std::vector<RestingContact>& restingContacts() = 0;
 
   /// force = f(x, v) [N] on every particle.
   virtual void computeForces(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v, Eigen::Matrix3Xd& force) const = 0;
@@ -36,8 +39,8 @@ public:
   virtual void coupledPairs(std::vector<std::pair<int, int>>& pairs) const = 0;
   /// True when an outside force (wind) may rightly add energy in a step.
   virtual bool suppliesEnergy() const = 0;
-  /// True when nothing does work on the body in this step (no wind, no pinned particle moving), so
-  /// that an implicit step must not gain energy.
+  /// True when nothing does work on the body in this step (no wind, no pinned particle moving, no
+  /// particle resting on a moving collider), so that an implicit step must not gain energy.
   bool nothingDoesWork()
   {
     if (suppliesEnergy()) return false;
@@ -45,6 +48,8 @@ public:
     const Eigen::Matrix3Xd& v = velocities();
     for (int i = 0; i < static_cast<int>(v.cols()); ++i)
       if (is_pinned[i] && !v.col(i).isZero()) return false;
+    for (const RestingContact& contact : restingContacts())
+      if (!contact.surface_velocity.isZero()) return false;  // a moving collider carries it
     return true;
   }
   virtual double kineticEnergy() const = 0;     ///< [J] of the current state, free particles

@@ -1,0 +1,234 @@
+// Contacts inside the implicit solve (issue 14, item 3): a particle resting on a collider is held by
+// the solve along the surface's normal (Baraff & Witkin's constrained directions), stuck while the
+// friction cone allows, sliding with Coulomb friction beyond it, let go when holding it would pull.
+// Checked against single-particle answers of the solver, against the exact implicit Euler answer of
+// a cloth sliding down an incline, and by cloths coming to rest on boxes without creep or jitter.
+
+#include "particle_sim/core/constraints/resting_contact.h"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <vector>
+
+#include "particle_sim/core/builders/cloth_grid.h"
+#include "particle_sim/core/integrators/implicit_euler_solver.h"
+#include "particle_sim/core/world.h"
+
+using namespace particle_sim::core;
+
+namespace
+{
+constexpr double kG = 9.81;
+
+// One implicit step of a lone particle of mass m [kg] at rest on the plane z = 0 (normal +z,
+// friction mu), under the constant force f [N]: no Jacobian, so Δv = h f / m unless the contact acts.
+struct LoneStep
+{
+  Eigen::Vector3d velocity;
+  RestingContact contact;
+};
+
+LoneStep stepOnPlane(double m, const Eigen::Vector3d& f, double mu, double h)
+{
+  ImplicitEulerSolver solver;
+  solver.setPattern(1, {});
+  const Eigen::VectorXd mass = Eigen::VectorXd::Constant(1, m);
+  const Eigen::Matrix3Xd force = f;
+  Eigen::Matrix3Xd x = Eigen::Matrix3Xd::Zero(3, 1), v = Eigen::Matrix3Xd::Zero(3, 1);
+  solver.begin(h, mass, force, &v);
+  std::vector<RestingContact> contacts(1);
+  contacts[0].particle = 0;
+  contacts[0].friction = mu;
+  IntegratorDef settings;
+  settings.cg_tolerance = 1e-14;
+  solver.solve({0}, contacts, settings, x, v);
+  return {v.col(0), contacts[0]};
+}
+
+// A cloth of side 0.3 m lying at rest on the top face of a box tilted by `tilt` [rad] about x (its
+// uphill direction is the box's +y axis), in a world without ground.
+struct Incline
+{
+  World world;
+  Eigen::Matrix3d rotation;
+  explicit Incline(double tilt, double friction, double dt) : world(def(tilt, friction, dt))
+  {
+    rotation = Eigen::AngleAxisd(tilt, Eigen::Vector3d::UnitX()).toRotationMatrix();
+    ClothGridDef cloth(ClothModel::Springs);
+    cloth.name = "cloth";
+    cloth.origin = rotation * Eigen::Vector3d(-0.15, -0.15, 0.1);
+    cloth.edge_u = rotation * Eigen::Vector3d(0.3, 0.0, 0.0);
+    cloth.edge_v = rotation * Eigen::Vector3d(0.0, 0.3, 0.0);
+    cloth.nu = cloth.nv = 16;
+    cloth.mass = 0.2;
+    cloth.stretch = {800.0, 0.5};
+    cloth.shear = {200.0, 0.2};
+    cloth.bend = {0.5, 0.01};
+    cloth.integrator.type = kImplicitEulerIntegrator;
+    EXPECT_TRUE(world.addClothGrid(cloth).ok);
+  }
+  static WorldDef def(double tilt, double friction, double dt)
+  {
+    WorldDef d;
+    d.dt = dt;
+    d.ground.enabled = false;
+    BoxColliderDef box;
+    box.name = "incline";
+    box.half_extents = {1.0, 1.0, 0.1};
+    box.orientation = Eigen::Quaterniond(Eigen::AngleAxisd(tilt, Eigen::Vector3d::UnitX()));
+    box.contact.friction = friction;
+    d.boxes = {box};
+    return d;
+  }
+  const ParticlePool& particles() const { return world.findSpringBody("cloth")->particles(); }
+  Eigen::Vector3d centroid() const { return particles().position.leftCols(particles().size()).rowwise().mean(); }
+};
+
+// The largest particle speed [m/s] of body `name` over `steps` steps of `world`.
+double fastestOver(World& world, const std::string& name, int steps)
+{
+  double fastest = 0.0;
+  for (int k = 0; k < steps; ++k)
+  {
+    world.step();
+    const ParticlePool& p = world.findSpringBody(name)->particles();
+    fastest = std::max(fastest, p.velocity.leftCols(p.size()).colwise().norm().maxCoeff());
+  }
+  return fastest;
+}
+}  // namespace
+
+TEST(RestingContact, AParticleOnTheGroundIsHeldWithTheImpulseOfItsWeight)
+{
+  // At rest on the plane under gravity: it stays at rest, and the surface gave it m g h.
+  const double m = 0.3, h = 0.01;
+  const LoneStep step = stepOnPlane(m, Eigen::Vector3d(0.0, 0.0, -m * kG), 0.5, h);
+  EXPECT_TRUE(step.contact.held);
+  EXPECT_LT(step.velocity.norm(), 1e-15);
+  EXPECT_NEAR(step.contact.normal_impulse, m * kG * h, 1e-12);
+}
+
+TEST(RestingContact, StaticFrictionHoldsInsideTheConeAndCoulombFrictionSlowsBeyondIt)
+{
+  // A sideways push F on a particle of weight W = m g with friction mu: below mu W it sticks (the
+  // surface gives −F h along the surface); above, it slides with Δv = (F − mu W) h / m.
+  const double m = 0.3, h = 0.01, mu = 0.5, weight = m * kG;
+  const LoneStep stuck = stepOnPlane(m, Eigen::Vector3d(0.9 * mu * weight, 0.0, -weight), mu, h);
+  EXPECT_TRUE(stuck.contact.stuck);
+  EXPECT_LT(stuck.velocity.norm(), 1e-15);
+  EXPECT_NEAR(stuck.contact.impulse.x(), -0.9 * mu * weight * h, 1e-12);
+
+  const double push = 2.0 * mu * weight;
+  const LoneStep sliding = stepOnPlane(m, Eigen::Vector3d(push, 0.0, -weight), mu, h);
+  EXPECT_TRUE(sliding.contact.held);
+  EXPECT_TRUE(sliding.contact.slipping);
+  EXPECT_NEAR(sliding.velocity.x(), (push - mu * weight) * h / m, 1e-12);
+  EXPECT_NEAR(sliding.velocity.z(), 0.0, 1e-15);
+}
+
+TEST(RestingContact, AParticlePulledOffTheSurfaceIsLetGo)
+{
+  // A force up of twice its weight: holding it would pull it down, so it leaves with the free
+  // answer Δv = h f / m.
+  const double m = 0.3, h = 0.01;
+  const LoneStep step = stepOnPlane(m, Eigen::Vector3d(0.0, 0.0, m * kG), 0.5, h);
+  EXPECT_FALSE(step.contact.held);
+  EXPECT_TRUE(step.contact.let_go);
+  EXPECT_NEAR(step.velocity.z(), kG * h, 1e-12);
+}
+
+TEST(RestingContact, FindsTheNearestSurfaceOfEachParticleOnACollider)
+{
+  // On the ground, on a box's face, on its edge (the normal points away from the edge), on a
+  // sphere; one in the air is not found.
+  Environment env;
+  BoxColliderDef box;
+  box.name = "box";
+  box.center = {0.0, 0.0, 1.0};
+  box.half_extents = {0.5, 0.5, 0.5};
+  env.boxes = {box};
+  SphereColliderDef sphere;
+  sphere.name = "ball";
+  sphere.center = {3.0, 0.0, 1.0};
+  sphere.radius = 0.5;
+  env.spheres = {sphere};
+  ParticlePool pool;
+  pool.resize(5, 5);
+  pool.inverse_mass.setOnes();
+  pool.position.col(0) = Eigen::Vector3d(2.0, 2.0, 0.0);                // ground
+  pool.position.col(1) = Eigen::Vector3d(0.1, 0.2, 1.5);                // box top
+  pool.position.col(2) = Eigen::Vector3d(0.5 + 3e-7, 0.0, 1.5 + 3e-7);  // just off the box's edge
+  pool.position.col(3) = Eigen::Vector3d(3.0, 0.5, 1.0);                // sphere
+  pool.position.col(4) = Eigen::Vector3d(2.0, 2.0, 0.1);                // air
+  std::vector<RestingContact> contacts;
+  findRestingContacts(env, pool, 0.0, contacts);
+  ASSERT_EQ(contacts.size(), 4u);
+  EXPECT_TRUE(contacts[0].normal.isApprox(Eigen::Vector3d::UnitZ()));
+  EXPECT_TRUE(contacts[1].normal.isApprox(Eigen::Vector3d::UnitZ()));
+  EXPECT_TRUE(contacts[2].normal.isApprox(Eigen::Vector3d(1.0, 0.0, 1.0).normalized()));
+  EXPECT_TRUE(contacts[3].normal.isApprox(Eigen::Vector3d::UnitY()));
+  EXPECT_EQ(contacts[3].particle, 3);
+}
+
+TEST(RestingContact, AClothStaysPutOnAnInclineItsFrictionHolds)
+{
+  // 15 degrees, friction 0.5 > tan 15° = 0.27: static friction holds the cloth at h = 1/60; it
+  // neither slides nor creeps (a projection after the solve let it creep about 1 mm a second).
+  Incline incline(15.0 * M_PI / 180.0, 0.5, 1.0 / 60.0);
+  const Eigen::Vector3d start = incline.centroid();
+  const double fastest = fastestOver(incline.world, "cloth", 60);
+  EXPECT_LT((incline.centroid() - start).norm(), 1e-9);
+  EXPECT_LT(fastest, 1e-9);
+}
+
+TEST(RestingContact, AClothSlidesDownAnInclineAsImplicitEulerPredicts)
+{
+  // Beyond its friction the cloth slides as one with a = g (sin θ − mu cos θ); implicit Euler's
+  // answer after n steps of h is a h² n (n + 1) / 2 along the slope, which the centroid must
+  // follow (a projection after the solve lost a third of it to particles stopped on the surface).
+  const double tilt = 15.0 * M_PI / 180.0, h = 1.0 / 60.0;
+  const int n = 30;
+  for (double mu : {0.0, 0.1, 0.2})
+  {
+    Incline incline(tilt, mu, h);
+    const Eigen::Vector3d start = incline.centroid();
+    for (int k = 0; k < n; ++k)
+      incline.world.step();
+    const double slid = (start - incline.centroid()).dot(incline.rotation.col(1));  // downhill
+    const double a = kG * (std::sin(tilt) - mu * std::cos(tilt));
+    EXPECT_NEAR(slid, a * h * h * n * (n + 1) / 2.0, 1e-3 * slid) << "friction " << mu;
+  }
+}
+
+TEST(RestingContact, AClothDroppedOnATiltedBoxComesToRestWithoutJitter)
+{
+  // A 0.5 m cloth dropped onto a 0.6 m box tilted 15 degrees (friction 0.5) at h = 1/60: after 3 s
+  // every particle is below 1 mm/s at every step of the next second (with the contacts projected
+  // after the solve instead, it crept and jittered at 0.18 m/s for good).
+  WorldDef def;
+  def.dt = 1.0 / 60.0;
+  BoxColliderDef table;
+  table.name = "table";
+  table.center = {0.0, 0.0, 0.25};
+  table.half_extents = {0.3, 0.3, 0.25};
+  table.orientation = Eigen::Quaterniond(Eigen::AngleAxisd(15.0 * M_PI / 180.0, Eigen::Vector3d::UnitX()));
+  table.contact.friction = 0.5;
+  def.boxes = {table};
+  World world(def);
+  ClothGridDef cloth(ClothModel::Springs);
+  cloth.name = "cloth";
+  cloth.origin = {-0.25, -0.25, 0.6};
+  cloth.edge_u = {0.5, 0.0, 0.0};
+  cloth.edge_v = {0.0, 0.5, 0.0};
+  cloth.nu = cloth.nv = 21;
+  cloth.mass = 0.2;
+  cloth.stretch = {800.0, 0.5};
+  cloth.shear = {200.0, 0.2};
+  cloth.bend = {0.5, 0.01};
+  cloth.integrator.type = kImplicitEulerIntegrator;
+  ASSERT_TRUE(world.addClothGrid(cloth).ok);
+  fastestOver(world, "cloth", 180);
+  EXPECT_LT(fastestOver(world, "cloth", 60), 1e-3);
+}
