@@ -12,6 +12,22 @@ namespace scene
 {
 Eigen::Vector3d ScriptedFrameDef::position(double t) const
 {
+  // Waypoints: between w_k and w_k+1, x = x_k + (x_k+1 − x_k) s(u), u = (t − t_k) / (t_k+1 − t_k),
+  // with the minimum-jerk profile s(u) = 10 u³ − 15 u⁴ + 6 u⁵ (s' = s'' = 0 at both ends).
+  if (!waypoints.empty())
+  {
+    if (t <= waypoints.front().t) return waypoints.front().position;
+    for (std::size_t k = 0; k + 1 < waypoints.size(); ++k)
+    {
+      const Waypoint& a = waypoints[k];
+      const Waypoint& b = waypoints[k + 1];
+      if (t > b.t) continue;
+      const double u = (t - a.t) / (b.t - a.t);
+      const double s = u * u * u * (10.0 - 15.0 * u + 6.0 * u * u);
+      return a.position + s * (b.position - a.position);
+    }
+    return waypoints.back().position;
+  }
   const double angle = 2.0 * M_PI * t / period + phase;
   return center + radius * Eigen::Vector3d(std::cos(angle), std::sin(angle), 0.0);
 }

@@ -683,3 +683,48 @@ TEST(SceneFiles, RefusesBadBoxesAndCapsulesNamingTheField)
   EXPECT_TRUE(contains(refusal("world:\n  capsules: [{center: [0, 0, 0], length: -1, radius: 0.1}]\n"),
                        "capsule 'capsule_0'.half_length = -0.5 is out of range"));
 }
+
+TEST(SceneFiles, AFrameWithWaypointsPassesThemWithMinimumJerkAndIsWrittenBack)
+{
+  // Through (0,0,1) at 1 s and (1,0,1) at 3 s, then (1,0,2) at 4 s: on each waypoint at its time,
+  // halfway at the middle of a leg (s(1/2) = 1/2), at a quarter 10/64 − 15/256 + 6/1024 of the way
+  // (s(u) = 10u³ − 15u⁴ + 6u⁵), still before the first and after the last, and with zero velocity
+  // at a waypoint (central difference).
+  const scene::SceneDef def = parseOk(
+      "frames:\n  - name: hand\n    waypoints:\n      - {t: 1, position: [0, 0, 1]}\n"
+      "      - {t: 3, position: [1, 0, 1]}\n      - {t: 4, position: [1, 0, 2]}\n");
+  ASSERT_EQ(def.frames.size(), 1u);
+  const scene::ScriptedFrameDef& hand = def.frames[0];
+  ASSERT_EQ(hand.waypoints.size(), 3u);
+  EXPECT_EQ(hand.position(0.0), Eigen::Vector3d(0, 0, 1));
+  EXPECT_EQ(hand.position(1.0), Eigen::Vector3d(0, 0, 1));
+  EXPECT_EQ(hand.position(3.0), Eigen::Vector3d(1, 0, 1));
+  EXPECT_EQ(hand.position(9.0), Eigen::Vector3d(1, 0, 2));
+  EXPECT_NEAR(hand.position(2.0).x(), 0.5, 1e-15);
+  const double quarter = 10.0 / 64.0 - 15.0 / 256.0 + 6.0 / 1024.0;
+  EXPECT_NEAR(hand.position(1.5).x(), quarter, 1e-15);
+  EXPECT_NEAR(hand.position(3.5).z(), 1.5, 1e-15);
+  const double dt = 1e-4;
+  EXPECT_LT((hand.position(3.0 + dt) - hand.position(3.0 - dt)).norm() / (2 * dt), 1e-6);
+
+  const scene::SceneDef again = parseOk(scene::toYaml(def));
+  ASSERT_EQ(again.frames[0].waypoints.size(), 3u);
+  for (std::size_t k = 0; k < 3; ++k)
+  {
+    EXPECT_EQ(again.frames[0].waypoints[k].t, hand.waypoints[k].t);
+    EXPECT_EQ(again.frames[0].waypoints[k].position, hand.waypoints[k].position);
+  }
+}
+
+TEST(SceneFiles, RefusesBadWaypointsNamingTheField)
+{
+  const std::string frame = "frames:\n  - name: f\n    waypoints: ";
+  EXPECT_TRUE(contains(refusal(frame + "[]\n"), "frames[0].waypoints must be a non-empty list of {t, position}"));
+  EXPECT_TRUE(contains(refusal(frame + "[{t: 1}]\n"), "frames[0].waypoints[0] needs the key 'position'"));
+  EXPECT_TRUE(contains(refusal(frame + "[{t: 1, position: [0, 0, 0]}, {t: 1, position: [1, 0, 0]}]\n"),
+                       "frames[0].waypoints[1].t = 1 s must be later than the waypoint before it (1 s)"));
+  EXPECT_TRUE(contains(refusal(frame + "[{t: 0, position: [0, 0]}]\n"),
+                       "frames[0].waypoints[0].position = [0, 0] must be a list of 3 numbers"));
+  EXPECT_TRUE(contains(refusal(frame + "[{t: 0, position: [0, 0, 0]}]\n    radius: 1\n"),
+                       "frames[0].radius is a circle's; a frame with waypoints follows them only"));
+}

@@ -24,16 +24,30 @@ using BodyDef = std::variant<core::EmitterDef, core::RopeDef, core::SpringNetwor
                              core::MeshClothDef, core::JellyDef>;
 
 /// A frame the scene moves by itself (a stand-in for a robot's gripper or tool): it goes round a
-/// horizontal circle. The node broadcasts it on tf; pins and spheres can follow it.
+/// horizontal circle, or through a list of waypoints. The node broadcasts it on tf; pins, grasps
+/// and colliders can follow it.
 struct ScriptedFrameDef
 {
+  /// Where the frame is at sim time `t`.
+  struct Waypoint
+  {
+    double t = 0.0;                                      ///< [s]
+    Eigen::Vector3d position = Eigen::Vector3d::Zero();  ///< [m] in the sim frame
+  };
+
   std::string name;
   Eigen::Vector3d center = Eigen::Vector3d::Zero();  ///< [m] in the sim frame
   double radius = 0.5;                               ///< [m] >= 0
   double period = 4.0;                               ///< [s] > 0, one turn
   double phase = 0.0;                                ///< [rad] angle at t = 0
+  /// When not empty, the frame goes through these instead of the circle (times strictly increasing):
+  /// from each to the next along the straight line with a minimum-jerk profile (it stops at every
+  /// waypoint, with no jump in velocity or acceleration); before the first and after the last it
+  /// stays there.
+  std::vector<Waypoint> waypoints;
 
-  /// Position [m] at sim time t [s]: center + radius (cos(2πt/period + phase), sin(...), 0).
+  /// Position [m] at sim time t [s]: on the waypoints' path, or on the circle center + radius
+  /// (cos(2πt/period + phase), sin(...), 0).
   Eigen::Vector3d position(double t) const;
 };
 

@@ -161,6 +161,29 @@ void readWorld(const YAML::Node& node, const std::string& source, SceneDef& scen
   check(reader, "world.", core::validate(world));
 }
 
+// A scripted frame's waypoints: a non-empty list of {t, position}, times finite and strictly increasing.
+void readWaypoints(const YAML::Node& node, const std::string& where, const std::string& source,
+                   std::vector<ScriptedFrameDef::Waypoint>& waypoints)
+{
+  if (!node.IsSequence() || node.size() == 0)
+    throw SceneError{location(source, node) + where + " must be a non-empty list of {t, position}"};
+  for (std::size_t k = 0; k < node.size(); ++k)
+  {
+    MapReader reader(node[k], where + "[" + std::to_string(k) + "]", source);
+    ScriptedFrameDef::Waypoint waypoint;
+    reader.require("t", waypoint.t);
+    reader.require("position", waypoint.position);
+    reader.finish();
+    check(reader, reader.field(""), core::checkFinite("t", waypoint.t));
+    check(reader, reader.field(""), core::checkFinite("position", waypoint.position));
+    if (!waypoints.empty() && !(waypoint.t > waypoints.back().t))
+      reader.fail(node[k], reader.field("t") + " = " + core::formatValue(waypoint.t) +
+                               " s must be later than the waypoint before it (" +
+                               core::formatValue(waypoints.back().t) + " s)");
+    waypoints.push_back(waypoint);
+  }
+}
+
 void readFrames(const YAML::Node& node, const std::string& source, SceneDef& scene)
 {
   if (!node.IsSequence()) throw SceneError{location(source, node) + "frames must be a list of frames"};
@@ -173,6 +196,16 @@ void readFrames(const YAML::Node& node, const std::string& source, SceneDef& sce
     reader.read("radius", frame.radius);
     reader.read("period", frame.period);
     reader.read("phase", frame.phase);
+    if (const YAML::Node waypoints = reader.child("waypoints"))
+    {
+      for (const char* circle_key : {"center", "radius", "period", "phase"})
+      {
+        if (reader.node()[circle_key])
+          reader.fail(reader.node()[circle_key], reader.field(circle_key) +
+                                                     " is a circle's; a frame with waypoints follows them only");
+      }
+      readWaypoints(waypoints, reader.field("waypoints"), source, frame.waypoints);
+    }
     reader.finish();
     if (frame.name.empty()) reader.fail(node[i], reader.field("name") + " is empty");
     check(reader, reader.field(""), core::checkFinite("center", frame.center));
@@ -239,10 +272,20 @@ void writeWorld(YAML::Node root, const SceneDef& scene)
   {
     YAML::Node frame;
     frame["name"] = f.name;
-    frame["center"] = vector3(f.center);
-    frame["radius"] = f.radius;
-    frame["period"] = f.period;
-    frame["phase"] = f.phase;
+    for (const ScriptedFrameDef::Waypoint& w : f.waypoints)
+    {
+      YAML::Node waypoint;
+      waypoint["t"] = w.t;
+      waypoint["position"] = vector3(w.position);
+      frame["waypoints"].push_back(waypoint);
+    }
+    if (f.waypoints.empty())
+    {
+      frame["center"] = vector3(f.center);
+      frame["radius"] = f.radius;
+      frame["period"] = f.period;
+      frame["phase"] = f.phase;
+    }
     root["frames"].push_back(frame);
   }
 }
