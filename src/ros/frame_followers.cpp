@@ -34,9 +34,24 @@ bool FrameFollowers::lookup(const std::string& frame, const Eigen::Vector3d& off
   return true;
 }
 
+void FrameFollowers::useScriptedFrames(const scene::SceneDef& scene, std::function<double()> sim_time)
+{
+  scene_ = &scene;
+  sim_time_ = std::move(sim_time);
+}
+
 bool FrameFollowers::lookupPose(const std::string& frame, Eigen::Isometry3d& pose, ros::Time& stamp,
                                 std::string& error) const
 {
+  // A scripted frame: where the scene puts it now (it does not turn).
+  if (const scene::ScriptedFrameDef* scripted = scene_ ? scene::findFrame(*scene_, frame) : nullptr)
+  {
+    const double now = sim_time_();
+    pose = Eigen::Isometry3d::Identity();
+    pose.translation() = scripted->position(now);
+    stamp = ros::Time(now);
+    return true;
+  }
   if (!tf_buffer_->canTransform(sim_frame_, frame, ros::Time(0), &error)) return false;
   try
   {
@@ -94,11 +109,16 @@ void FrameFollowers::beginTick(core::World& world, const scene::SceneDef& scene)
 
 void FrameFollowers::moveTargets(core::World& world, std::uint64_t step, std::uint64_t steps) const
 {
-  // Particles pinned to tf frames move in equal parts towards this tick's frame pose.
+  // Particles pinned to tf frames move in equal parts towards this tick's frame pose; those pinned
+  // to a scripted frame go where it is at the end of this step.
   for (std::size_t k = 0; k < pins_.size(); ++k)
   {
     const double s = static_cast<double>(step + 1) / static_cast<double>(steps);
-    world.findSpringBody(pins_[k].body)->setPinTarget(pins_[k].index, start_[k] + s * (goal_[k] - start_[k]));
+    const FramePin& pin = pins_[k];
+    const Eigen::Vector3d target = pin.scripted
+                                       ? Eigen::Vector3d(pin.scripted->position(world.simTime() + world.dt()) + pin.offset)
+                                       : Eigen::Vector3d(start_[k] + s * (goal_[k] - start_[k]));
+    world.findSpringBody(pin.body)->setPinTarget(pin.index, target);
   }
   // Boxes and capsules likewise, one step's worth of their frame's motion at a time.
   for (const ColliderMove& move : collider_moves_)
@@ -126,6 +146,8 @@ void FrameFollowers::updateFramePins(core::World& world)
   {
     FramePin& pin = pins_[k];
     start_[k] = world.findSpringBody(pin.body)->pinTarget(pin.index);
+    pin.scripted = scene_ ? scene::findFrame(*scene_, pin.frame) : nullptr;
+    if (pin.scripted) continue;  // placed step by step (moveTargets)
     std::string error;
     ros::Time stamp;
     const bool available =

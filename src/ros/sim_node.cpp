@@ -150,6 +150,7 @@ void SimNode::advertiseInterfaces()
   // tf is listened to from the start (on the listener's own thread), so that a pin request can be
   // answered at once from what tf already knows.
   frame_followers_.startListening(settings_.frame_id);
+  frame_followers_.useScriptedFrames(scene_, [this] { return world_->simTime(); });
 
   services_.push_back(private_node_.advertiseService(names::kSpawnEmitter, &SimNode::spawnEmitter, this));
   services_.push_back(private_node_.advertiseService(names::kRemoveBody, &SimNode::removeBody, this));

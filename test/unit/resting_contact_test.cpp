@@ -9,11 +9,13 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
 #include "particle_sim/core/builders/cloth_grid.h"
 #include "particle_sim/core/integrators/implicit_euler_solver.h"
+#include "particle_sim/core/spring_network.h"
 #include "particle_sim/core/world.h"
 
 using namespace particle_sim::core;
@@ -231,4 +233,59 @@ TEST(RestingContact, AClothDroppedOnATiltedBoxComesToRestWithoutJitter)
   ASSERT_TRUE(world.addClothGrid(cloth).ok);
   fastestOver(world, "cloth", 180);
   EXPECT_LT(fastestOver(world, "cloth", 60), 1e-3);
+}
+
+TEST(RestingContact, AClothPeeledOffTheFloorByItsCornerIsNeverGluedToIt)
+{
+  // A 0.5 m towel (0.1 kg, 21 x 21) lying on a floor with friction 0.6, held by its corner and the
+  // corner's two neighbours (as ~grasp with a 3 cm sphere holds it) and lifted 1.3 m in 2 s along a
+  // minimum-jerk profile, at h = 0.01 s: the pick_and_place demo's lift. Rows leave the floor one
+  // after another (the holds are let go row by row) while the rest slides on it. Newton's second
+  // law for the towel bounds the vertical force on what holds it: F_z = dP_z/dt + m g − N with the
+  // floor's N >= 0, and dP_z/dt is at most the lifted mass's acceleration, m a_max, plus the
+  // momentum of the mass being picked up, λ v_max² (λ: the most mass a unit of height lifts, the
+  // areal density times the cloth's widest diagonal section). A floor that glued a row for a step,
+  // or a grip that moved in jerks, shows as force spikes over this bound (the node's grasp, when it
+  // followed the scripted gripper through tf, saw 4.5 N against 1.6 N).
+  ClothGridDef def(ClothModel::Springs);
+  def.name = "towel";
+  def.origin = {0.0, 0.0, 0.0};
+  def.edge_u = {0.5, 0.0, 0.0};
+  def.edge_v = {0.0, 0.5, 0.0};
+  def.nu = def.nv = 21;
+  def.mass = 0.1;
+  def.stretch = {1000.0, 0.3};
+  def.shear = {300.0, 0.1};
+  def.bend = {1.0, 0.01};
+  def.strain_limit.max_strain = 0.1;
+  def.integrator.type = kImplicitEulerIntegrator;
+  // Held as a gripper holds it: the corner and its two neighbours (~grasp with a 3 cm sphere).
+  const std::vector<int> corner = {def.nu - 1, def.nu - 2, 2 * def.nu - 1};
+  def.pins = corner;
+  ASSERT_TRUE(validate(def, 1000).ok);
+  SpringNetworkBody body(buildClothGrid(def));
+  Environment env;
+  env.ground.contact.friction = 0.6;
+  env.ground.contact.restitution = 0.0;
+  env.air.drag = 0.3;
+
+  const double h = 0.01, lift = 1.3, duration = 2.0;
+  const Eigen::Vector3d start = body.particles().position.col(corner[0]);
+  for (int step = 0; step < 160; ++step)  // settle onto the floor
+    body.step(h, env);
+  double highest = 0.0;
+  for (int step = 1; step * h <= duration + 1e-9; ++step)
+  {
+    const double u = step * h / duration, s = u * u * u * (10.0 - 15.0 * u + 6.0 * u * u);
+    for (int pin : corner)
+      ASSERT_TRUE(body.setPinTarget(pin, body.definition().positions[pin] + Eigen::Vector3d(0.0, 0.0, lift * s)).ok);
+    body.step(h, env);
+    highest = std::max(highest, body.pinLoad(corner, start).force.z());
+  }
+  const double a_max = 10.0 / std::sqrt(3.0) * lift / (duration * duration);  // s'' peaks at 10/√3
+  const double v_max = 15.0 / 8.0 * lift / duration;                         // s' peaks at 15/8
+  const double lambda = def.mass / (0.5 * 0.5) * 0.5 * std::sqrt(2.0);        // [kg/m]
+  const double bound = def.mass * (kG + a_max) + lambda * v_max * v_max;
+  EXPECT_LT(highest, bound) << "the floor held the towel back: the corner's force peaked at " << highest << " N";
+  EXPECT_GT(highest, def.mass * kG * 0.5) << "the corner never carried the towel";
 }

@@ -9,6 +9,7 @@
 #include <Eigen/Geometry>
 #include <chrono>
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <memory>
 #include <string>
@@ -37,10 +38,16 @@ public:
   void startListening(const std::string& sim_frame);
   /// Stops listening and lets go of tf (in the thread that runs ROS).
   void stopListening();
+  /// The scene's scripted frames are known exactly, not through tf: a lookup of one answers its
+  /// pose at `sim_time()` [s], and a particle pinned to one is put where the frame is at the end of
+  /// each step, as the scene's own frame pins are. (Through tf, the node's own broadcast came back
+  /// one or two ticks late, by how the messages happened to arrive: a grasped cloth was jerked
+  /// along.) `scene` must outlive this object.
+  void useScriptedFrames(const scene::SceneDef& scene, std::function<double()> sim_time);
 
   /// `offset` [m] in `frame` as a point [m] of the sim frame, from the frame's latest transform
-  /// (its `stamp`); false with the reason in `error` when tf does not know it (or it is not
-  /// finite). Never waits.
+  /// (its `stamp`; a scripted frame's exact pose now); false with the reason in `error` when tf does
+  /// not know it (or it is not finite). Never waits.
   bool lookup(const std::string& frame, const Eigen::Vector3d& offset, Eigen::Vector3d& point, ros::Time& stamp,
               std::string& error) const;
   /// The pose of `frame` in the sim frame (x_sim = pose · x_frame), from its latest transform; false
@@ -61,7 +68,8 @@ public:
   void beginTick(core::World& world, const scene::SceneDef& scene);
   /// Before step `step` (0-based) of the tick's `steps`: particles pinned to frames, and boxes and
   /// capsules following tf frames, move in equal parts from where they were towards this tick's
-  /// frame pose (orientations by slerp), so that a collider's velocity is its frame's.
+  /// frame pose (orientations by slerp), so that a collider's velocity is its frame's; particles
+  /// pinned to a scripted frame go where it is at the end of the step.
   void moveTargets(core::World& world, std::uint64_t step, std::uint64_t steps) const;
 
 private:
@@ -78,6 +86,7 @@ private:
     std::string frame;
     Eigen::Vector3d offset = Eigen::Vector3d::Zero();
     FrameAge age;
+    const scene::ScriptedFrameDef* scripted = nullptr;  // the scene's frame of that name, this tick
   };
   /// Records the transform's `stamp` in `age`; false, with the reason in `error`, when a
   /// non-static frame's transform has not changed for more than kFramePinTimeout.
@@ -88,6 +97,8 @@ private:
   void updateFrameColliders(const core::World& world, const scene::SceneDef& scene);
 
   std::string sim_frame_;
+  const scene::SceneDef* scene_ = nullptr;  // scripted frames (useScriptedFrames)
+  std::function<double()> sim_time_;
   std::unique_ptr<tf2_ros::Buffer> tf_buffer_;
   std::unique_ptr<tf2_ros::TransformListener> tf_listener_;
   std::vector<FramePin> pins_;
