@@ -25,6 +25,8 @@ for executable in particle_sim_node particle_sim_run particle_sim_bench; do
   [ "$path" = "$INSTALL/lib/particle_sim/$executable" ] || fail "rosrun runs $path for $executable"
   rosrun particle_sim "$executable" --help | grep -qi usage || fail "rosrun particle_sim $executable --help"
 done
+path="$(rosrun --prefix 'echo' particle_sim pick_and_place.py)"  # the demo's node, started by its launch file
+[ "$path" = "$INSTALL/lib/particle_sim/pick_and_place.py" ] || fail "rosrun runs $path for pick_and_place.py"
 [ "$(roslaunch --files particle_sim particle_sim.launch | head -1)" = "$INSTALL/share/particle_sim/launch/particle_sim.launch" ] ||
   fail "roslaunch does not take the installed launch file"
 /usr/bin/python3 -c 'import particle_sim.msg, particle_sim.srv, particle_sim.cfg, sys; sys.exit(0 if particle_sim.msg.__file__.startswith(sys.argv[1]) else 1)' "$INSTALL" ||
