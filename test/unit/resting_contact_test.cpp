@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "particle_sim/core/builders/cloth_grid.h"
+#include "particle_sim/core/builders/rope.h"
 #include "particle_sim/core/integrators/implicit_euler_solver.h"
 #include "particle_sim/core/spring_network.h"
 #include "particle_sim/core/world.h"
@@ -288,4 +289,52 @@ TEST(RestingContact, AClothPeeledOffTheFloorByItsCornerIsNeverGluedToIt)
   const double bound = def.mass * (kG + a_max) + lambda * v_max * v_max;
   EXPECT_LT(highest, bound) << "the floor held the towel back: the corner's force peaked at " << highest << " N";
   EXPECT_GT(highest, def.mass * kG * 0.5) << "the corner never carried the towel";
+}
+
+TEST(RestingContact, NoContactEndsAStepHeldWhileItPulls)
+{
+  // A stiff rope (20 particles over 1 m, 0.2 kg, 5000 N/m) lying on a floor with friction 0.5, its
+  // end yanked 5 cm along it and 2 cm up in one implicit step of 0.01 s. The pull reaches along the
+  // rope within the step, but each solve can only learn that one more held particle must slip or
+  // leave (its neighbour was stuck in the solve before), so the holds are revised many times. At the
+  // end of the step every contact the solve still holds must be pushed by its surface (J·n >= 0)
+  // and, when stuck, lie inside its friction cone: a surface can neither pull nor hold beyond
+  // static friction. Stopping after 4 solves left particles stuck outside their cone.
+  RopeDef def;
+  def.name = "rope";
+  def.particles = 20;
+  def.start = {0.0, 0.0, 0.0};
+  def.end = {1.0, 0.0, 0.0};
+  def.mass = 0.2;
+  def.stretch_stiffness = 5000.0;
+  def.stretch_damping = 1.0;
+  def.pins = {19};
+  def.integrator.type = kImplicitEulerIntegrator;
+  ASSERT_TRUE(validate(def, 1000).ok);
+  SpringNetworkBody rope(buildRope(def));
+  Environment env;
+  env.ground.contact.friction = 0.5;
+  env.ground.contact.restitution = 0.0;
+  const double h = 0.01;
+  for (int step = 0; step < 10; ++step)  // at rest on the floor
+    rope.step(h, env);
+  ASSERT_TRUE(rope.setPinTarget(19, Eigen::Vector3d(1.05, 0.0, 0.02)).ok);
+  rope.step(h, env);
+
+  int held = 0, revised = 0;
+  for (const RestingContact& contact : rope.lastRestingContacts())
+  {
+    if (contact.let_go || contact.slipping) ++revised;
+    if (!contact.held) continue;
+    ++held;
+    EXPECT_GE(contact.normal_impulse, 0.0) << "the floor pulls particle " << contact.particle;
+    if (contact.stuck)
+    {
+      const Eigen::Vector3d tangential = contact.impulse - contact.normal_impulse * contact.normal;
+      EXPECT_LE(tangential.norm(), contact.friction * contact.normal_impulse * (1.0 + 1e-12))
+          << "particle " << contact.particle << " is stuck outside its friction cone";
+    }
+  }
+  EXPECT_GT(revised, 4) << "the yank should set more particles slipping or free than 4 solves can";
+  EXPECT_GT(held, 0) << "the far end should still rest on the floor";
 }

@@ -125,6 +125,10 @@ public:
     Eigen::Vector3d torque = Eigen::Vector3d::Zero();
   };
   PinLoad pinLoad(const std::vector<int>& indices, const Eigen::Vector3d& about) const;
+  /// The resting contacts of the last implicit step (findRestingContacts): which the solve held,
+  /// stuck or let slip, which it let go, and the impulses [N·s] the surfaces gave them. Empty after
+  /// an explicit step.
+  const std::vector<RestingContact>& lastRestingContacts() const { return resting_contacts_; }
 
   // Force elements ---------------------------------------------------------------------------
   const ForceSet& forces() const { return forces_; }

@@ -56,7 +56,7 @@ public:
   /// Solves for Δv with pinned rows filtered and resting contacts held, then v += Δv, x += h v.
   /// Pinned particles keep the velocity in v (the one that carries them to their target). Each
   /// contact whose particle is not leaving its surface is held (RestingContact: stuck, sliding or let
-  /// go, decided by the impulses of up to kContactSolves solves); what was decided and the
+  /// go, decided by the impulses of solves repeated until no hold changes); what was decided and the
   /// impulses are written back.
   SolverReport solve(const std::vector<char>& pinned, std::vector<RestingContact>& contacts,
                      const IntegratorDef& settings, Eigen::Matrix3Xd& x, Eigen::Matrix3Xd& v);
@@ -82,7 +82,6 @@ private:
   bool reviseHolds(std::vector<RestingContact>& contacts);
   // The linear solve of the (filtered) system in blocks_ and rhs_ for delta_v_.
   SolverReport solveLinear(const std::vector<char>& pinned, const IntegratorDef& settings);
-  static constexpr int kContactSolves = 4;  // most solves a step makes to revise its holds
 
   // Block-sparse rows: row i has blocks row_start_[i] .. row_start_[i + 1] − 1.
   std::vector<int> row_start_, block_row_, block_column_, diagonal_block_;
