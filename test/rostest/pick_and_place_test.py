@@ -4,7 +4,8 @@
 The scene's scripted gripper picks the towel's corner off the floor (the demo's own node calls
 ~grasp), lifts it, lets it hang, shakes it, carries it to the table and lays it over the table, and
 the demo's node calls ~release. The test watches from outside, through ~status, ~points and
-~grasp_wrench/corner, and checks against the scene file's own numbers:
+~grasp_wrench/corner, and checks against the scene file's own numbers. The simulator starts paused;
+the test unpauses it once the demo's node is ready (its parameter ready) and the test receives.
 
 1. The grasp holds the corner: the particles within its 3 cm sphere (the corner and its two
    neighbours, 2.5 cm away on a 21 x 21 grid of 0.5 m), and the corner rises with the gripper.
@@ -12,10 +13,10 @@ the demo's node calls ~release. The test watches from outside, through ~status, 
    m (g + a_max) + λ v_max² (the lifted mass's largest acceleration, and the momentum of the mass
    being picked up; see RestingContact.AClothPeeledOffTheFloorByItsCornerIsNeverGluedToIt): a grip
    that followed the gripper in jerks shows as spikes above it.
-2. Hanging still, the grasp carries the towel: averaged over the last half second of the hang, the
+2. Hanging still, the grasp carries the towel: averaged over half a second late in the hang, the
    vertical force in the gripper frame is the towel's weight m g within 2 %, and the towel's
    kinetic energy is below 1 % of m g times its size (it hangs, it does not swing).
-3. After ~release the status lists no grasp; two seconds later the towel lies over the table at
+3. After ~release (by 13 s) the status lists no grasp; two seconds after it the towel lies over the table at
    rest: no particle inside the table, part of it on the top (within 1 cm of the top's height,
    inside its outline), part of it hanging down over an edge, and none below the ground.
 """
@@ -30,6 +31,7 @@ import rostest
 from geometry_msgs.msg import WrenchStamped
 from sensor_msgs import point_cloud2
 from sensor_msgs.msg import PointCloud2
+from std_srvs.srv import Trigger
 
 from particle_sim.msg import SimStatus
 
@@ -43,8 +45,9 @@ TOWEL_SIZE = 0.5  # [m] side
 TABLE_CENTER = (0.7, 0.0, 0.2)  # [m]
 TABLE_SIZE = (0.5, 0.5, 0.4)  # [m]
 LIFT = (2.0, 4.0, 1.295)  # [s], [s], [m]: the gripper's minimum-jerk lift from 0.005 m to 1.3 m
-HANG = (5.5, 6.0)  # [s] the last half second of the hang (gripper still at 1.3 m)
+HANG = (5.4, 5.9)  # [s] late in the hang (the gripper holds still at 1.3 m from 4 to 6 s)
 RELEASE_AT = 12.5  # [s] launch/pick_and_place.launch's default (scripts/pick_and_place.py)
+RELEASED_BY = 13.0  # [s] the gripper holds still until then
 SETTLED_AT = RELEASE_AT + 2.0  # [s]
 
 
@@ -82,7 +85,20 @@ class PickAndPlaceTest(unittest.TestCase):
         return status.bodies[body], [(x, y, z) for x, y, z, b in point_cloud2.read_points(
             cloud, field_names=("x", "y", "z", "body")) if b == body]
 
+    def start(self):
+        """Unpauses the simulator once the demo's node is ready and this test receives its status."""
+        end = time.monotonic() + 60.0
+        while not rospy.get_param("/pick_and_place/ready", False) and time.monotonic() < end:
+            time.sleep(0.05)
+        self.assertTrue(rospy.get_param("/pick_and_place/ready", False), "the demo's node never became ready")
+        status, _ = self.status_after(0.0)
+        self.assertTrue(status.paused, "the demo should start paused")
+        self.assertEqual(status.sim_time, 0.0)
+        rospy.wait_for_service(NS + "/unpause_physics", timeout=60.0)
+        self.assertTrue(rospy.ServiceProxy(NS + "/unpause_physics", Trigger)().success)
+
     def test_pick_lift_hang_shake_and_lay_over_the_table(self):
+        self.start()
         # 1. Grasped by 2 s (the demo grasps at 1.6 s), then lifted with the gripper.
         status, cloud = self.status_after(2.0)
         self.assertEqual([g.name for g in status.grasps], ["corner"], "the demo's ~grasp did not take")
@@ -114,7 +130,7 @@ class PickAndPlaceTest(unittest.TestCase):
         self.assertLess(towel.kinetic_energy, 0.01 * weight * TOWEL_SIZE, "the towel still swings")
 
         # 3. Released and laid over the table.
-        status, cloud = self.status_after(RELEASE_AT + 0.2)
+        status, cloud = self.status_after(RELEASED_BY)
         self.assertEqual(status.grasps, [], "the demo's ~release did not take")
         status, cloud = self.status_after(SETTLED_AT)
         towel, points = self.towel(status, cloud)
