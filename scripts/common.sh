@@ -43,7 +43,7 @@ PARTICLE_SIM_REPORT_PACKAGES=(gnuplot-nox)
 # ROS tools are Python programs that need Debian's python3, not a pyenv one found first on PATH.
 export PATH="/usr/bin:$PATH"
 
-log() { printf '\033[1m[particle_sim]\033[0m %s\n' "$*" >&2; }
+log() { printf '\033[1m[particle_sim %s]\033[0m %s\n' "$(date -u +%H:%M:%S)" "$*" >&2; }
 
 as_root() {
   if [ "$(id -u)" -eq 0 ]; then "$@"; else sudo "$@"; fi
