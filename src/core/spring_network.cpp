@@ -119,13 +119,26 @@ Status validate(const SpringNetworkDef& def, int max_particles)
     if (Status s = checkMin(where + "stiffness", bend.stiffness, 0.0); !s) return s;
     if (Status s = checkMin(where + "damping", bend.damping, 0.0); !s) return s;
   }
+  const PlateBendingDef& plate = def.plate_bending;
+  const bool plate_consistent =
+      plate.empty() ? plate.particles.empty() && plate.weights.empty()
+                    : plate.row_start.size() == plate.inverse_area.size() + 1 && plate.row_start.front() == 0 &&
+                          plate.particles.size() == plate.weights.size() &&
+                          plate.row_start.back() == static_cast<int>(plate.particles.size());
+  if (!plate_consistent)
+    return Status::failure("plate_bending: the stencils' row starts, particles, weights and areas do not agree");
+  for (int c : plate.particles)
+    if (Status s = checkIndex("plate_bending particle", c, n); !s) return s;
+  if (Status s = checkMin("plate_bending.rigidity", plate.rigidity, 0.0); !s) return s;
+  if (Status s = checkMin("plate_bending.damping", plate.damping, 0.0); !s) return s;
   return validate(def.integrator);
 }
 
 SpringNetworkBody::SpringNetworkBody(const SpringNetworkDef& def, const IntegratorDef& integrator_defaults)
     : Body(def.name),
       def_(def),
-      forces_(makeSpringBodyForces(def_.springs, def_.baraff_witkin, def_.triangles, def_.rod_bending)),
+      forces_(makeSpringBodyForces(def_.springs, def_.baraff_witkin, def_.triangles, def_.rod_bending,
+                                   def_.plate_bending)),
       built_integrator_(resolve(def.integrator, integrator_defaults)),
       strain_limit_(def_.strain_limit, def_.springs, static_cast<int>(def_.positions.size()))
 {

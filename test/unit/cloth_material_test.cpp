@@ -125,6 +125,7 @@ TEST(ClothMaterial, PresetsFollowTheKnownOrderingOfFabrics)
 
 #include "particle_sim/core/builders/cloth_grid.h"
 #include "particle_sim/core/builders/mesh_cloth.h"
+#include "particle_sim/core/forces/plate_bending.h"
 #include "particle_sim/core/forces/rod_bending.h"
 #include "particle_sim/core/spring.h"
 
@@ -317,9 +318,8 @@ TEST(ClothMaterialConversion, GridBendingIsAnIsotropicPlateForEveryUniformCurvat
   // rods centred on the vertices of a block of m x m' vertices and the hinges of its m x m' cells hold
   // B/2 (...) times the block's area, for any curvature, up to the small-angle error (relative
   // O((κ L)²) ≈ 1e-5 here). Checked on square and on rectangular cells, for cylinders at several
-  // angles to the grid and for a saddle. Then, as a control, the hinges of every edge with the
-  // discrete-shells weight (what a Baraff–Witkin mesh cloth gets) store, for square cells,
-  // B/2 [(κ_uu + κ_uv)² + (κ_vv + κ_uv)² + 4 κ_uv²]: bending couples to twist.
+  // angles to the grid and for a saddle. Hinges on every edge would store, for square cells,
+  // B/2 [(κ_uu + κ_uv)² + (κ_vv + κ_uv)² + 4 κ_uv²] instead: bending coupled to twist.
   const core::ClothMaterial denim = *core::findClothPreset("denim");
   const double kappa = 0.02;  // [1/m] small: the angles stay linear
   for (const auto& [nu, nv] : {std::pair<int, int>{25, 25}, std::pair<int, int>{25, 17}})
@@ -367,10 +367,11 @@ TEST(ClothMaterialConversion, GridBendingIsAnIsotropicPlateForEveryUniformCurvat
     }
   }
 
-  // The control, on square cells: Baraff–Witkin hinges on every edge (as a mesh cloth of the same
-  // grid gets them), block of whole 1 x 1 periods (every cell split alike).
+  // A mesh cloth of the same material and grid has no hinges: it bends with the isotropic plate of its
+  // flat pattern (forces/plate_bending.h), which stores B/2 (κ_uu + κ_vv)² per area under a uniform
+  // curvature (the cotangent Laplacian of these right triangles is the five-point one, exact on the
+  // quadratic surface): for a cylinder at any angle to the grid, B/2 κ², as above.
   const int n = 25;
-  const double h = kWidthU / (n - 1);
   core::ClothGridDef def = materialGrid(core::ClothModel::BaraffWitkin, n, n, denim);
   def.edge_v = Eigen::Vector3d(0.0, kWidthU, 0.0);
   core::MeshClothDef mesh(core::ClothModel::BaraffWitkin);
@@ -381,24 +382,23 @@ TEST(ClothMaterialConversion, GridBendingIsAnIsotropicPlateForEveryUniformCurvat
   for (const Eigen::Vector3d& p : grid.positions)
     mesh.uvs.emplace_back(p.x(), p.y());
   mesh.material = denim;
-  core::SpringNetworkDef hinges = core::buildMeshCloth(mesh);
-  for (std::size_t k = 0; k < hinges.baraff_witkin.bends.size(); ++k)
+  const core::SpringNetworkDef plate_net = core::buildMeshCloth(mesh);
+  EXPECT_TRUE(plate_net.baraff_witkin.bends.empty());
+  const core::PlateBendingForce plate(plate_net.plate_bending);
+  double interior_area = 0.0;
+  for (double inverse : plate_net.plate_bending.inverse_area)
+    interior_area += 1.0 / inverse;
+  const Eigen::VectorXd masses = Eigen::VectorXd::Ones(grid.positions.size());
+  const std::vector<char> pinned(grid.positions.size(), 0);
+  const core::ForceContext context{masses, pinned, Eigen::Vector3d::Zero(), core::AirDef(), 0.0};
+  for (double degrees : {0.0, 17.0, 30.0, 45.0, 60.0, 90.0, 135.0})
   {
-    const core::BwBend& b = hinges.baraff_witkin.bends[k];
-    const Eigen::Vector3d mid = 0.5 * (hinges.positions[b.v[1]] + hinges.positions[b.v[2]]);
-    const long cu = std::lround(2.0 * mid.x() / h), cv = std::lround(2.0 * mid.y() / h);
-    if (!(cu >= 8 && cu < 8 + 2 * (n - 9) && cv >= 8 && cv < 8 + 2 * (n - 9)))
-      hinges.baraff_witkin.bend_weights[k] = 0.0;
-  }
-  const core::BaraffWitkinModel every_edge = onlyClass(hinges, core::SpringClass::Bend);
-  const double area = std::pow((n - 9) * h, 2);
-  for (const Eigen::Matrix2d& k : {Eigen::Matrix2d(Eigen::Vector2d(kappa, 0.0).asDiagonal()),
-                                   Eigen::Matrix2d((Eigen::Matrix2d() << 0.0, kappa, kappa, 0.0).finished())})
-  {
-    const double uu = k(0, 0), vv = k(1, 1), uv = k(0, 1);
-    const double expected =
-        0.5 * denim.bending_rigidity * ((uu + uv) * (uu + uv) + (vv + uv) * (vv + uv) + 4.0 * uv * uv) * area;
-    EXPECT_NEAR(every_edge.energy(quadraticSurface(hinges, k, kWidthU / 2, kWidthU / 2)), expected, 1e-4 * expected);
+    const Eigen::Matrix2d r = Eigen::Rotation2Dd(degrees * M_PI / 180.0).toRotationMatrix();
+    const Eigen::Matrix2d curvature = r * Eigen::Vector2d(kappa, 0.0).asDiagonal() * r.transpose();
+    double energy = 0.0;
+    plate.addEnergy(context, quadraticSurface(plate_net, curvature, kWidthU / 2, kWidthU / 2), energy);
+    const double expected = 0.5 * denim.bending_rigidity * kappa * kappa * interior_area;
+    EXPECT_NEAR(energy, expected, 1e-9 * expected) << "mesh cloth, cylinder at " << degrees << "°";
   }
 }
 

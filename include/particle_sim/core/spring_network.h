@@ -11,6 +11,7 @@
 #include "particle_sim/core/constraints/strain_limit.h"
 #include "particle_sim/core/forces/baraff_witkin_model.h"
 #include "particle_sim/core/forces/force_set.h"
+#include "particle_sim/core/forces/plate_bending.h"
 #include "particle_sim/core/forces/rod_bending.h"
 #include "particle_sim/core/integrator.h"
 #include "particle_sim/core/integrators/implicit_euler.h"
@@ -48,6 +49,7 @@ struct SpringNetworkDef
   std::vector<Eigen::Vector3i> triangles;  ///< surface triangles (cloth, jelly): drawn, published, feel the air
   BaraffWitkinDef baraff_witkin;           ///< Baraff–Witkin energies (cloth model baraff_witkin); empty = none
   RodBendingDef rod_bending;               ///< discrete rod bending (ropes built from a material); empty = none
+  PlateBendingDef plate_bending;           ///< isotropic plate bending (mesh cloths built from a material); empty = none
   StrainLimitDef strain_limit;
   BodyIntegratorDef integrator;    ///< what the body sets; the rest is the world's default
   double contact_thickness = 0.0;  ///< [m] in limits::kContactThickness: kept from ground and spheres (0 = touch)

@@ -145,7 +145,8 @@ std::vector<double> lumpedClothMasses(const std::vector<Eigen::Vector3d>& x,
 //   per area, the isotropic plate of Poisson ratio 0, at any resolution and cell aspect ratio; a
 //   rod sees every zig-zag of its line, so no mode bends for less; and a clamped strip is the
 //   discrete elastica (tested in cloth_material_test.cpp and validation_cloth_test.cpp). A mesh
-//   cloth keeps the hinges of every edge, with their anisotropy on regular meshes.
+//   cloth, whose triangles follow no grid, has no hinges: it bends with the isotropic plate of its
+//   flat pattern (forces/plate_bending.h, mesh_cloth.cpp), B/2 ∫ (κ₁ + κ₂)² dA.
 ClothClassConstants baraffWitkinMaterialConstants(const ClothMaterial& material, double area)
 {
   const ClothDampingTimes beta = clothDampingTimes(material, area);

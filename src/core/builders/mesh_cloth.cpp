@@ -6,6 +6,7 @@
 #include "particle_sim/core/builders/mesh_topology.h"
 #include "particle_sim/core/builders/pins.h"
 #include "particle_sim/core/forces/baraff_witkin_model.h"
+#include "particle_sim/core/forces/plate_bending.h"
 #include "particle_sim/core/validation.h"
 
 namespace particle_sim
@@ -96,8 +97,16 @@ SpringNetworkDef buildMeshCloth(const MeshClothDef& def)
       uvs.push_back(scale * uv);
     if (def.material)
     {
+      // A material bends with the isotropic plate (forces/plate_bending.h) of the flat pattern, the
+      // texture coordinates scaled: the same B in every direction, on any triangulation, where
+      // Baraff–Witkin's hinges of every edge would bend less across some directions than others.
       const ClothClassConstants c = baraffWitkinMaterialConstants(*def.material, mesh_area);
-      addBaraffWitkin(uvs, c.stretch, c.shear, c.bend, def.b_u, def.b_v, net);
+      addBaraffWitkin(uvs, c.stretch, c.shear, SpringConstants{0.0, 0.0}, def.b_u, def.b_v, net);
+      net.baraff_witkin.bends.clear();
+      net.baraff_witkin.bend_weights.clear();
+      std::string error;
+      if (c.bend.stiffness > 0.0)
+        buildPlateBending(uvs, def.triangles, c.bend.stiffness, c.bend.damping, net.plate_bending, error);
     }
     else
       addBaraffWitkin(uvs, stretch, shear, bend, def.b_u, def.b_v, net);

@@ -13,7 +13,8 @@ namespace particle_sim
 namespace core
 {
 ForceSet makeSpringBodyForces(const std::vector<Spring>& springs, const BaraffWitkinDef& baraff_witkin,
-                              const std::vector<Eigen::Vector3i>& triangles, const RodBendingDef& rod_bending)
+                              const std::vector<Eigen::Vector3i>& triangles, const RodBendingDef& rod_bending,
+                              const PlateBendingDef& plate_bending)
 {
   ForceSet forces;
   constexpr int kGravity = 0, kSprings = 1, kBaraffWitkin = 2;
@@ -30,6 +31,11 @@ ForceSet makeSpringBodyForces(const std::vector<Spring>& springs, const BaraffWi
   {
     energy_order.push_back(baraff_witkin.empty() ? kBaraffWitkin : kBaraffWitkin + 1);
     forces.add(std::make_unique<RodBendingForce>(rod_bending));
+  }
+  if (!plate_bending.empty())
+  {
+    energy_order.push_back(static_cast<int>(energy_order.size()));  // its index: every element so far has energy
+    forces.add(std::make_unique<PlateBendingForce>(plate_bending));
   }
   if (!triangles.empty()) forces.add(std::make_unique<AirForce>(triangles));
   forces.add(std::make_unique<GlobalDampingForce>());

@@ -5,6 +5,7 @@
 
 #include "particle_sim/core/forces/baraff_witkin_model.h"
 #include "particle_sim/core/forces/force_set.h"
+#include "particle_sim/core/forces/plate_bending.h"
 #include "particle_sim/core/forces/rod_bending.h"
 #include "particle_sim/core/spring.h"
 
@@ -20,7 +21,8 @@ namespace core
 /// has rod bending).
 ForceSet makeSpringBodyForces(const std::vector<Spring>& springs, const BaraffWitkinDef& baraff_witkin,
                               const std::vector<Eigen::Vector3i>& triangles,
-                              const RodBendingDef& rod_bending = RodBendingDef());
+                              const RodBendingDef& rod_bending = RodBendingDef(),
+                              const PlateBendingDef& plate_bending = PlateBendingDef());
 
 }  // namespace core
 }  // namespace particle_sim
