@@ -10,6 +10,7 @@
 
 #include "particle_sim/core/cloth_model.h"
 #include "particle_sim/core/emitter.h"
+#include "particle_sim/core/integrators/implicit_euler_solver.h"
 #include "particle_sim/ros/eigen_messages.h"
 #include "particle_sim/ros/message_text.h"
 
@@ -140,7 +141,10 @@ void buildDiagnostics(const core::World& world, const LoopFigures& loop, double 
   }
   if (not_converged > 0)
     stat.mergeSummary(DiagnosticStatus::WARN,
-                      std::to_string(not_converged) + " implicit solves did not reach cg_tolerance in their last step");
+                      std::to_string(not_converged) +
+                          " implicit solves did not converge in their last step (cg_tolerance not reached, or "
+                          "resting contacts still changing after " +
+                          std::to_string(core::ImplicitEulerSolver::kMaxContactSolves) + " solves)");
   if (loop.stability_events > 0)
     stat.mergeSummary(DiagnosticStatus::WARN,
                       std::to_string(loop.stability_events) + " stability events since the last report (see ~status)");

@@ -337,4 +337,38 @@ TEST(RestingContact, NoContactEndsAStepHeldWhileItPulls)
   }
   EXPECT_GT(revised, 4) << "the yank should set more particles slipping or free than 4 solves can";
   EXPECT_GT(held, 0) << "the far end should still rest on the floor";
+  EXPECT_GT(rope.lastSolve().contact_solves, 4);
+  EXPECT_TRUE(rope.lastSolve().converged);
+}
+
+TEST(RestingContact, AStepThatWouldNeedMoreContactSolvesThanTheCapSaysItDidNotConverge)
+{
+  // The yank above on a rope of 200 particles: each solve learns about one more particle, so
+  // settling every hold would take well over kMaxContactSolves. The step stops there and reports
+  // itself unconverged (the status and diagnostics warn of it); the state stays finite.
+  RopeDef def;
+  def.name = "rope";
+  def.particles = 200;
+  def.start = {0.0, 0.0, 0.0};
+  def.end = {1.0, 0.0, 0.0};
+  def.mass = 0.2;
+  def.stretch_stiffness = 50000.0;
+  def.stretch_damping = 1.0;
+  def.pins = {199};
+  def.integrator.type = kImplicitEulerIntegrator;
+  ASSERT_TRUE(validate(def, 1000).ok);
+  SpringNetworkBody rope(buildRope(def));
+  Environment env;
+  env.ground.contact.friction = 0.5;
+  env.ground.contact.restitution = 0.0;
+  const double h = 0.01;
+  for (int step = 0; step < 10; ++step)
+    rope.step(h, env);
+  ASSERT_TRUE(rope.lastSolve().converged);
+  ASSERT_TRUE(rope.setPinTarget(199, Eigen::Vector3d(1.05, 0.0, 0.02)).ok);
+  rope.step(h, env);
+  EXPECT_EQ(rope.lastSolve().contact_solves, ImplicitEulerSolver::kMaxContactSolves);
+  EXPECT_FALSE(rope.lastSolve().converged);
+  EXPECT_TRUE(rope.particles().position.leftCols(rope.particles().size()).allFinite());
+  EXPECT_FALSE(rope.frozen());
 }

@@ -127,7 +127,9 @@ struct SolverReport
   bool direct = false;             ///< the direct solver factorized and solved (CG iterations may follow it, to polish)
   int iterations = 0;              ///< conjugate-gradient iterations
   double relative_residual = 0.0;  ///< |r| / |b| at the end
-  bool converged = true;           ///< the residual reached the tolerance within the iteration cap
+  bool converged = true;           ///< the residual reached the tolerance within the iteration cap, and the
+                                   ///< resting contacts' holds settled within kMaxContactSolves
+  int contact_solves = 1;          ///< linear solves of the step (more than one when contact holds were revised)
   bool breakdown = false;          ///< CG met a direction of non-positive (or NaN) curvature: the solve failed
 };
 

@@ -230,13 +230,23 @@ SolverReport ImplicitEulerSolver::solve(const std::vector<char>& pinned, std::ve
   // rope or cloth lifted off a floor lets go particle after particle, one more each solve (up to 17
   // solves in a step of the pick_and_place demo); stopping earlier would leave the rest held while
   // they pull, a floor that glues. The collision response after the step answers what a let-go
-  // particle then does.
+  // particle then does. A step that would need more than kMaxContactSolves (a long rope or a sheet
+  // dragged over a floor in one step) keeps the last solve and reports itself unconverged, which the
+  // status and diagnostics warn of, rather than costing an unbounded number of factorizations.
   for (RestingContact& contact : contacts)
     contact.let_go = contact.slipping = false;
   bool holding = holdContacts(pinned, contacts, v, true);
   SolverReport report = solveLinear(pinned, settings);
+  int solves = 1;
+  bool settled = true;
   while (holding && reviseHolds(contacts))
   {
+    if (solves == kMaxContactSolves)
+    {
+      settled = false;
+      break;
+    }
+    ++solves;
     blocks_ = original_blocks_;
     rhs_ = original_rhs_;
     for (const RestingContact& contact : contacts)
@@ -244,6 +254,8 @@ SolverReport ImplicitEulerSolver::solve(const std::vector<char>& pinned, std::ve
     holding = holdContacts(pinned, contacts, v, false);
     report = solveLinear(pinned, settings);
   }
+  report.contact_solves = solves;
+  if (!settled) report.converged = false;
 
   // v1 = v0 + Δv (+ z on the held particles), x1 = x0 + h v1.
   v += delta_v_;

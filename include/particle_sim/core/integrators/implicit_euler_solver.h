@@ -33,6 +33,10 @@ namespace core
 class ImplicitEulerSolver
 {
 public:
+  /// The most linear solves one step makes while revising resting contacts' holds (1 + 2 · contacts
+  /// would settle every hold; the pick_and_place demo's worst step takes 17).
+  static constexpr int kMaxContactSolves = 64;
+
   /// Sets the pattern: every particle's diagonal block, and both (i, j) and (j, i) for each pair.
   void setPattern(int particles, const std::vector<std::pair<int, int>>& coupled_pairs);
   /// The index of block (row i, column j); -1 when the pattern has no such block.
