@@ -51,8 +51,14 @@ void ImplicitEulerSolver::setPattern(int particles, const std::vector<std::pair<
   auto_choice_ = DirectChoice::Undecided;
   direct_in_cg_iterations_ = 0.0;
   inverse_diagonal_.assign(particles, Eigen::Matrix3d::Identity());
-  for (Eigen::Matrix3Xd* m : {&delta_v_, &rhs_, &residual_, &direction_, &product_, &preconditioned_, &held_change_})
+  for (Eigen::Matrix3Xd* m : {&delta_v_, &rhs_, &residual_, &direction_, &product_, &preconditioned_, &held_change_,
+                              &original_rhs_})
     m->setZero(3, particles);
+  // Room for the resting contacts' bookkeeping (holdContacts) for every particle held, so that no
+  // step allocates when contacts first appear or grow in number.
+  original_blocks_.reserve(blocks_.size());
+  held_rows_.reserve(blocks_.size());
+  held_rhs_.reserve(particles);
 }
 
 int ImplicitEulerSolver::blockIndex(int i, int j) const
