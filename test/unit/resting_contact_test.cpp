@@ -11,6 +11,7 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <vector>
 
 #include "particle_sim/core/builders/cloth_grid.h"
@@ -291,6 +292,38 @@ TEST(RestingContact, AClothPeeledOffTheFloorByItsCornerIsNeverGluedToIt)
   EXPECT_GT(highest, def.mass * kG * 0.5) << "the corner never carried the towel";
 }
 
+namespace
+{
+// A rope of `particles` over 1 m (0.2 kg, springs of `stiffness` [N/m]) at rest on a floor with
+// friction 0.5 under implicit Euler at 0.01 s, then its last particle yanked 5 cm along it and 2 cm up
+// in one step; null if a step before the yank did not converge.
+std::unique_ptr<SpringNetworkBody> ropeYankedAlongAFloor(int particles, double stiffness)
+{
+  RopeDef def;
+  def.name = "rope";
+  def.particles = particles;
+  def.start = {0.0, 0.0, 0.0};
+  def.end = {1.0, 0.0, 0.0};
+  def.mass = 0.2;
+  def.stretch_stiffness = stiffness;
+  def.stretch_damping = 1.0;
+  def.pins = {particles - 1};
+  def.integrator.type = kImplicitEulerIntegrator;
+  EXPECT_TRUE(validate(def, 1000).ok);
+  auto rope = std::make_unique<SpringNetworkBody>(buildRope(def));
+  Environment env;
+  env.ground.contact.friction = 0.5;
+  env.ground.contact.restitution = 0.0;
+  const double h = 0.01;
+  for (int step = 0; step < 10; ++step)  // at rest on the floor
+    rope->step(h, env);
+  if (!rope->lastSolve().converged) return nullptr;
+  EXPECT_TRUE(rope->setPinTarget(particles - 1, Eigen::Vector3d(1.05, 0.0, 0.02)).ok);
+  rope->step(h, env);
+  return rope;
+}
+}  // namespace
+
 TEST(RestingContact, NoContactEndsAStepHeldWhileItPulls)
 {
   // A stiff rope (20 particles over 1 m, 0.2 kg, 5000 N/m) lying on a floor with friction 0.5, its
@@ -300,26 +333,9 @@ TEST(RestingContact, NoContactEndsAStepHeldWhileItPulls)
   // end of the step every contact the solve still holds must be pushed by its surface (J·n >= 0)
   // and, when stuck, lie inside its friction cone: a surface can neither pull nor hold beyond
   // static friction. Stopping after 4 solves left particles stuck outside their cone.
-  RopeDef def;
-  def.name = "rope";
-  def.particles = 20;
-  def.start = {0.0, 0.0, 0.0};
-  def.end = {1.0, 0.0, 0.0};
-  def.mass = 0.2;
-  def.stretch_stiffness = 5000.0;
-  def.stretch_damping = 1.0;
-  def.pins = {19};
-  def.integrator.type = kImplicitEulerIntegrator;
-  ASSERT_TRUE(validate(def, 1000).ok);
-  SpringNetworkBody rope(buildRope(def));
-  Environment env;
-  env.ground.contact.friction = 0.5;
-  env.ground.contact.restitution = 0.0;
-  const double h = 0.01;
-  for (int step = 0; step < 10; ++step)  // at rest on the floor
-    rope.step(h, env);
-  ASSERT_TRUE(rope.setPinTarget(19, Eigen::Vector3d(1.05, 0.0, 0.02)).ok);
-  rope.step(h, env);
+  const std::unique_ptr<SpringNetworkBody> yanked = ropeYankedAlongAFloor(20, 5000.0);
+  ASSERT_TRUE(yanked);
+  const SpringNetworkBody& rope = *yanked;
 
   int held = 0, revised = 0;
   for (const RestingContact& contact : rope.lastRestingContacts())
@@ -346,27 +362,9 @@ TEST(RestingContact, AStepThatWouldNeedMoreContactSolvesThanTheCapSaysItDidNotCo
   // The yank above on a rope of 200 particles: each solve learns about one more particle, so
   // settling every hold would take well over kMaxContactSolves. The step stops there and reports
   // itself unconverged (the status and diagnostics warn of it); the state stays finite.
-  RopeDef def;
-  def.name = "rope";
-  def.particles = 200;
-  def.start = {0.0, 0.0, 0.0};
-  def.end = {1.0, 0.0, 0.0};
-  def.mass = 0.2;
-  def.stretch_stiffness = 50000.0;
-  def.stretch_damping = 1.0;
-  def.pins = {199};
-  def.integrator.type = kImplicitEulerIntegrator;
-  ASSERT_TRUE(validate(def, 1000).ok);
-  SpringNetworkBody rope(buildRope(def));
-  Environment env;
-  env.ground.contact.friction = 0.5;
-  env.ground.contact.restitution = 0.0;
-  const double h = 0.01;
-  for (int step = 0; step < 10; ++step)
-    rope.step(h, env);
-  ASSERT_TRUE(rope.lastSolve().converged);
-  ASSERT_TRUE(rope.setPinTarget(199, Eigen::Vector3d(1.05, 0.0, 0.02)).ok);
-  rope.step(h, env);
+  const std::unique_ptr<SpringNetworkBody> yanked = ropeYankedAlongAFloor(200, 50000.0);
+  ASSERT_TRUE(yanked);
+  const SpringNetworkBody& rope = *yanked;
   EXPECT_EQ(rope.lastSolve().contact_solves, ImplicitEulerSolver::kMaxContactSolves);
   EXPECT_FALSE(rope.lastSolve().converged);
   EXPECT_TRUE(rope.particles().position.leftCols(rope.particles().size()).allFinite());
