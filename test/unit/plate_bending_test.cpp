@@ -222,4 +222,28 @@ TEST(PlateBending, AMeshClothOfAMaterialBendsWithThePlateAndHasNoHinges)
   EXPECT_EQ(net.plate_bending.stencils(), interior);
   EXPECT_DOUBLE_EQ(net.plate_bending.rigidity, def.material->bending_rigidity);
   EXPECT_GT(net.plate_bending.damping, 0.0);
+
+  // Its bend class is set at run time (~set_spring_constants), and reset, like Baraff–Witkin's.
+  SpringNetworkBody body(net);
+  ASSERT_TRUE(body.hasSpringClass(SpringClass::Bend));
+  const Eigen::Matrix3Xd bent = rolled(mesh, 0.2, 0.5);
+  const ForceContext context{Eigen::VectorXd::Ones(bent.cols()), std::vector<char>(bent.cols(), 0),
+                             Eigen::Vector3d::Zero(), AirDef(), 0.0};
+  const PlateBendingForce built(net.plate_bending);
+  double before = 0.0;
+  built.addEnergy(context, bent, before);
+  PlateBendingForce element(net.plate_bending);
+  element.setClassConstants(SpringClass::Bend, 3.0 * def.material->bending_rigidity, 0.0);
+  double tripled = 0.0;
+  element.addEnergy(context, bent, tripled);
+  EXPECT_NEAR(tripled, 3.0 * before, 1e-12 * before);
+  element.setClassConstants(SpringClass::Stretch, 1.0, 0.0);  // not its class: unchanged
+  double still = 0.0;
+  element.addEnergy(context, bent, still);
+  EXPECT_EQ(still, tripled);
+  element.resetConstants();
+  double reset = 0.0;
+  element.addEnergy(context, bent, reset);
+  EXPECT_EQ(reset, before);
+  EXPECT_TRUE(body.setSpringConstants(SpringClass::Bend, 2e-5, 1e-7).ok);
 }

@@ -141,6 +141,19 @@ void PlateBendingForce::addStabilityRows(const std::vector<Eigen::Vector3d>& /*r
   }
 }
 
+void PlateBendingForce::setClassConstants(std::optional<SpringClass> spring_class, double stiffness, double damping)
+{
+  if (spring_class && *spring_class != SpringClass::Bend) return;
+  def_.rigidity = stiffness;
+  def_.damping = damping;
+}
+
+void PlateBendingForce::resetConstants()
+{
+  def_.rigidity = built_rigidity_;
+  def_.damping = built_damping_;
+}
+
 void PlateBendingForce::addEnergy(const ForceContext& /*context*/, const Eigen::Matrix3Xd& x, double& energy) const
 {
   for (int s = 0; s < def_.stencils(); ++s)

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -51,7 +52,9 @@ bool buildPlateBending(const std::vector<Eigen::Vector2d>& rest, const std::vect
 class PlateBendingForce : public ForceElement
 {
 public:
-  explicit PlateBendingForce(PlateBendingDef def) : def_(std::move(def)) {}
+  explicit PlateBendingForce(PlateBendingDef def)
+      : def_(std::move(def)), built_rigidity_(def_.rigidity), built_damping_(def_.damping)
+  {}
 
   const PlateBendingDef& definition() const { return def_; }
 
@@ -67,11 +70,17 @@ public:
   /// B/2 Σ_v |y_v|² / A_v [J].
   void addEnergy(const ForceContext& context, const Eigen::Matrix3Xd& x, double& energy) const override;
 
+  /// The bend class: B [N·m] and the bending viscosity [N·m·s], as Baraff–Witkin's bend.
+  bool hasClass(SpringClass spring_class) const override { return spring_class == SpringClass::Bend; }
+  void setClassConstants(std::optional<SpringClass> spring_class, double stiffness, double damping) override;
+  void resetConstants() override;
+
 private:
   // y_v of stencil s at x.
   Eigen::Vector3d curvatureNormal(int s, const Eigen::Matrix3Xd& x) const;
 
   PlateBendingDef def_;
+  double built_rigidity_, built_damping_;  // what resetConstants() puts back
   std::vector<int> blocks_;  // per stencil, its m × m blocks (row-major) from blocks_start_[s]
   std::vector<int> blocks_start_;
 };
