@@ -104,7 +104,7 @@ SpringNetworkDef buildMeshCloth(const MeshClothDef& def)
       addBaraffWitkin(uvs, c.stretch, c.shear, SpringConstants{0.0, 0.0}, def.b_u, def.b_v, net);
       net.baraff_witkin.bends.clear();
       net.baraff_witkin.bend_weights.clear();
-      std::string error;
+      std::string error;  // none: validate() refused triangles without area in (u, v)
       if (c.bend.stiffness > 0.0)
         buildPlateBending(uvs, def.triangles, c.bend.stiffness, c.bend.damping, net.plate_bending, error);
     }

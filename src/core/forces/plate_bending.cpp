@@ -4,6 +4,8 @@
 #include <cmath>
 #include <map>
 
+#include "particle_sim/core/builders/mesh_topology.h"
+
 namespace particle_sim
 {
 namespace core
@@ -11,11 +13,10 @@ namespace core
 bool buildPlateBending(const std::vector<Eigen::Vector2d>& rest, const std::vector<Eigen::Vector3i>& triangles,
                        double rigidity, double damping, PlateBendingDef& def, std::string& error)
 {
-  // Cotangent weights of the flat pattern, edge by edge: the corner opposite an edge adds half the
-  // cotangent of its angle to the edge's weight. A vertex's area is a third of its triangles'.
+  // Cotangent weights of the flat pattern, edge by edge (mesh_topology.h): the corner opposite an
+  // edge on each side adds half the cotangent of its angle to the edge's weight; an edge with one
+  // side is on the border, and so are its ends. A vertex's area is a third of its triangles'.
   const int n = static_cast<int>(rest.size());
-  std::vector<std::map<int, double>> edge_weight(n);  // ordered: the stencils come out the same every time
-  std::map<std::pair<int, int>, int> edge_uses;
   std::vector<double> area(n, 0.0);
   for (std::size_t t = 0; t < triangles.size(); ++t)
   {
@@ -28,18 +29,22 @@ bool buildPlateBending(const std::vector<Eigen::Vector2d>& rest, const std::vect
       return false;
     }
     for (int c = 0; c < 3; ++c)
+      area[tri[c]] += twice_area / 6.0;
+  }
+  std::vector<std::map<int, double>> edge_weight(n);  // ordered: the stencils come out the same every time
+  std::vector<char> border(n, 0);
+  for (const auto& [edge, sides] : meshEdges(triangles))
+  {
+    const auto [a, b] = edge;
+    if (sides.size() == 1) border[a] = border[b] = 1;
+    for (const EdgeSide& side : sides)
     {
-      const int a = tri[(c + 1) % 3], b = tri[(c + 2) % 3], o = tri[c];
-      const double cot = (rest[a] - rest[o]).dot(rest[b] - rest[o]) / twice_area;
+      const Eigen::Vector2d u = rest[a] - rest[side.opposite], w = rest[b] - rest[side.opposite];
+      const double cot = u.dot(w) / std::abs(u.x() * w.y() - u.y() * w.x());
       edge_weight[a][b] += 0.5 * cot;
       edge_weight[b][a] += 0.5 * cot;
-      ++edge_uses[{std::min(a, b), std::max(a, b)}];
-      area[tri[c]] += twice_area / 6.0;
     }
   }
-  std::vector<char> border(n, 0);
-  for (const auto& [edge, uses] : edge_uses)
-    if (uses == 1) border[edge.first] = border[edge.second] = 1;
 
   // One stencil per interior vertex: y_v = Σ_j w_vj (x_v − x_j).
   def = PlateBendingDef();
