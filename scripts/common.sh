@@ -32,6 +32,7 @@ PARTICLE_SIM_PACKAGES=(
   librosbag-dev python3-rosbag python3-rosnode python3-tf2-msgs rviz
   python3-std-msgs python3-std-srvs python3-geometry-msgs python3-shape-msgs python3-visualization-msgs
   python3-rosgraph-msgs python3-diagnostic-msgs python3-sensor-msgs
+  libbullet-dev  # the peer of scripts/bench --performance (particle_sim_bullet_peer), Bullet 3.24
 )
 
 # Only for scripts/fuzz (libFuzzer comes with clang; the package build and scripts/test use gcc).

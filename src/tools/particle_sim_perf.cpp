@@ -29,6 +29,7 @@
 #include "particle_sim/core/integrators/implicit_euler.h"
 #include "particle_sim/core/integrators/sparse_block_ldlt.h"
 #include "particle_sim/core/integrators/symplectic_euler.h"
+#include "particle_sim/core/integrators/verlet.h"
 #include "particle_sim/core/spring_network.h"
 #include "particle_sim/core/world.h"
 
@@ -240,54 +241,106 @@ core::SpringNetworkDef hang64(int n)
   return def;
 }
 
+// How far hang64 stretches and sags under a method: simulated for `seconds` from rest, the peak
+// over all steps of the largest spring strain, and the sag at the end (the lowest particle's depth
+// below the pinned corners). Bullet's peer (particle_sim_bullet_peer) reports the same two figures,
+// so that the engines can be compared at equal stretch.
+std::string stretchAndSag(core::SpringNetworkDef def, double dt, double seconds)
+{
+  core::SpringNetworkBody body(def);
+  const core::Environment env = noGround();
+  double peak = 0.0;
+  const int steps = static_cast<int>(std::lround(seconds / dt));
+  for (int i = 0; i < steps && !body.frozen(); ++i)
+  {
+    body.step(dt, env);
+    peak = std::max(peak, body.maxStrain());
+  }
+  const core::ParticlePool& p = body.particles();
+  const double sag = def.positions[def.pins[0]].z() - p.position.leftCols(p.size()).row(2).minCoeff();
+  std::ostringstream text;
+  text.precision(3);
+  text << "over " << seconds << " s: peak strain " << peak << ", sag " << sag << " m";
+  if (body.frozen()) text << ", FROZE";
+  return text.str();
+}
+
 void hang(std::ostream& out, bool quick)
 {
-  for (const core::LinearSolverType solver :
-       {core::LinearSolverType::ConjugateGradient, core::LinearSolverType::Direct})
+  struct Variant
   {
-    for (double tolerance : {1e-6, 1e-4})
+    std::string name;
+    core::IntegratorType integrator;
+    core::LinearSolverType solver;
+    double tolerance, dt;
+  };
+  // Implicit Euler at h = 1/60 with both linear solvers (goal 1); Verlet split into the substeps its
+  // stability needs (the cheapest stable explicit method: against Bullet's position-based solver at
+  // equal stretch, goal 7); and `auto` (goal 8: within 1.2x of the best fixed choice). Then the same
+  // at h = 1/1000, where Bullet's implicit solver is compared at the same dt (goal 7).
+  const double h60 = 1.0 / 60.0, h1000 = 1.0 / 1000.0;
+  const std::vector<Variant> variants = {
+      {"implicit_euler cg tol 1e-6", core::kImplicitEulerIntegrator, core::LinearSolverType::ConjugateGradient, 1e-6,
+       h60},
+      {"implicit_euler cg tol 1e-4", core::kImplicitEulerIntegrator, core::LinearSolverType::ConjugateGradient, 1e-4,
+       h60},
+      {"implicit_euler direct", core::kImplicitEulerIntegrator, core::LinearSolverType::Direct, 1e-6, h60},
+      {"verlet substepped", core::kVerletIntegrator, core::LinearSolverType::Auto, 1e-6, h60},
+      {"auto", core::kAutoIntegrator, core::LinearSolverType::Auto, 1e-6, h60},
+      {"implicit_euler cg dt 1/1000", core::kImplicitEulerIntegrator, core::LinearSolverType::ConjugateGradient, 1e-6,
+       h1000},
+      {"implicit_euler direct dt 1/1000", core::kImplicitEulerIntegrator, core::LinearSolverType::Direct, 1e-6, h1000},
+      {"verlet substepped dt 1/1000", core::kVerletIntegrator, core::LinearSolverType::Auto, 1e-6, h1000},
+      {"auto dt 1/1000", core::kAutoIntegrator, core::LinearSolverType::Auto, 1e-6, h1000},
+  };
+  for (const Variant& variant : variants)
+  {
+    core::SpringNetworkDef def = hang64(64);
+    def.integrator.type = variant.integrator;
+    def.integrator.linear_solver = variant.solver;
+    def.integrator.cg_tolerance = variant.tolerance;
+    def.integrator.cg_max_iterations = 100000;
+    def.integrator.max_substeps = 100000;
+    core::SpringNetworkBody body(def);
+    const int steps = variant.dt < 0.01 ? 500 : 60;
+    Row row = timeBody(body, variant.dt, quick ? 3 : 10, quick ? 5 : steps, quick ? 1 : 3);
+    if (variant.solver == core::LinearSolverType::Direct)
     {
-      if (solver == core::LinearSolverType::Direct && tolerance != 1e-6) continue;
-      core::SpringNetworkDef def = hang64(64);
-      def.integrator.type = core::kImplicitEulerIntegrator;
-      def.integrator.linear_solver = solver;
-      def.integrator.cg_tolerance = tolerance;
-      def.integrator.cg_max_iterations = 100000;
-      core::SpringNetworkBody body(def);
-      Row row = timeBody(body, 1.0 / 60.0, quick ? 3 : 10, quick ? 5 : 60, quick ? 1 : 3);
-      if (solver == core::LinearSolverType::Direct)
+      // The factorization's size, from the pattern of the implicit system (one block per spring).
+      std::vector<std::vector<int>> columns(def.positions.size());
+      for (std::size_t i = 0; i < columns.size(); ++i)
+        columns[i].push_back(static_cast<int>(i));
+      for (const core::Spring& spring : def.springs)
       {
-        // The factorization's size, from the pattern of the implicit system (one block per spring).
-        std::vector<std::vector<int>> columns(def.positions.size());
-        for (std::size_t i = 0; i < columns.size(); ++i)
-          columns[i].push_back(static_cast<int>(i));
-        for (const core::Spring& spring : def.springs)
-        {
-          columns[spring.i].push_back(spring.j);
-          columns[spring.j].push_back(spring.i);
-        }
-        std::vector<int> row_start = {0}, block_column;
-        for (std::vector<int>& c : columns)
-        {
-          std::sort(c.begin(), c.end());
-          block_column.insert(block_column.end(), c.begin(), c.end());
-          row_start.push_back(static_cast<int>(block_column.size()));
-        }
-        const core::SparseBlockLdlt::Cost cost = core::SparseBlockLdlt::estimateCost(row_start, block_column);
-        std::ostringstream detail;
-        detail.precision(3);
-        detail << "factorization " << cost.factor_flops / 1e6 << " Mflop (" << cost.factor_blocks
-               << " blocks of L), solve " << cost.solve_flops / 1e6 << " Mflop";
-        row.detail = detail.str() + (row.detail.empty() ? "" : "; " + row.detail);
+        columns[spring.i].push_back(spring.j);
+        columns[spring.j].push_back(spring.i);
       }
-      row.case_name = "hang64";
-      row.variant =
-          std::string("implicit_euler ") + core::toString(solver) +
-          (solver == core::LinearSolverType::ConjugateGradient ? (tolerance == 1e-6 ? " tol 1e-6" : " tol 1e-4") : "");
-      row.size = 64;
-      row.elements = 64 * 64;
-      writeRow(out, row);
+      std::vector<int> row_start = {0}, block_column;
+      for (std::vector<int>& c : columns)
+      {
+        std::sort(c.begin(), c.end());
+        block_column.insert(block_column.end(), c.begin(), c.end());
+        row_start.push_back(static_cast<int>(block_column.size()));
+      }
+      const core::SparseBlockLdlt::Cost cost = core::SparseBlockLdlt::estimateCost(row_start, block_column);
+      std::ostringstream detail;
+      detail.precision(3);
+      detail << "factorization " << cost.factor_flops / 1e6 << " Mflop (" << cost.factor_blocks
+             << " blocks of L), solve " << cost.solve_flops / 1e6 << " Mflop";
+      row.detail = detail.str() + (row.detail.empty() ? "" : "; " + row.detail);
     }
+    if (!core::isImplicit(body.lastIntegrator()))
+      row.detail = std::string(core::toString(body.lastIntegrator())) + ", " + std::to_string(body.lastSubsteps()) +
+                   " substeps" + (row.detail.empty() ? "" : "; " + row.detail);
+    else if (variant.integrator == core::kAutoIntegrator)
+      row.detail = std::string(core::toString(body.lastIntegrator())) + (row.detail.empty() ? "" : "; " + row.detail);
+    const std::string stretch = stretchAndSag(def, variant.dt, quick ? 0.1 : 2.0);
+    row.detail = (row.detail.empty() ? "" : row.detail + "; ") + stretch;
+    row.case_name = "hang64";
+    row.variant = variant.name;
+    row.size = 64;
+    row.elements = 64 * 64;
+    writeRow(out, row);
   }
 }
 

@@ -42,6 +42,10 @@ SERVICES = ["spawn_emitter", "spawn_rope", "spawn_cloth", "spawn_jelly", "set_wi
             "pin_particle", "unpin_particle", "remove_body", "step", "pause_physics", "unpause_physics", "reset",
             "set_parameters", "grasp", "release", "spawn_collider", "remove_collider"]
 EXECUTABLES = {"particle_sim_node", "particle_sim_run", "particle_sim_bench", "particle_sim_perf"}
+# Bullet's peer of the performance bench is built when CMake finds Bullet's headers (libbullet-dev,
+# which scripts/common.sh installs), where this looks for them too.
+if os.path.isfile("/usr/include/bullet/btBulletDynamicsCommon.h"):
+    EXECUTABLES.add("particle_sim_bullet_peer")
 
 
 def run(args, timeout=60.0):
