@@ -120,11 +120,11 @@ Status validate(const SpringNetworkDef& def, int max_particles)
     if (Status s = checkMin(where + "damping", bend.damping, 0.0); !s) return s;
   }
   const PlateBendingDef& plate = def.plate_bending;
-  const bool plate_consistent =
-      plate.empty() ? plate.particles.empty() && plate.weights.empty()
-                    : plate.row_start.size() == plate.inverse_area.size() + 1 && plate.row_start.front() == 0 &&
-                          plate.particles.size() == plate.weights.size() &&
-                          plate.row_start.back() == static_cast<int>(plate.particles.size());
+  const bool plate_consistent = plate.empty() ? plate.particles.empty() && plate.weights.empty()
+                                              : plate.row_start.size() == plate.inverse_area.size() + 1 &&
+                                                    plate.row_start.front() == 0 &&
+                                                    plate.particles.size() == plate.weights.size() &&
+                                                    plate.row_start.back() == static_cast<int>(plate.particles.size());
   if (!plate_consistent)
     return Status::failure("plate_bending: the stencils' row starts, particles, weights and areas do not agree");
   for (int c : plate.particles)
@@ -137,8 +137,8 @@ Status validate(const SpringNetworkDef& def, int max_particles)
 SpringNetworkBody::SpringNetworkBody(const SpringNetworkDef& def, const IntegratorDef& integrator_defaults)
     : Body(def.name),
       def_(def),
-      forces_(makeSpringBodyForces(def_.springs, def_.baraff_witkin, def_.triangles, def_.rod_bending,
-                                   def_.plate_bending)),
+      forces_(
+          makeSpringBodyForces(def_.springs, def_.baraff_witkin, def_.triangles, def_.rod_bending, def_.plate_bending)),
       built_integrator_(resolve(def.integrator, integrator_defaults)),
       strain_limit_(def_.strain_limit, def_.springs, static_cast<int>(def_.positions.size()))
 {
@@ -159,6 +159,8 @@ SpringNetworkBody::SpringNetworkBody(const SpringNetworkDef& def, const Integrat
   ImplicitEulerSolver pattern;
   pattern.setPattern(n, pairs);
   forces_.bindPattern(pattern);
+  // What an implicit step costs this body, in explicit substeps: `auto` weighs it against Verlet's.
+  implicit_step_cost_ = StabilityGuard::implicitStepCost(pattern.directCostInCgIterations());
   for (const IntegratorInfo& info : integratorRegistry())
     methods_.emplace_back(info.type, info.make(n, pairs));
   step_target_.setZero(3, n);
@@ -356,7 +358,9 @@ SubstepPlan SpringNetworkBody::planStep(double dt, const Environment& env) const
   // global damping.
   const double c_max = dampingBound(env.air, env.damping);
   const IntegratorType type =
-      integrator_.type == kAutoIntegrator ? StabilityGuard::chooseAuto(dt, omega_bound_, c_max) : integrator_.type;
+      integrator_.type == kAutoIntegrator
+          ? StabilityGuard::chooseAuto(dt, omega_bound_, c_max, implicit_step_cost_, integrator_.max_substeps)
+          : integrator_.type;
   return StabilityGuard::planSubsteps(type, dt, omega_bound_, c_max, integrator_.max_substeps);
 }
 
@@ -372,8 +376,8 @@ void SpringNetworkBody::step(double dt, const Environment& env)
   saved_velocity_ = p.velocity;
   step_target_ = pin_target_;
   bool switched = false;
-  const IntegratorType type =
-      guard_.resolve(integrator_.type, dt, omega_bound_, dampingBound(), last_integrator_, switched);
+  const IntegratorType type = guard_.resolve(integrator_.type, dt, omega_bound_, dampingBound(), implicit_step_cost_,
+                                             integrator_.max_substeps, last_integrator_, switched);
   if (switched) restartMethods();
   const bool explicit_method = !isImplicit(type);
   const bool had_history = method(type).hasHistory();

@@ -115,9 +115,13 @@ TEST(CoreQueries, SubstepPlanCapsAtMaxSubstepsAndSaysWhatWasNeeded)
 
 TEST(CoreQueries, AutoChoiceBeforeAStepIsTheMethodTheStepRuns)
 {
-  // The rule: Verlet while h (ω_max + c_max) <= half Verlet's limit 2, else implicit Euler.
-  EXPECT_EQ(StabilityGuard::chooseAuto(1.0, 0.75, 0.25), kVerletIntegrator);
-  EXPECT_EQ(StabilityGuard::chooseAuto(1.0, std::nextafter(1.0, 2.0), 0.0), kImplicitEulerIntegrator);
+  // The rule: Verlet while the substeps it needs (h (ω_max + c_max) within 90 % of its limit 2 in
+  // each) fit in max_substeps and cost no more than the implicit step's estimate, else implicit Euler.
+  EXPECT_EQ(StabilityGuard::chooseAuto(1.0, 1.35, 0.45, 1.0, 64), kVerletIntegrator);  // 1.8: one substep
+  EXPECT_EQ(StabilityGuard::chooseAuto(1.0, 1.8, 0.0, std::nextafter(1.0, 0.0), 64), kImplicitEulerIntegrator);
+  EXPECT_EQ(StabilityGuard::chooseAuto(1.0, 9.0, 0.0, 5.0, 64), kVerletIntegrator);  // 5 substeps
+  EXPECT_EQ(StabilityGuard::chooseAuto(1.0, std::nextafter(9.0, 10.0), 0.0, 5.0, 64), kImplicitEulerIntegrator);
+  EXPECT_EQ(StabilityGuard::chooseAuto(1.0, 9.0, 0.0, 1e9, 4), kImplicitEulerIntegrator);  // 5 > max_substeps
 
   const Environment env = gravityOnly();
   const double dt = 1.0 / 60.0;

@@ -246,7 +246,7 @@ TEST(HardCases, PinTargetJumpingOneMetreInOneStepStaysFinite)
   }
 }
 
-TEST(AutoIntegrator, PicksVerletForSoftBodiesAndImplicitForStiffOnesAndSaysWhy)
+TEST(AutoIntegrator, PicksVerletWhileItsSubstepsCostLessThanAnImplicitStepAndSaysWhy)
 {
   core::RopeDef def;
   def.name = "r";
@@ -258,13 +258,23 @@ TEST(AutoIntegrator, PicksVerletForSoftBodiesAndImplicitForStiffOnesAndSaysWhy)
   def.integrator.type = core::kAutoIntegrator;
   SpringNetworkBody body(core::buildRope(def));
   EXPECT_NEAR(body.frequencyBound(), std::sqrt(4.0 * 100.0 / 0.1), 1e-9);
+  // An implicit step of this short chain costs 11 substeps and the direct solve (the chain has no
+  // fill: a few CG iterations' flops).
   core::Environment env;
-  body.step(0.01, env);  // dt omega = 0.63 <= 1
+  body.step(0.01, env);  // dt omega = 0.63: one substep
   EXPECT_EQ(body.lastIntegrator(), core::kVerletIntegrator);
-  EXPECT_NE(body.autoChoice().find("verlet"), std::string::npos) << body.autoChoice();
-  body.step(0.02, env);  // 1.26 > 1
+  EXPECT_EQ(body.lastSubsteps(), 1);
+  EXPECT_NE(body.autoChoice().find("verlet: 1 substep costs no more than an implicit Euler step"), std::string::npos)
+      << body.autoChoice();
+  body.step(0.1, env);  // 6.3: four substeps, still cheaper
+  EXPECT_EQ(body.lastIntegrator(), core::kVerletIntegrator) << body.autoChoice();
+  EXPECT_EQ(body.lastSubsteps(), 4);
+  body.step(0.5, env);  // 31.6: 18 substeps, dearer than the implicit step
   EXPECT_EQ(body.lastIntegrator(), core::kImplicitEulerIntegrator);
+  EXPECT_NE(body.autoChoice().find("implicit_euler: Verlet would need 18 substeps, more than an implicit Euler step"),
+            std::string::npos)
+      << body.autoChoice();
   ASSERT_TRUE(body.setSpringConstants(std::nullopt, 1.0, 0.0).ok);  // softer: re-decided
-  body.step(0.02, env);
+  body.step(0.5, env);
   EXPECT_EQ(body.lastIntegrator(), core::kVerletIntegrator) << body.autoChoice();
 }

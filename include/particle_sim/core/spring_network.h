@@ -49,7 +49,7 @@ struct SpringNetworkDef
   std::vector<Eigen::Vector3i> triangles;  ///< surface triangles (cloth, jelly): drawn, published, feel the air
   BaraffWitkinDef baraff_witkin;           ///< Baraff–Witkin energies (cloth model baraff_witkin); empty = none
   RodBendingDef rod_bending;               ///< discrete rod bending (ropes built from a material); empty = none
-  PlateBendingDef plate_bending;           ///< isotropic plate bending (mesh cloths built from a material); empty = none
+  PlateBendingDef plate_bending;  ///< isotropic plate bending (mesh cloths built from a material); empty = none
   StrainLimitDef strain_limit;
   BodyIntegratorDef integrator;    ///< what the body sets; the rest is the world's default
   double contact_thickness = 0.0;  ///< [m] in limits::kContactThickness: kept from ground and spheres (0 = touch)
@@ -81,9 +81,10 @@ Status validate(const SpringNetworkDef& def, int max_particles);
 /// stepping and says why (frozenReason()). A solve that reaches its iteration cap is kept and
 /// reported (lastSolve().converged = false).
 ///
-/// The `auto` integrator picks, per step, Verlet when h (ω_max + c_max) is at most half its limit
-/// (one substep, with margin), else implicit Euler; it re-decides when the spring constants or
-/// the step change and says what it picked and why (autoChoice()).
+/// The `auto` integrator picks, per step, the cheaper of Verlet with the substeps its stability
+/// needs and implicit Euler (whose cost the body estimates in substeps from its implicit system's
+/// pattern); it re-decides when the spring constants or the step change and says what it picked
+/// and why (autoChoice()).
 class SpringNetworkBody : public Body, private DynamicSystem
 {
 public:
@@ -231,10 +232,11 @@ private:
   Eigen::Matrix3Xd pin_target_;
   IntegratorType last_integrator_ = kImplicitEulerIntegrator;
   int last_substeps_ = 1;
-  double omega_bound_ = 0.0;    // [1/s]
-  double damping_bound_ = 0.0;  // [1/s], springs and conditions (global damping added at use)
-  double energy_scale_ = 0.0;   // [J] total mass · (|g| + 1 m/s²) · size, for the blow-up check
-  StabilityGuard guard_;        // substeps, rollback, freeze and `auto`
+  double omega_bound_ = 0.0;         // [1/s]
+  double damping_bound_ = 0.0;       // [1/s], springs and conditions (global damping added at use)
+  double energy_scale_ = 0.0;        // [J] total mass · (|g| + 1 m/s²) · size, for the blow-up check
+  StabilityGuard guard_;             // substeps, rollback, freeze and `auto`
+  double implicit_step_cost_ = 0.0;  // an implicit Euler step, in explicit substeps (`auto`'s estimate)
   SolverReport last_solve_;
   std::string frozen_reason_;
 

@@ -51,8 +51,8 @@ void ImplicitEulerSolver::setPattern(int particles, const std::vector<std::pair<
   auto_choice_ = DirectChoice::Undecided;
   direct_in_cg_iterations_ = 0.0;
   inverse_diagonal_.assign(particles, Eigen::Matrix3d::Identity());
-  for (Eigen::Matrix3Xd* m : {&delta_v_, &rhs_, &residual_, &direction_, &product_, &preconditioned_, &held_change_,
-                              &original_rhs_})
+  for (Eigen::Matrix3Xd* m :
+       {&delta_v_, &rhs_, &residual_, &direction_, &product_, &preconditioned_, &held_change_, &original_rhs_})
     m->setZero(3, particles);
   // Room for the resting contacts' bookkeeping (holdContacts) for every particle held, so that no
   // step allocates when contacts first appear or grow in number.
@@ -106,17 +106,23 @@ void ImplicitEulerSolver::precondition(const Eigen::Matrix3Xd& r, Eigen::Matrix3
     out.col(i).noalias() = inverse_diagonal_[i] * r.col(i);
 }
 
+double ImplicitEulerSolver::directCostInCgIterations() const
+{
+  // One CG iteration: a product with A (18 flops a block) and about 40 flops a particle of vector
+  // passes (residual, direction, preconditioner, dots).
+  const SparseBlockLdlt::Cost direct = SparseBlockLdlt::estimateCost(row_start_, block_column_);
+  const double cg_iteration = 18.0 * static_cast<double>(blocks_.size()) + 40.0 * diagonal_block_.size();
+  return (direct.factor_flops + direct.solve_flops) / cg_iteration;
+}
+
 bool ImplicitEulerSolver::usesDirect(LinearSolverType solver)
 {
   if (solver == LinearSolverType::ConjugateGradient) return false;
   if (solver == LinearSolverType::Auto && auto_choice_ == DirectChoice::Undecided)
   {
-    // One CG iteration: a product with A (18 flops a block) and about 40 flops a particle of vector
-    // passes (residual, direction, preconditioner, dots). The direct solve's cost in CG iterations
-    // decides now (kDirectSolverCgIterations) and again after each CG solve (solve()).
-    const SparseBlockLdlt::Cost direct = SparseBlockLdlt::estimateCost(row_start_, block_column_);
-    const double cg_iteration = 18.0 * static_cast<double>(blocks_.size()) + 40.0 * diagonal_block_.size();
-    direct_in_cg_iterations_ = (direct.factor_flops + direct.solve_flops) / cg_iteration;
+    // The direct solve's cost in CG iterations decides now (kDirectSolverCgIterations) and again
+    // after each CG solve (solve()).
+    direct_in_cg_iterations_ = directCostInCgIterations();
     auto_choice_ = direct_in_cg_iterations_ <= kDirectSolverCgIterations ? DirectChoice::Cheaper : DirectChoice::Dearer;
   }
   if (solver == LinearSolverType::Auto && auto_choice_ == DirectChoice::Dearer) return false;

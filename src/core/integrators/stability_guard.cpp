@@ -13,12 +13,19 @@ namespace particle_sim
 {
 namespace core
 {
-IntegratorType StabilityGuard::chooseAuto(double dt, double omega_max, double c_max)
+double StabilityGuard::implicitStepCost(double direct_in_cg_iterations)
 {
-  // Verlet where one step is stable with a factor 2 of margin; implicit Euler otherwise.
-  const double product = dt * (omega_max + c_max);
-  const double limit = 0.5 * stabilityLimit(kVerletIntegrator);
-  return product <= limit ? kVerletIntegrator : kImplicitEulerIntegrator;
+  return kImplicitFixedCost + kCgIterationCost * kDirectFlopCost * direct_in_cg_iterations;
+}
+
+IntegratorType StabilityGuard::chooseAuto(double dt, double omega_max, double c_max, double implicit_cost,
+                                          int max_substeps)
+{
+  // Verlet with the substeps it needs to stay within 90 % of its limit, when they all fit and cost
+  // no more than one implicit step; implicit Euler otherwise.
+  const SubstepPlan verlet = planSubsteps(kVerletIntegrator, dt, omega_max, c_max, max_substeps);
+  const bool fits = verlet.needed_substeps <= max_substeps;
+  return fits && verlet.substeps <= implicit_cost ? kVerletIntegrator : kImplicitEulerIntegrator;
 }
 
 SubstepPlan StabilityGuard::planSubsteps(IntegratorType type, double dt, double omega_max, double c_max,
@@ -38,20 +45,28 @@ SubstepPlan StabilityGuard::planSubsteps(IntegratorType type, double dt, double 
 }
 
 IntegratorType StabilityGuard::resolve(IntegratorType requested, double dt, double omega_max, double c_max,
-                                       IntegratorType last, bool& switched)
+                                       double implicit_cost, int max_substeps, IntegratorType last, bool& switched)
 {
   switched = false;
   if (requested != kAutoIntegrator) return requested;
-  const IntegratorType choice = chooseAuto(dt, omega_max, c_max);
-  const double product = dt * (omega_max + c_max);
-  const double limit = 0.5 * stabilityLimit(kVerletIntegrator);
+  const IntegratorType choice = chooseAuto(dt, omega_max, c_max, implicit_cost, max_substeps);
   if (auto_choice_.empty() || choice != last)
   {
     switched = choice != last;
-    auto_choice_ = std::string(toString(choice)) + ": h (omega_max + c_max) = " + formatValue(product) +
-                   (choice == kVerletIntegrator ? " <= " : " > ") + formatValue(limit) +
-                   " (half of Verlet's limit 2; omega_max = " + formatValue(omega_max) +
-                   " 1/s, c_max = " + formatValue(c_max) + " 1/s, dt = " + formatValue(dt) + " s)";
+    const SubstepPlan verlet = planSubsteps(kVerletIntegrator, dt, omega_max, c_max, max_substeps);
+    const std::string why = " (h (omega_max + c_max) = " + formatValue(dt * (omega_max + c_max)) +
+                            " against Verlet's limit 2 with 10 % " + "margin; omega_max = " + formatValue(omega_max) +
+                            " 1/s, c_max = " + formatValue(c_max) + " 1/s, dt = " + formatValue(dt) + " s)";
+    const std::string implicit = "an implicit Euler step, estimated at " + formatValue(implicit_cost) + " substeps";
+    if (choice == kVerletIntegrator)
+      auto_choice_ = std::string(toString(choice)) + ": " + std::to_string(verlet.substeps) +
+                     (verlet.substeps == 1 ? " substep costs" : " substeps cost") + " no more than " + implicit + why;
+    else if (verlet.needed_substeps > max_substeps)
+      auto_choice_ = std::string(toString(choice)) + ": Verlet would need " + std::to_string(verlet.needed_substeps) +
+                     " substeps, more than max_substeps = " + std::to_string(max_substeps) + why;
+    else
+      auto_choice_ = std::string(toString(choice)) + ": Verlet would need " + std::to_string(verlet.substeps) +
+                     " substeps, more than " + implicit + why;
   }
   return choice;
 }

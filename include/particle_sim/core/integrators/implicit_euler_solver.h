@@ -68,6 +68,10 @@ public:
   /// factorization and solve with kDirectSolverCgIterations CG iterations (analysed once), and
   /// switches to the direct solver for good once a CG solve took more iterations than that count.
   bool usesDirect(LinearSolverType solver);
+  /// One factorization and solve of the direct solver for this pattern, in CG iterations (their flop
+  /// counts: 18 a block of A and about 40 a particle for one iteration). Analyses the pattern
+  /// (allocates): for decisions taken once.
+  double directCostInCgIterations() const;
   /// Forgets the warm start (after a reset or a jump of the state).
   void clearWarmStart() { delta_v_.setZero(); }
 

@@ -23,9 +23,10 @@ struct SubstepPlan
 /// The stability guard of a body's time integration, `auto` included: the policy and its
 /// explanations, while the body keeps the state it saves and restores.
 ///
-///  - `auto` picks, per step, Verlet when h (ω_max + c_max) is at most half Verlet's limit (one
-///    substep, with margin), else implicit Euler; it re-decides when the bound or the step change
-///    and says what it picked and why.
+///  - `auto` picks, per step, the cheaper of two methods that are stable with margin: Verlet with
+///    the substeps its stability needs (as below), or implicit Euler, whose cost the body estimates
+///    in substeps (implicitStepCost()); it re-decides when the bound or the step change and says
+///    what it picked and why.
 ///  - Substeps: an explicit method gets enough substeps for h (ω_max + c_max) to stay within 90 %
 ///    of its stability limit, up to IntegratorDef::max_substeps.
 ///  - Blow-up: after an explicit step, a non-finite state or mechanical energy grown past
@@ -39,9 +40,22 @@ class StabilityGuard
 public:
   StabilityGuard() { last_event_.reserve(kEventCapacity); }
 
-  /// What `auto` runs at step dt [s] with the bounds ω_max and c_max [1/s]: Verlet when
-  /// h (ω_max + c_max) is at most half Verlet's limit, else implicit Euler.
-  static IntegratorType chooseAuto(double dt, double omega_max, double c_max);
+  /// `auto`'s estimate of one implicit Euler step, in explicit substeps (a force evaluation and an
+  /// update each): a fixed part (forces, Jacobians, the energy checks) and the linear solve, taken as
+  /// the direct solver's, `direct_in_cg_iterations` CG iterations of flops (the `auto` linear
+  /// solver does no worse: it turns to the direct solver once CG needs more). The three constants
+  /// were measured on hang64 (docs/performance.md): a substep of Verlet took 0.18 ms, an implicit
+  /// step's fixed part about 11 substeps, a CG iteration 0.6 substeps, and the direct solve's flops
+  /// ran 1.5 times slower than CG's.
+  static double implicitStepCost(double direct_in_cg_iterations);
+  static constexpr double kImplicitFixedCost = 11.0;  ///< [substeps]
+  static constexpr double kCgIterationCost = 0.6;     ///< [substeps per CG iteration]
+  static constexpr double kDirectFlopCost = 1.5;      ///< a direct solve's flop against a CG iteration's
+
+  /// What `auto` runs at step dt [s] with the bounds ω_max and c_max [1/s]: Verlet when the
+  /// substeps its stability needs (planSubsteps) fit in max_substeps and cost no more than
+  /// `implicit_cost` substeps (implicitStepCost()), else implicit Euler.
+  static IntegratorType chooseAuto(double dt, double omega_max, double c_max, double implicit_cost, int max_substeps);
   /// The substeps of a step of dt [s] with the method `type` (not auto) and the bounds ω_max and
   /// c_max [1/s]: what substeps() will answer, without recording anything.
   static SubstepPlan planSubsteps(IntegratorType type, double dt, double omega_max, double c_max, int max_substeps);
@@ -49,11 +63,12 @@ public:
   /// The method to run for `requested` at step dt [s], with the body's bounds ω_max and c_max
   /// [1/s]; `last` is the method of the previous step. Sets `switched` when `auto` picks another
   /// method than `last` (the caller then restarts the methods' histories).
-  IntegratorType resolve(IntegratorType requested, double dt, double omega_max, double c_max, IntegratorType last,
-                         bool& switched);
+  IntegratorType resolve(IntegratorType requested, double dt, double omega_max, double c_max, double implicit_cost,
+                         int max_substeps, IntegratorType last, bool& switched);
   /// Forgets the `auto` decision (the bounds changed): re-decided and re-explained next step.
   void forgetChoice() { auto_choice_.clear(); }
-  /// For `auto`: what it picked and why, e.g. "verlet: h (omega_max + c_max) = 0.31 <= 1 (...)".
+  /// For `auto`: what it picked and why, e.g. "verlet: 5 substeps cost no more than an implicit
+  /// Euler step, estimated at 90 substeps (h (omega_max + c_max) = 8.2 ...)".
   const std::string& autoChoice() const { return auto_choice_; }
 
   /// Substeps an explicit method `type` needs at step dt (1 for an implicit one); records an event
