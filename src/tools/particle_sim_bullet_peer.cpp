@@ -108,7 +108,11 @@
 #include <string>
 #include <vector>
 
-using Clock = std::chrono::steady_clock;
+#include "bench_rows.h"
+
+using particle_sim_bench::Row;
+using particle_sim_bench::timeSteps;
+using particle_sim_bench::writeRow;
 
 namespace
 {
@@ -120,49 +124,6 @@ const char* kUsage =
 
 const btVector3 kGravity(0, 0, -9.81);  // z up, like particle_sim
 double settle_time = 2.0;               // [s] simulated from rest for the detail column (--quick: 0.1)
-
-// --- Timing and CSV rows, as particle_sim_perf has them.
-struct Timing
-{
-  double min = 0.0, median = 0.0, max = 0.0;  // [ms] per step
-};
-
-// Runs `warmup` steps, then `repeats` times `steps` steps; the time per step of each repeat.
-Timing timeSteps(const std::function<void()>& step, int warmup, int steps, int repeats)
-{
-  for (int i = 0; i < warmup; ++i)
-    step();
-  std::vector<double> per_step;
-  for (int r = 0; r < repeats; ++r)
-  {
-    const auto start = Clock::now();
-    for (int i = 0; i < steps; ++i)
-      step();
-    per_step.push_back(std::chrono::duration<double, std::milli>(Clock::now() - start).count() / steps);
-  }
-  std::sort(per_step.begin(), per_step.end());
-  return {per_step.front(), per_step[per_step.size() / 2], per_step.back()};
-}
-
-struct Row
-{
-  std::string case_name, variant;
-  double size = 0.0;
-  double elements = 0.0;
-  Timing timing;
-  double iterations = 0.0;  // mean CG iterations per timed step (implicit variants), else 0
-  std::string detail;
-};
-
-void writeRow(std::ostream& out, const Row& r)
-{
-  out << r.case_name << ',' << r.variant << ',' << r.size << ',' << r.elements << ',' << r.timing.min << ','
-      << r.timing.median << ',' << r.timing.max << ',' << r.iterations << ",\"" << r.detail << "\"\n";
-  out.flush();
-  std::fprintf(stderr, "%-6s %-34s size %-5g %.4g ms/step (min; median %.4g, max %.4g)%s%s\n", r.case_name.c_str(),
-               r.variant.c_str(), r.size, r.timing.min, r.timing.median, r.timing.max, r.detail.empty() ? "" : "; ",
-               r.detail.c_str());
-}
 
 const char* precisionName()
 {
@@ -676,7 +637,7 @@ int main(int argc, char** argv)
     std::cerr << "particle_sim_bullet_peer: cannot write " << out_path << "\n";
     return 1;
   }
-  out << "case,variant,size,elements,ms_min,ms_median,ms_max,cg_iterations,detail\n";
+  out << particle_sim_bench::kCsvHeader;
   auto wanted = [&only](const char* name) {
     return only.empty() || std::find(only.begin(), only.end(), name) != only.end();
   };

@@ -23,6 +23,7 @@
 #include <string>
 #include <vector>
 
+#include "bench_rows.h"
 #include "particle_sim/core/builders/cloth_grid.h"
 #include "particle_sim/core/builders/rope.h"
 #include "particle_sim/core/emitter.h"
@@ -34,6 +35,9 @@
 #include "particle_sim/core/world.h"
 
 namespace core = particle_sim::core;
+using particle_sim_bench::Row;
+using particle_sim_bench::timeSteps;
+using particle_sim_bench::writeRow;
 using Clock = std::chrono::steady_clock;
 
 namespace
@@ -43,50 +47,6 @@ const char* kUsage =
     "  --out FILE    CSV output (default performance.csv)\n"
     "  --quick       fewer sizes, steps and repeats: a smoke run, not a report\n"
     "  --only CASES  run only these cases: rope, cloth, hang64, springs, emitters\n";
-
-struct Timing
-{
-  double min = 0.0, median = 0.0, max = 0.0;  // [ms] per step
-};
-
-// Runs `warmup` steps, then `repeats` times `steps` steps; the time per step of each repeat.
-Timing timeSteps(const std::function<void()>& step, int warmup, int steps, int repeats)
-{
-  for (int i = 0; i < warmup; ++i)
-    step();
-  std::vector<double> per_step;
-  for (int r = 0; r < repeats; ++r)
-  {
-    const auto start = Clock::now();
-    for (int i = 0; i < steps; ++i)
-      step();
-    per_step.push_back(std::chrono::duration<double, std::milli>(Clock::now() - start).count() / steps);
-  }
-  std::sort(per_step.begin(), per_step.end());
-  return {per_step.front(), per_step[per_step.size() / 2], per_step.back()};
-}
-
-// One CSV row: case, variant, size (the sweep's parameter), elements (what the cost should grow
-// with: particles, segments, springs), timing [ms per step], and free-form detail.
-struct Row
-{
-  std::string case_name, variant;
-  double size = 0.0;
-  double elements = 0.0;
-  Timing timing;
-  double iterations = 0.0;  // mean CG iterations per step (implicit cases), else 0
-  std::string detail;
-};
-
-void writeRow(std::ostream& out, const Row& r)
-{
-  out << r.case_name << ',' << r.variant << ',' << r.size << ',' << r.elements << ',' << r.timing.min << ','
-      << r.timing.median << ',' << r.timing.max << ',' << r.iterations << ",\"" << r.detail << "\"\n";
-  out.flush();
-  std::fprintf(stderr, "%-8s %-22s size %-8g %.4g ms/step (min; median %.4g, max %.4g)%s%s\n", r.case_name.c_str(),
-               r.variant.c_str(), r.size, r.timing.min, r.timing.median, r.timing.max, r.detail.empty() ? "" : "; ",
-               r.detail.c_str());
-}
 
 core::Environment noGround()
 {
@@ -468,7 +428,7 @@ int main(int argc, char** argv)
     std::cerr << "particle_sim_perf: cannot write " << out_path << "\n";
     return 1;
   }
-  out << "case,variant,size,elements,ms_min,ms_median,ms_max,cg_iterations,detail\n";
+  out << particle_sim_bench::kCsvHeader;
   auto wanted = [&only](const char* name) {
     return only.empty() || std::find(only.begin(), only.end(), name) != only.end();
   };

@@ -1,0 +1,65 @@
+#pragma once
+// What the performance bench (particle_sim_perf) and its Bullet peer (particle_sim_bullet_peer)
+// share, so that their rows are comparable line for line: the timing of a step function (warm-up
+// steps, then `repeats` runs of `steps` steps, steady_clock; min, median and max ms per step) and
+// the CSV row both write (case, variant, size, elements, times, CG iterations, detail), echoed on
+// stderr. Header-only and free of particle_sim and Bullet, so that the peer builds without either.
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <functional>
+#include <ostream>
+#include <string>
+#include <vector>
+
+namespace particle_sim_bench
+{
+struct Timing
+{
+  double min = 0.0, median = 0.0, max = 0.0;  // [ms] per step
+};
+
+// Runs `warmup` steps, then `repeats` times `steps` steps; the time per step of each repeat.
+inline Timing timeSteps(const std::function<void()>& step, int warmup, int steps, int repeats)
+{
+  using Clock = std::chrono::steady_clock;
+  for (int i = 0; i < warmup; ++i)
+    step();
+  std::vector<double> per_step;
+  for (int r = 0; r < repeats; ++r)
+  {
+    const auto start = Clock::now();
+    for (int i = 0; i < steps; ++i)
+      step();
+    per_step.push_back(std::chrono::duration<double, std::milli>(Clock::now() - start).count() / steps);
+  }
+  std::sort(per_step.begin(), per_step.end());
+  return {per_step.front(), per_step[per_step.size() / 2], per_step.back()};
+}
+
+// One CSV row: case, variant, size (the sweep's parameter), elements (what the cost should grow
+// with: particles, segments, springs), timing [ms per step], and free-form detail.
+struct Row
+{
+  std::string case_name, variant;
+  double size = 0.0;
+  double elements = 0.0;
+  Timing timing;
+  double iterations = 0.0;  // mean CG iterations per timed step (implicit variants), else 0
+  std::string detail;
+};
+
+inline const char* kCsvHeader = "case,variant,size,elements,ms_min,ms_median,ms_max,cg_iterations,detail\n";
+
+inline void writeRow(std::ostream& out, const Row& r)
+{
+  out << r.case_name << ',' << r.variant << ',' << r.size << ',' << r.elements << ',' << r.timing.min << ','
+      << r.timing.median << ',' << r.timing.max << ',' << r.iterations << ",\"" << r.detail << "\"\n";
+  out.flush();
+  std::fprintf(stderr, "%-8s %-34s size %-8g %.4g ms/step (min; median %.4g, max %.4g)%s%s\n", r.case_name.c_str(),
+               r.variant.c_str(), r.size, r.timing.min, r.timing.median, r.timing.max, r.detail.empty() ? "" : "; ",
+               r.detail.c_str());
+}
+
+}  // namespace particle_sim_bench
