@@ -106,7 +106,7 @@ struct DrapeRun
 };
 
 // Folds: the rim's radius rises above its mean and falls below it again once per fold (with a
-// hysteresis of a tenth of the spread, so that a ripple on a crest is not a fold).
+// band of ±5 % of the spread around the mean, so that a ripple on a crest is not a fold).
 int countFolds(const std::vector<Eigen::Vector2d>& rim)
 {
   std::vector<double> radius;
