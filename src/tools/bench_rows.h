@@ -9,7 +9,9 @@
 #include <chrono>
 #include <cstdio>
 #include <functional>
+#include <iostream>
 #include <ostream>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -60,6 +62,49 @@ inline void writeRow(std::ostream& out, const Row& r)
   std::fprintf(stderr, "%-8s %-34s size %-8g %.4g ms/step (min; median %.4g, max %.4g)%s%s\n", r.case_name.c_str(),
                r.variant.c_str(), r.size, r.timing.min, r.timing.median, r.timing.max, r.detail.empty() ? "" : "; ",
                r.detail.c_str());
+}
+
+// The command line both share: --out FILE, --quick, --only CASE,... and --help.
+struct Options
+{
+  std::string out_path;           // the CSV to write
+  bool quick = false;             // fewer sizes, steps and repeats: a smoke run
+  std::vector<std::string> only;  // cases to run (empty: all)
+  bool wanted(const char* name) const
+  {
+    return only.empty() || std::find(only.begin(), only.end(), name) != only.end();
+  }
+};
+
+// Parses the command line into `options` (out_path keeps its default unless --out is given).
+// Returns -1 to go on, or the exit code: 0 after --help, 2 (usage on stderr) after a bad argument.
+inline int parseOptions(int argc, char** argv, const char* usage, Options& options)
+{
+  for (int i = 1; i < argc; ++i)
+  {
+    const std::string arg = argv[i];
+    if (arg == "--help" || arg == "-h")
+    {
+      std::cout << usage;
+      return 0;
+    }
+    if (arg == "--out" && i + 1 < argc)
+      options.out_path = argv[++i];
+    else if (arg == "--quick")
+      options.quick = true;
+    else if (arg == "--only" && i + 1 < argc)
+    {
+      std::stringstream list(argv[++i]);
+      for (std::string name; std::getline(list, name, ',');)
+        options.only.push_back(name);
+    }
+    else
+    {
+      std::cerr << usage;
+      return 2;
+    }
+  }
+  return -1;
 }
 
 }  // namespace particle_sim_bench

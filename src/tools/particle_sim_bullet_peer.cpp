@@ -593,36 +593,13 @@ void ropes(std::ostream& out, bool quick)
 
 int main(int argc, char** argv)
 {
-  std::string out_path = "bullet.csv";
-  bool quick = false;
-  std::vector<std::string> only;
-  for (int i = 1; i < argc; ++i)
-  {
-    const std::string arg = argv[i];
-    if (arg == "--help" || arg == "-h")
-    {
-      std::cout << kUsage;
-      return 0;
-    }
-    if (arg == "--out" && i + 1 < argc)
-      out_path = argv[++i];
-    else if (arg == "--quick")
-    {
-      quick = true;
-      settle_time = 0.1;
-    }
-    else if (arg == "--only" && i + 1 < argc)
-    {
-      std::stringstream list(argv[++i]);
-      for (std::string name; std::getline(list, name, ',');)
-        only.push_back(name);
-    }
-    else
-    {
-      std::cerr << kUsage;
-      return 2;
-    }
-  }
+  particle_sim_bench::Options options;
+  options.out_path = "bullet.csv";
+  if (const int code = particle_sim_bench::parseOptions(argc, argv, kUsage, options); code >= 0) return code;
+  const std::string& out_path = options.out_path;
+  const bool quick = options.quick;
+  const std::vector<std::string>& only = options.only;
+  if (quick) settle_time = 0.1;
   for (const std::string& name : only)
   {
     if (name != "hang64" && name != "rope")
@@ -638,10 +615,7 @@ int main(int argc, char** argv)
     return 1;
   }
   out << particle_sim_bench::kCsvHeader;
-  auto wanted = [&only](const char* name) {
-    return only.empty() || std::find(only.begin(), only.end(), name) != only.end();
-  };
-  if (wanted("rope")) ropes(out, quick);
-  if (wanted("hang64")) hang(out, quick);
+  if (options.wanted("rope")) ropes(out, quick);
+  if (options.wanted("hang64")) hang(out, quick);
   return 0;
 }

@@ -395,33 +395,11 @@ void emitters(std::ostream& out, bool quick)
 
 int main(int argc, char** argv)
 {
-  std::string out_path = "performance.csv";
-  bool quick = false;
-  std::vector<std::string> only;
-  for (int i = 1; i < argc; ++i)
-  {
-    const std::string arg = argv[i];
-    if (arg == "--help" || arg == "-h")
-    {
-      std::cout << kUsage;
-      return 0;
-    }
-    if (arg == "--out" && i + 1 < argc)
-      out_path = argv[++i];
-    else if (arg == "--quick")
-      quick = true;
-    else if (arg == "--only" && i + 1 < argc)
-    {
-      std::stringstream list(argv[++i]);
-      for (std::string name; std::getline(list, name, ',');)
-        only.push_back(name);
-    }
-    else
-    {
-      std::cerr << kUsage;
-      return 2;
-    }
-  }
+  particle_sim_bench::Options options;
+  options.out_path = "performance.csv";
+  if (const int code = particle_sim_bench::parseOptions(argc, argv, kUsage, options); code >= 0) return code;
+  const std::string& out_path = options.out_path;
+  const bool quick = options.quick;
   std::ofstream out(out_path);
   if (!out)
   {
@@ -429,9 +407,7 @@ int main(int argc, char** argv)
     return 1;
   }
   out << particle_sim_bench::kCsvHeader;
-  auto wanted = [&only](const char* name) {
-    return only.empty() || std::find(only.begin(), only.end(), name) != only.end();
-  };
+  auto wanted = [&options](const char* name) { return options.wanted(name); };
   if (wanted("rope")) ropes(out, quick);
   if (wanted("cloth")) cloths(out, quick);
   if (wanted("hang64")) hang(out, quick);

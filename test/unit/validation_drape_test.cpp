@@ -96,6 +96,7 @@ Specimen specimen(int rings)
 
 struct DrapeRun
 {
+  double spacing = 0.0;      // h [m] of the specimen's rings
   double coefficient = 0.0;  // DC [-]
   double energy = 0.0;       // potential energy at rest (gravity and elastic) [J]
   int folds = 0;             // waves of the rim around the circle
@@ -178,6 +179,7 @@ DrapeRun drape(const ClothMaterial& material, int rings, int waves)
     body.step(kSettleStep, env);
 
   DrapeRun run;
+  run.spacing = s.spacing;
   run.frozen = body.frozen();
   run.max_speed = maxSpeed();
   const Eigen::Matrix3Xd x = p.position.leftCols(p.size());
@@ -243,7 +245,7 @@ TEST(ValidationDrape, CusickDrapeCoefficientConvergesWithinTheRangeOfRealFabrics
     EXPECT_LT(r.force_ratio, 1e-4) << n << " rings";
     EXPECT_EQ(r.folds, 6) << n << " rings";
     dc.push_back(r.coefficient);
-    h.push_back(specimen(n).spacing);
+    h.push_back(r.spacing);
     std::printf("%d rings (h = %.2f mm): DC %.4f, %d folds, E %.6e J, v %.1e m/s, F/W %.1e\n", n, h.back() * 1e3,
                 r.coefficient, r.folds, r.energy, r.max_speed, r.force_ratio);
   }
