@@ -91,6 +91,7 @@ IntegratorDef resolve(const BodyIntegratorDef& body, const IntegratorDef& defaul
   def.type = body.type.value_or(defaults.type);
   def.verlet_damping = body.verlet_damping.value_or(defaults.verlet_damping);
   def.cg_tolerance = body.cg_tolerance.value_or(defaults.cg_tolerance);
+  def.cg_velocity_tolerance = body.cg_velocity_tolerance.value_or(defaults.cg_velocity_tolerance);
   def.cg_max_iterations = body.cg_max_iterations.value_or(defaults.cg_max_iterations);
   def.max_substeps = body.max_substeps.value_or(defaults.max_substeps);
   def.linear_solver = body.linear_solver.value_or(defaults.linear_solver);
@@ -99,7 +100,8 @@ IntegratorDef resolve(const BodyIntegratorDef& body, const IntegratorDef& defaul
 
 BodyIntegratorDef settingEveryField(const IntegratorDef& def)
 {
-  return {def.type, def.verlet_damping, def.cg_tolerance, def.cg_max_iterations, def.max_substeps, def.linear_solver};
+  return {def.type,         def.verlet_damping, def.cg_tolerance, def.cg_velocity_tolerance, def.cg_max_iterations,
+          def.max_substeps, def.linear_solver};
 }
 
 Status validate(const BodyIntegratorDef& def)
@@ -116,6 +118,8 @@ Status validate(const IntegratorDef& def)
                            " is not registered; allowed: " + integratorTypeNames());
   if (Status s = checkRange("verlet_damping", def.verlet_damping, 0.0, 1.0); !s) return s;
   if (Status s = checkPositive("cg_tolerance", def.cg_tolerance); !s) return s;
+  if (Status s = checkRange("cg_velocity_tolerance", def.cg_velocity_tolerance, limits::kSolverVelocityTolerance); !s)
+    return s;
   if (Status s = checkIntRange("cg_max_iterations", def.cg_max_iterations, 1, 1000000); !s) return s;
   return checkIntRange("max_substeps", def.max_substeps, 1, 1 << 20);
 }

@@ -75,6 +75,7 @@ SimStatus buildSimStatus(const core::World& world, const ros::Time& stamp, const
         b.linear_solver = spring_body.lastSolve().direct ? "direct" : "cg";
       b.solver_iterations = static_cast<std::uint32_t>(std::max(0, spring_body.lastSolve().iterations));
       b.solver_residual = spring_body.lastSolve().relative_residual;
+      b.solver_velocity_error = spring_body.lastSolve().velocity_error;
       b.frozen = spring_body.frozen();
       b.frozen_reason = spring_body.frozenReason();
       if (const auto material = materials.find(b.name); material != materials.end())
@@ -93,7 +94,7 @@ void buildDiagnostics(const core::World& world, const LoopFigures& loop, double 
   // Over the spring bodies: the last implicit solves (how many, how many direct, most CG iterations,
   // worst residual), strain and frozen bodies.
   int iterations = 0, not_converged = 0, implicit_solves = 0, direct_solves = 0;
-  double residual = 0.0, max_strain = 0.0;
+  double residual = 0.0, velocity_error = 0.0, max_strain = 0.0;
   std::string strained_body;
   std::vector<std::string> frozen;
   for (const auto& body : world.bodies())
@@ -112,6 +113,7 @@ void buildDiagnostics(const core::World& world, const LoopFigures& loop, double 
       direct_solves += spring_body.lastSolve().direct ? 1 : 0;
       iterations = std::max(iterations, spring_body.lastSolve().iterations);
       residual = std::max(residual, spring_body.lastSolve().relative_residual);
+      velocity_error = std::max(velocity_error, spring_body.lastSolve().velocity_error);
       if (!spring_body.lastSolve().converged) ++not_converged;
     }
     const double strain = spring_body.maxStrain();
@@ -142,7 +144,8 @@ void buildDiagnostics(const core::World& world, const LoopFigures& loop, double 
   if (not_converged > 0)
     stat.mergeSummary(DiagnosticStatus::WARN,
                       std::to_string(not_converged) +
-                          " implicit solves did not converge in their last step (cg_tolerance not reached, or "
+                          " implicit solves did not converge in their last step (neither cg_tolerance nor "
+                          "cg_velocity_tolerance reached, or "
                           "resting contacts still changing after " +
                           std::to_string(core::ImplicitEulerSolver::kMaxContactSolves) + " solves)");
   if (loop.stability_events > 0)
@@ -167,6 +170,7 @@ void buildDiagnostics(const core::World& world, const LoopFigures& loop, double 
   stat.add("direct solves (last step)", direct_solves);
   stat.add("solver iterations (max, last step)", iterations);
   stat.add("solver residual (max, last step)", residual);
+  stat.add("solver velocity error [m/s] (max, last step)", velocity_error);
   stat.add("max strain", max_strain);
   stat.add("frozen bodies", static_cast<int>(frozen.size()));
   stat.add("stability events since last report", loop.stability_events);
@@ -174,10 +178,10 @@ void buildDiagnostics(const core::World& world, const LoopFigures& loop, double 
 
 std::string statusLine(const core::World& world, double real_time_factor, double step_time_us, bool paused)
 {
-  // The implicit solves of the last step: how many were direct, most CG iterations and worst
-  // relative residual.
+  // The implicit solves of the last step: how many were direct, most CG iterations, worst relative
+  // residual and worst velocity error.
   int cg_iterations = 0, direct_solves = 0, implicit_solves = 0;
-  double cg_residual = 0.0;
+  double cg_residual = 0.0, velocity_error = 0.0;
   bool any_implicit = false;
   for (const auto& body : world.bodies())
   {
@@ -189,15 +193,17 @@ std::string statusLine(const core::World& world, double real_time_factor, double
     direct_solves += spring_body.lastSolve().direct ? 1 : 0;
     cg_iterations = std::max(cg_iterations, spring_body.lastSolve().iterations);
     cg_residual = std::max(cg_residual, spring_body.lastSolve().relative_residual);
+    velocity_error = std::max(velocity_error, spring_body.lastSolve().velocity_error);
   }
-  char solver[128] = "";
+  char solver[160] = "";
   if (any_implicit && direct_solves == implicit_solves && cg_iterations == 0)
     std::snprintf(solver, sizeof(solver), " | direct solve, residual %.1e", cg_residual);
   else if (any_implicit && direct_solves > 0)
-    std::snprintf(solver, sizeof(solver), " | %d of %d solves direct, CG %d iterations, residual %.1e", direct_solves,
-                  implicit_solves, cg_iterations, cg_residual);
+    std::snprintf(solver, sizeof(solver), " | %d of %d solves direct, CG %d iterations, residual %.1e, %.1e m/s",
+                  direct_solves, implicit_solves, cg_iterations, cg_residual, velocity_error);
   else if (any_implicit)
-    std::snprintf(solver, sizeof(solver), " | CG %d iterations, residual %.1e", cg_iterations, cg_residual);
+    std::snprintf(solver, sizeof(solver), " | CG %d iterations, residual %.1e, %.1e m/s", cg_iterations, cg_residual,
+                  velocity_error);
   char line[512];
   std::snprintf(line, sizeof(line), "sim time %.3f s | real-time factor %.2f | live particles %d | step %.1f us%s%s",
                 world.simTime(), real_time_factor, world.particleCount(), step_time_us, solver,

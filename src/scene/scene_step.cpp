@@ -89,6 +89,7 @@ void setWhereDifferent(core::BodyIntegratorDef& body, const core::IntegratorDef&
   set(body.type, wanted.type, defaults.type);
   set(body.verlet_damping, wanted.verlet_damping, defaults.verlet_damping);
   set(body.cg_tolerance, wanted.cg_tolerance, defaults.cg_tolerance);
+  set(body.cg_velocity_tolerance, wanted.cg_velocity_tolerance, defaults.cg_velocity_tolerance);
   set(body.cg_max_iterations, wanted.cg_max_iterations, defaults.cg_max_iterations);
   set(body.max_substeps, wanted.max_substeps, defaults.max_substeps);
   set(body.linear_solver, wanted.linear_solver, defaults.linear_solver);

@@ -211,6 +211,7 @@ int main(int argc, char** argv)
     long long iterations = 0;
     int max_iterations = 0;
     double worst_residual = 0.0;
+    double worst_velocity_error = 0.0;  // [m/s]
     long long unconverged = 0;
     long long direct = 0;  // steps whose last solve was direct
   };
@@ -243,6 +244,7 @@ int main(int argc, char** argv)
       method->iterations += report.iterations;
       method->max_iterations = std::max(method->max_iterations, report.iterations);
       method->worst_residual = std::max(method->worst_residual, report.relative_residual);
+      method->worst_velocity_error = std::max(method->worst_velocity_error, report.velocity_error);
       method->unconverged += report.converged ? 0 : 1;
       method->direct += report.direct ? 1 : 0;
     }
@@ -299,10 +301,10 @@ int main(int argc, char** argv)
         std::printf("%s", particle_sim::core::toString(method.method));
       if (implicit)
         std::printf(
-            ": CG iterations mean %.1f, max %d; worst relative residual %.2e; %lld steps not converged; %lld of %lld "
-            "solved directly",
+            ": CG iterations mean %.1f, max %d; worst relative residual %.2e, velocity error %.2e m/s; %lld steps "
+            "not converged; %lld of %lld solved directly",
             static_cast<double>(method.iterations) / method.steps, method.max_iterations, method.worst_residual,
-            method.unconverged, method.direct, method.steps);
+            method.worst_velocity_error, method.unconverged, method.direct, method.steps);
       std::printf("\n");
     }
   }

@@ -48,6 +48,7 @@ core::IntegratorDef worldDefaultIntegrator()
   integrator.type = core::kVerletIntegrator;
   integrator.verlet_damping = 0.99;
   integrator.cg_tolerance = 1e-6;
+  integrator.cg_velocity_tolerance = 5e-4;
   integrator.cg_max_iterations = 77;
   integrator.max_substeps = 9;
   return integrator;
@@ -57,6 +58,7 @@ void expectSameSettings(const core::BodyIntegratorDef& a, const core::Integrator
 {
   EXPECT_EQ(a.verlet_damping, b.verlet_damping);
   EXPECT_EQ(a.cg_tolerance, b.cg_tolerance);
+  EXPECT_EQ(a.cg_velocity_tolerance, b.cg_velocity_tolerance);
   EXPECT_EQ(a.cg_max_iterations, b.cg_max_iterations);
   EXPECT_EQ(a.max_substeps, b.max_substeps);
 }

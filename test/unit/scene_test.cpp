@@ -216,7 +216,7 @@ TEST(SceneFiles, ReadsRopesWithWorldIntegratorDefaultsAndOverrides)
 TEST(SceneFiles, WritesOnlyTheIntegratorKeysABodySets)
 {
   const scene::SceneDef def = parseOk(
-      "world: {integrator: rk4, cg_tolerance: 1.0e-5}\n"
+      "world: {integrator: rk4, cg_tolerance: 1.0e-5, cg_velocity_tolerance: 2.0e-4}\n"
       "bodies:\n  - {name: a, kind: rope}\n  - {name: b, kind: jelly, integrator: verlet}\n");
   const std::string written = scene::toYaml(def);
   auto count = [&](const std::string& key) {
@@ -226,12 +226,14 @@ TEST(SceneFiles, WritesOnlyTheIntegratorKeysABodySets)
     return n;
   };
   EXPECT_EQ(count("integrator"), 2) << written;  // the world's and b's
-  for (const char* key : {"verlet_damping", "cg_tolerance", "cg_max_iterations", "max_substeps", "linear_solver"})
+  for (const char* key : {"verlet_damping", "cg_tolerance", "cg_velocity_tolerance", "cg_max_iterations",
+                          "max_substeps", "linear_solver"})
     EXPECT_EQ(count(key), 1) << key << " in\n" << written;  // the world's only
   scene::SceneDef again;
   ASSERT_TRUE(scene::parseScene(written, "written", again).ok);
   EXPECT_EQ(std::get<core::JellyDef>(again.bodies[1]).integrator.type, core::kVerletIntegrator);
   EXPECT_EQ(again.world.integrator.cg_tolerance, 1.0e-5);
+  EXPECT_EQ(again.world.integrator.cg_velocity_tolerance, 2.0e-4);
 }
 
 TEST(SceneFiles, ReadsAndWritesTheLinearSolver)

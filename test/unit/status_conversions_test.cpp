@@ -163,7 +163,7 @@ TEST(StatusConversions, DiagnosticsAreOkWhenRunningOnTimeAndListEveryFigure)
   for (const char* key :
        {"sim time [s]", "real-time factor", "target real-time factor", "step time [us]", "implicit solves (last step)",
         "direct solves (last step)", "solver iterations (max, last step)", "solver residual (max, last step)",
-        "max strain", "stability events since last report"})
+        "solver velocity error [m/s] (max, last step)", "max strain", "stability events since last report"})
     EXPECT_NE(findValue(stat, key), nullptr) << key;
 }
 
@@ -182,6 +182,14 @@ TEST(StatusConversions, DiagnosticsCountTheImplicitSolvesAndThoseSolvedDirectly)
     EXPECT_EQ(*findValue(stat, "implicit solves (last step)"), "1");
     EXPECT_EQ(*findValue(stat, "direct solves (last step)"), direct ? "1" : "0");
     EXPECT_EQ(*findValue(stat, "solver iterations (max, last step)") == "0", direct);
+    // The velocity error of the one solve, in ~status and the diagnostics alike.
+    const auto& rope = static_cast<const core::SpringNetworkBody&>(*world.bodies()[1]);
+    const double velocity_error = rope.lastSolve().velocity_error;
+    EXPECT_LE(velocity_error, rope.integrator().cg_velocity_tolerance);
+    EXPECT_EQ(buildSimStatus(world, ros::Time(), "sim", false, 1.0).bodies[1].solver_velocity_error, velocity_error);
+    ASSERT_NE(findValue(stat, "solver velocity error [m/s] (max, last step)"), nullptr);
+    EXPECT_NEAR(std::stod(*findValue(stat, "solver velocity error [m/s] (max, last step)")), velocity_error,
+                1e-5 * velocity_error + 1e-300);  // printed to 6 digits
   }
   // No implicit body: nothing solved.
   core::World explicit_world = makeWorld(core::kVerletIntegrator);
@@ -255,6 +263,7 @@ TEST(StatusConversions, StatusLineShowsTimeRateParticlesStepAndTheImplicitSolves
   EXPECT_EQ(cg_line.rfind("sim time 0.001 s | real-time factor 1.00 | live particles 15 | step 1.0 us | CG ", 0), 0u)
       << cg_line;
   EXPECT_NE(cg_line.find(" iterations, residual "), std::string::npos) << cg_line;
+  EXPECT_EQ(cg_line.substr(cg_line.size() - 4), " m/s") << cg_line;  // the velocity error
 
   // Without an implicit body, no solver figures.
   core::World explicit_world = makeWorld(core::kVerletIntegrator);

@@ -23,6 +23,7 @@ IntegratorDef worldDefault()
   integrator.type = kVerletIntegrator;
   integrator.verlet_damping = 0.97;
   integrator.cg_tolerance = 1e-5;
+  integrator.cg_velocity_tolerance = 3e-4;
   integrator.cg_max_iterations = 123;
   integrator.max_substeps = 7;
   return integrator;
@@ -33,6 +34,7 @@ void expectSettings(const IntegratorDef& actual, const IntegratorDef& expected, 
   EXPECT_EQ(actual.type, expected.type) << body << ": " << toString(actual.type);
   EXPECT_EQ(actual.verlet_damping, expected.verlet_damping) << body;
   EXPECT_EQ(actual.cg_tolerance, expected.cg_tolerance) << body;
+  EXPECT_EQ(actual.cg_velocity_tolerance, expected.cg_velocity_tolerance) << body;
   EXPECT_EQ(actual.cg_max_iterations, expected.cg_max_iterations) << body;
   EXPECT_EQ(actual.max_substeps, expected.max_substeps) << body;
 }
@@ -142,6 +144,21 @@ TEST(WorldIntegrator, ABodySetsOnlyValidFieldsAndWithoutAWorldUsesTheBuiltInDefa
   EXPECT_NE(refused.message.find("cg_tolerance = 0"), std::string::npos) << refused.message;
   World world(worldWithDefault());
   EXPECT_FALSE(world.addRope(rope).ok);
+  // The velocity tolerance: 0 (off) to 1 m/s, in its unit.
+  rope.integrator = BodyIntegratorDef{};
+  for (double tolerance : {0.0, 1.0})
+  {
+    rope.integrator.cg_velocity_tolerance = tolerance;
+    EXPECT_TRUE(validate(rope, 100).ok) << tolerance;
+  }
+  for (double tolerance : {-1e-6, 1.5})
+  {
+    rope.integrator.cg_velocity_tolerance = tolerance;
+    const Status out_of_range = validate(rope, 100);
+    EXPECT_FALSE(out_of_range.ok) << tolerance;
+    EXPECT_NE(out_of_range.message.find("cg_velocity_tolerance = "), std::string::npos) << out_of_range.message;
+    EXPECT_NE(out_of_range.message.find("must be in [0, 1] m/s"), std::string::npos) << out_of_range.message;
+  }
 
   // Built without a World: the method it sets, the rest built in.
   rope.integrator = BodyIntegratorDef{};

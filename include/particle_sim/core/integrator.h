@@ -84,6 +84,12 @@ struct IntegratorDef
   IntegratorType type;          ///< default: implicit Euler
   double verlet_damping = 1.0;  ///< the lecture's Verlet k_d in [0, 1]: 1 = no damping, below 1 damps
   double cg_tolerance = 1e-8;   ///< implicit Euler: stop when |r| <= tolerance |b| (filtered residuals), > 0
+  /// Implicit methods: CG also stops when the bound on the new velocities' mass-weighted RMS error
+  /// (SolverReport::velocity_error) is at most this [m/s], in [0, 1]; 0 leaves only cg_tolerance.
+  /// An error of τ m/s a step moves the body by at most τ metres a simulated second. Unlike
+  /// |r| <= tolerance |b|, which asks for round-off once b nearly vanishes (a body coming to rest),
+  /// it does not depend on how large this step's change happens to be.
+  double cg_velocity_tolerance = 1e-5;
   int cg_max_iterations = 500;  ///< implicit Euler: iteration cap, >= 1
   int max_substeps = 64;        ///< explicit methods: most substeps a step may be split into to stay stable, >= 1
   LinearSolverType linear_solver = LinearSolverType::Auto;  ///< implicit methods: how each step's system is solved
@@ -99,6 +105,7 @@ struct BodyIntegratorDef
   std::optional<IntegratorType> type;
   std::optional<double> verlet_damping;
   std::optional<double> cg_tolerance;
+  std::optional<double> cg_velocity_tolerance;
   std::optional<int> cg_max_iterations;
   std::optional<int> max_substeps;
   std::optional<LinearSolverType> linear_solver;
@@ -127,10 +134,14 @@ struct SolverReport
   bool direct = false;             ///< the direct solver factorized and solved (CG iterations may follow it, to polish)
   int iterations = 0;              ///< conjugate-gradient iterations
   double relative_residual = 0.0;  ///< |r| / |b| at the end
-  bool converged = true;           ///< the residual reached the tolerance within the iteration cap, and the
-                                   ///< resting contacts' holds settled within kMaxContactSolves
-  int contact_solves = 1;          ///< linear solves of the step (more than one when contact holds were revised)
-  bool breakdown = false;          ///< CG met a direction of non-positive (or NaN) curvature: the solve failed
+  /// [m/s] sqrt(Σ |r_i|² / m_i / Σ m_i) over the free particles at the end: a bound on the mass-weighted
+  /// RMS error of the new velocities, exact while every force's Jacobian is negative semi-definite
+  /// (then the system A = M − h ∂f/∂v − h² ∂f/∂x is at least M, and |A⁻¹ r|_M <= |r|_M⁻¹).
+  double velocity_error = 0.0;
+  bool converged = true;   ///< the residual reached a tolerance within the iteration cap, and the
+                           ///< resting contacts' holds settled within kMaxContactSolves
+  int contact_solves = 1;  ///< linear solves of the step (more than one when contact holds were revised)
+  bool breakdown = false;  ///< CG met a direction of non-positive (or NaN) curvature: the solve failed
 };
 
 }  // namespace core

@@ -26,6 +26,7 @@ constexpr Range kStiffness{0.0, 1e9, "N/m"};           // spring stiffness k_e (
 constexpr Range kDamping{0.0, 1e6, "N·s/m"};           // spring damping k_d
 constexpr Range kGravityComponent{-100.0, 100.0, "m/s^2"};
 constexpr Range kWindComponent{-100.0, 100.0, "m/s"};
+constexpr Range kSolverVelocityTolerance{0.0, 1.0, "m/s"};  // cg_velocity_tolerance; 0 = off
 constexpr Range kGlobalDamping{0.0, 100.0, "1/s"};
 constexpr Range kRealTimeFactor{0.0, 1000.0, "-"};     // 0 = as fast as possible
 constexpr Range kPublishRate{0.1, 1000.0, "Hz"};

@@ -292,7 +292,7 @@ SolverReport ImplicitEulerSolver::solveLinear(const std::vector<char>& pinned, c
     direct_.solve(residual_, delta_v_);
     report.direct = true;
   }
-  conjugateGradient(pinned, settings.cg_tolerance, settings.cg_max_iterations, report);
+  conjugateGradient(pinned, settings, report);
   // `auto` measured CG: when a solve took more iterations than the direct solve costs, or stopped
   // at the iteration cap short of the tolerance (the direct solve is exact, however dear), the
   // direct solver takes over from the next solve on (for good: no switching back and forth).
@@ -302,20 +302,28 @@ SolverReport ImplicitEulerSolver::solveLinear(const std::vector<char>& pinned, c
   return report;
 }
 
-void ImplicitEulerSolver::conjugateGradient(const std::vector<char>& pinned, double tolerance, int max_iterations,
+void ImplicitEulerSolver::conjugateGradient(const std::vector<char>& pinned, const IntegratorDef& settings,
                                             SolverReport& report)
 {
   // Modified preconditioned CG (Baraff & Witkin 1998, section 5.3), started from delta_v_, with
-  // pinned rows filtered out of the start, every residual and every direction.
+  // pinned rows filtered out of the start, every residual and every direction. It stops when the
+  // residual is within cg_tolerance of |b|, or when the velocity error it bounds is within
+  // cg_velocity_tolerance (residualNorms), or at the cap.
   filter(pinned, delta_v_);
   residual_ = rhs_;
   filter(pinned, residual_);
-  const double rhs_norm = std::sqrt(dot(residual_, residual_));
+  double free_mass = 0.0;
+  for (int i = 0; i < static_cast<int>(pinned.size()); ++i)
+    free_mass += pinned[i] ? 0.0 : (*mass_)[i];
+  const double rhs_norm = residualNorms(residual_, free_mass).euclidean;
   multiply(delta_v_, product_);
   residual_ -= product_;
   filter(pinned, residual_);
-  double residual_norm = std::sqrt(dot(residual_, residual_));
-  if (residual_norm > tolerance * rhs_norm && max_iterations > 0)
+  ResidualNorms norms = residualNorms(residual_, free_mass);
+  auto within = [&](const ResidualNorms& n) {
+    return n.euclidean <= settings.cg_tolerance * rhs_norm || n.velocity <= settings.cg_velocity_tolerance;
+  };
+  if (!within(norms) && settings.cg_max_iterations > 0)
   {
     for (int i = 0; i < static_cast<int>(diagonal_block_.size()); ++i)
       inverse_diagonal_[i] = blocks_[diagonal_block_[i]].inverse();
@@ -323,7 +331,7 @@ void ImplicitEulerSolver::conjugateGradient(const std::vector<char>& pinned, dou
     filter(pinned, direction_);
   }
   double delta_new = dot(residual_, direction_);
-  while (residual_norm > tolerance * rhs_norm && report.iterations < max_iterations)
+  while (!within(norms) && report.iterations < settings.cg_max_iterations)
   {
     multiply(direction_, product_);
     filter(pinned, product_);
@@ -341,12 +349,27 @@ void ImplicitEulerSolver::conjugateGradient(const std::vector<char>& pinned, dou
     delta_new = dot(residual_, preconditioned_);
     direction_ = preconditioned_ + (delta_new / delta_old) * direction_;
     filter(pinned, direction_);
-    residual_norm = std::sqrt(dot(residual_, residual_));
+    norms = residualNorms(residual_, free_mass);
     ++report.iterations;
   }
-  report.relative_residual = rhs_norm > 0.0 ? residual_norm / rhs_norm : 0.0;
-  report.converged = residual_norm <= tolerance * rhs_norm;
-  if (!std::isfinite(residual_norm)) report.converged = false;
+  report.relative_residual = rhs_norm > 0.0 ? norms.euclidean / rhs_norm : 0.0;
+  report.velocity_error = norms.velocity;
+  report.converged = within(norms) && std::isfinite(norms.euclidean);
+}
+
+ImplicitEulerSolver::ResidualNorms ImplicitEulerSolver::residualNorms(const Eigen::Matrix3Xd& r, double free_mass) const
+{
+  // |r| and |r|_M⁻¹ / sqrt(Σ m) in one pass (pinned rows are zero after filtering; a massless
+  // particle, which only a pinned one can be, adds nothing).
+  double squared = 0.0, weighted = 0.0;
+  for (int i = 0; i < static_cast<int>(r.cols()); ++i)
+  {
+    const double s = r.col(i).squaredNorm();
+    squared += s;
+    const double m = (*mass_)[i];
+    if (m > 0.0) weighted += s / m;
+  }
+  return {std::sqrt(squared), free_mass > 0.0 ? std::sqrt(weighted / free_mass) : 0.0};
 }
 
 }  // namespace core

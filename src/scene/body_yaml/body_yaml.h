@@ -24,8 +24,8 @@ namespace body_yaml
 // Fails at `reader`'s node with a core validation message, prefixed by the entry's path.
 void check(const MapReader& reader, const std::string& prefix, const Status& status);
 
-// The integrator keys (integrator, verlet_damping, cg_tolerance, cg_max_iterations, max_substeps,
-// linear_solver).
+// The integrator keys (integrator, verlet_damping, cg_tolerance, cg_velocity_tolerance,
+// cg_max_iterations, max_substeps, linear_solver).
 // A body reads and writes only the keys it sets (the world applies its default to the others);
 // the world reads its keys over the built-in defaults and writes them all.
 void readIntegrator(MapReader& reader, core::BodyIntegratorDef& integrator);

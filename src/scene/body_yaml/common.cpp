@@ -38,6 +38,7 @@ void readIntegrator(MapReader& reader, core::BodyIntegratorDef& integrator)
   }
   readSetting(reader, "verlet_damping", integrator.verlet_damping);
   readSetting(reader, "cg_tolerance", integrator.cg_tolerance);
+  readSetting(reader, "cg_velocity_tolerance", integrator.cg_velocity_tolerance);
   readSetting(reader, "cg_max_iterations", integrator.cg_max_iterations);
   readSetting(reader, "max_substeps", integrator.max_substeps);
   if (reader.has("linear_solver"))
@@ -65,6 +66,7 @@ void writeIntegrator(YAML::Node node, const core::BodyIntegratorDef& i)
   if (i.type) node["integrator"] = core::toString(*i.type);
   if (i.verlet_damping) node["verlet_damping"] = *i.verlet_damping;
   if (i.cg_tolerance) node["cg_tolerance"] = *i.cg_tolerance;
+  if (i.cg_velocity_tolerance) node["cg_velocity_tolerance"] = *i.cg_velocity_tolerance;
   if (i.cg_max_iterations) node["cg_max_iterations"] = *i.cg_max_iterations;
   if (i.max_substeps) node["max_substeps"] = *i.max_substeps;
   if (i.linear_solver) node["linear_solver"] = core::toString(*i.linear_solver);

@@ -76,8 +76,15 @@ public:
   void clearWarmStart() { delta_v_.setZero(); }
 
 private:
-  // CG iterations from delta_v_ until the filtered residual is within tolerance |b| or the cap.
-  void conjugateGradient(const std::vector<char>& pinned, double tolerance, int max_iterations, SolverReport& report);
+  // CG iterations from delta_v_ until the filtered residual is within cg_tolerance |b|, or the
+  // velocity error it bounds within cg_velocity_tolerance, or the cap.
+  void conjugateGradient(const std::vector<char>& pinned, const IntegratorDef& settings, SolverReport& report);
+  struct ResidualNorms
+  {
+    double euclidean;  // |r|
+    double velocity;   // [m/s] sqrt(Σ |r_i|² / m_i / free_mass): SolverReport::velocity_error
+  };
+  ResidualNorms residualNorms(const Eigen::Matrix3Xd& r, double free_mass) const;
   void multiply(const Eigen::Matrix3Xd& p, Eigen::Matrix3Xd& out) const;
   static void filter(const std::vector<char>& pinned, Eigen::Matrix3Xd& p);
   void precondition(const Eigen::Matrix3Xd& r, Eigen::Matrix3Xd& out) const;

@@ -1,0 +1,241 @@
+// The implicit solve's stopping rule in velocity (IntegratorDef::cg_velocity_tolerance): the bound
+// it reports against the true error of a stopped conjugate gradient (a dense LU of the same system
+// gives the exact answer), and what it changes on bodies: a body at rest stops at once, a moving one
+// stops within the bound.
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <cmath>
+#include <random>
+#include <utility>
+#include <vector>
+
+#include "particle_sim/core/builders/cloth_grid.h"
+#include "particle_sim/core/integrators/implicit_euler_solver.h"
+#include "particle_sim/core/spring_network.h"
+
+using namespace particle_sim::core;
+
+namespace
+{
+// A stiff random system A = M + K on an n x n grid: masses from 0.1 to 2 kg, and for each
+// neighbouring pair a positive semi-definite 3x3 term (K, −K; −K, K) of up to 1e4 N·s/m (what
+// h ∂f/∂v + h² ∂f/∂x of a definite spring gives). Two particles are pinned. A random right-hand side
+// in momentum units [kg·m/s].
+struct RandomSystem
+{
+  int particles = 0;
+  std::vector<std::pair<int, int>> pairs;
+  std::vector<Eigen::Matrix3d> terms;  // per pair
+  Eigen::VectorXd mass;
+  Eigen::Matrix3Xd rhs;
+  std::vector<char> pinned;
+};
+
+RandomSystem randomSystem(int n, unsigned seed)
+{
+  std::mt19937_64 random(seed);
+  std::uniform_real_distribution<double> uniform(-1.0, 1.0);
+  RandomSystem system;
+  system.particles = n * n;
+  for (int b = 0; b < n; ++b)
+    for (int a = 0; a < n; ++a)
+    {
+      const int i = b * n + a;
+      if (a + 1 < n) system.pairs.emplace_back(i, i + 1);
+      if (b + 1 < n) system.pairs.emplace_back(i, i + n);
+      if (a + 1 < n && b + 1 < n) system.pairs.emplace_back(i, i + n + 1);
+    }
+  for (std::size_t p = 0; p < system.pairs.size(); ++p)
+  {
+    Eigen::Matrix3d g;
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c)
+        g(r, c) = uniform(random);
+    system.terms.push_back(1e4 / 3.0 * g * g.transpose());
+  }
+  system.mass.resize(system.particles);
+  system.rhs.resize(3, system.particles);
+  for (int i = 0; i < system.particles; ++i)
+  {
+    system.mass[i] = 0.1 + 0.95 * (1.0 + uniform(random));
+    system.rhs.col(i) = Eigen::Vector3d(uniform(random), uniform(random), uniform(random));
+  }
+  system.pinned.assign(system.particles, 0);
+  system.pinned[0] = system.pinned[n - 1] = 1;
+  return system;
+}
+
+// Δv from ImplicitEulerSolver with `settings` (h = 1, v0 = 0, so that A = M + K and b = rhs).
+Eigen::Matrix3Xd solveWith(const RandomSystem& system, const IntegratorDef& settings, SolverReport& report)
+{
+  ImplicitEulerSolver solver;
+  solver.setPattern(system.particles, system.pairs);
+  solver.begin(1.0, system.mass, system.rhs, nullptr);
+  for (std::size_t p = 0; p < system.pairs.size(); ++p)
+  {
+    const auto [i, j] = system.pairs[p];
+    const Eigen::Matrix3d& k = system.terms[p];
+    const Eigen::Matrix3d zero = Eigen::Matrix3d::Zero();
+    solver.addBlock(solver.blockIndex(i, i), -k, zero);  // A −= h² ∂f/∂x
+    solver.addBlock(solver.blockIndex(j, j), -k, zero);
+    solver.addBlock(solver.blockIndex(i, j), k, zero);
+    solver.addBlock(solver.blockIndex(j, i), k, zero);
+  }
+  std::vector<RestingContact> contacts;
+  Eigen::Matrix3Xd x = Eigen::Matrix3Xd::Zero(3, system.particles);
+  Eigen::Matrix3Xd v = Eigen::Matrix3Xd::Zero(3, system.particles);
+  report = solver.solve(system.pinned, contacts, settings, x, v);
+  return v;
+}
+
+// The exact Δv: a dense LU of the free rows and columns of A = M + K.
+Eigen::Matrix3Xd solveDense(const RandomSystem& system)
+{
+  const int n = system.particles;
+  Eigen::MatrixXd a = Eigen::MatrixXd::Zero(3 * n, 3 * n);
+  for (int i = 0; i < n; ++i)
+    a.block<3, 3>(3 * i, 3 * i) = system.mass[i] * Eigen::Matrix3d::Identity();
+  for (std::size_t p = 0; p < system.pairs.size(); ++p)
+  {
+    const auto [i, j] = system.pairs[p];
+    a.block<3, 3>(3 * i, 3 * i) += system.terms[p];
+    a.block<3, 3>(3 * j, 3 * j) += system.terms[p];
+    a.block<3, 3>(3 * i, 3 * j) -= system.terms[p];
+    a.block<3, 3>(3 * j, 3 * i) -= system.terms[p];
+  }
+  Eigen::VectorXd b = Eigen::Map<const Eigen::VectorXd>(system.rhs.data(), 3 * n);
+  for (int i = 0; i < n; ++i)
+  {
+    if (!system.pinned[i]) continue;
+    a.middleRows(3 * i, 3).setZero();
+    a.middleCols(3 * i, 3).setZero();
+    a.block<3, 3>(3 * i, 3 * i).setIdentity();
+    b.segment<3>(3 * i).setZero();
+  }
+  const Eigen::VectorXd solution = a.partialPivLu().solve(b);
+  return Eigen::Map<const Eigen::Matrix3Xd>(solution.data(), 3, n);
+}
+
+// sqrt(Σ m_i |e_i|² / Σ m_i) over the free particles [m/s].
+double massWeightedRms(const RandomSystem& system, const Eigen::Matrix3Xd& error)
+{
+  double weighted = 0.0, mass = 0.0;
+  for (int i = 0; i < system.particles; ++i)
+  {
+    if (system.pinned[i]) continue;
+    weighted += system.mass[i] * error.col(i).squaredNorm();
+    mass += system.mass[i];
+  }
+  return std::sqrt(weighted / mass);
+}
+}  // namespace
+
+TEST(CgStoppingRule, VelocityErrorBoundsTheTrueErrorOfAStoppedSolve)
+{
+  // CG stopped by the velocity rule alone (a relative tolerance it cannot reach first): at each
+  // tolerance the reported bound is within it, and the true mass-weighted RMS error against the
+  // dense solve is within the bound, and not zero (the solve did stop early).
+  for (unsigned seed : {1u, 2u, 3u})
+  {
+    const RandomSystem system = randomSystem(10, seed);
+    const Eigen::Matrix3Xd exact = solveDense(system);
+    int previous_iterations = -1;
+    for (double tolerance : {1e-2, 1e-3, 1e-4, 1e-5})
+    {
+      IntegratorDef settings;
+      settings.linear_solver = LinearSolverType::ConjugateGradient;
+      settings.cg_tolerance = 1e-300;
+      settings.cg_velocity_tolerance = tolerance;
+      settings.cg_max_iterations = 100000;
+      SolverReport report;
+      const Eigen::Matrix3Xd cg = solveWith(system, settings, report);
+      const double true_error = massWeightedRms(system, cg - exact);
+      EXPECT_TRUE(report.converged) << "seed " << seed << ", tolerance " << tolerance;
+      EXPECT_LE(report.velocity_error, tolerance) << "seed " << seed;
+      EXPECT_LE(true_error, report.velocity_error) << "seed " << seed << ", tolerance " << tolerance;
+      EXPECT_GT(true_error, 0.0) << "seed " << seed << ", tolerance " << tolerance;
+      EXPECT_GT(report.iterations, previous_iterations) << "a tighter tolerance takes more iterations";
+      previous_iterations = report.iterations;
+      std::printf("seed %u, tolerance %.0e m/s: %3d iterations, bound %.3e m/s, true error %.3e m/s\n", seed, tolerance,
+                  report.iterations, report.velocity_error, true_error);
+    }
+  }
+}
+
+TEST(CgStoppingRule, OnlyTheRelativeRuleWhenTheVelocityToleranceIsZero)
+{
+  // cg_velocity_tolerance 0: the solve goes on to the relative residual, far past the velocity
+  // error the default would have stopped at.
+  const RandomSystem system = randomSystem(10, 4);
+  IntegratorDef settings;
+  settings.linear_solver = LinearSolverType::ConjugateGradient;
+  settings.cg_tolerance = 1e-12;
+  settings.cg_velocity_tolerance = 0.0;
+  settings.cg_max_iterations = 100000;
+  SolverReport report;
+  const Eigen::Matrix3Xd cg = solveWith(system, settings, report);
+  EXPECT_TRUE(report.converged);
+  EXPECT_LE(report.relative_residual, 1e-12);
+  EXPECT_LT(report.velocity_error, IntegratorDef().cg_velocity_tolerance * 1e-3);
+  EXPECT_LT(massWeightedRms(system, cg - solveDense(system)), 1e-9);
+}
+
+namespace
+{
+// A 16 x 16 spring cloth hanging from two corners, implicit Euler with CG.
+ClothGridDef dampedHangingCloth()
+{
+  ClothGridDef def(ClothModel::Springs);
+  def.name = "cloth";
+  def.nu = def.nv = 16;
+  def.mass = 0.5;
+  def.stretch.stiffness = 500.0;
+  def.shear.stiffness = 500.0;
+  def.bend.stiffness = 20.0;
+  def.named_pins = {"corner_00", "corner_10"};
+  def.integrator.type = kImplicitEulerIntegrator;
+  def.integrator.linear_solver = LinearSolverType::ConjugateGradient;
+  def.integrator.cg_max_iterations = 100000;
+  return def;
+}
+}  // namespace
+
+TEST(CgStoppingRule, ABodyComingToRestCostsLittleUnderTheVelocityRule)
+{
+  // A damped cloth settling for 20 s. The relative rule asks for |r| <= 1e-8 |b| however small b
+  // becomes, so it costs as many iterations at rest as in motion (and settles the speeds to 1e-9
+  // m/s, far below anything a step resolves). The velocity rule (1e-5 m/s) stops once the warm start
+  // (the last step's Δv) is that close: in the last second it costs under a quarter as much, and the
+  // cloth is at rest to within a few times its tolerance.
+  ClothGridDef relative_def = dampedHangingCloth();
+  relative_def.integrator.cg_velocity_tolerance = 0.0;
+  ClothGridDef velocity_def = dampedHangingCloth();  // the defaults: 1e-8 relative or 1e-5 m/s
+  SpringNetworkBody relative(buildClothGrid(relative_def)), velocity(buildClothGrid(velocity_def));
+  const double tolerance = velocity.integrator().cg_velocity_tolerance;
+  Environment env;
+  env.ground.enabled = false;
+  env.damping = 2.0;  // [1/s]: every speed falls by e^-40 in 20 s
+  auto largestSpeed = [](const SpringNetworkBody& body) {
+    const ParticlePool& p = body.particles();
+    return p.velocity.leftCols(p.size()).colwise().norm().maxCoeff();
+  };
+  int relative_late = 0, velocity_late = 0;
+  for (int step = 0; step < 1200; ++step)  // 20 s at 60 Hz
+  {
+    relative.step(1.0 / 60.0, env);
+    velocity.step(1.0 / 60.0, env);
+    ASSERT_TRUE(relative.lastSolve().converged) << "step " << step;
+    ASSERT_TRUE(velocity.lastSolve().converged) << "step " << step;
+    EXPECT_LE(velocity.lastSolve().velocity_error, tolerance) << "step " << step;
+    if (step >= 1140)  // the last second
+    {
+      relative_late += relative.lastSolve().iterations;
+      velocity_late += velocity.lastSolve().iterations;
+    }
+  }
+  std::printf("last second: relative rule %d iterations (largest speed %.2e m/s), velocity rule %d (%.2e m/s)\n",
+              relative_late, largestSpeed(relative), velocity_late, largestSpeed(velocity));
+  EXPECT_LT(largestSpeed(velocity), 5.0 * tolerance);
+  EXPECT_LT(4 * velocity_late, relative_late);
+}
