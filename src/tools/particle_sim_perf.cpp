@@ -1,8 +1,9 @@
 // particle_sim_perf: the performance bench of issue 13. Times the core's step on bodies built in
 // code at a sweep of sizes and writes one CSV row per case and size: ropes and cloths solved
-// implicitly (both linear solvers), Bullet's test cloth ("hang64"), explicit springs against the
-// machine's memory bandwidth (a STREAM-like triad), and emitters. scripts/bench --performance runs
-// it and scripts/performance_report.py turns the CSV into docs/performance.md and its plots.
+// implicitly (both linear solvers), Bullet's test cloth ("hang64"), the implicit solve's stopping
+// rule on each of them, explicit springs against the machine's memory bandwidth (a STREAM-like
+// triad), and emitters. scripts/bench --performance runs it and scripts/performance_report.py turns the CSV into
+// docs/performance.md and its plots.
 //
 //   particle_sim_perf [--out FILE] [--quick] [--only CASE,...]
 //
@@ -46,7 +47,7 @@ const char* kUsage =
     "usage: particle_sim_perf [--out FILE] [--quick] [--only CASE,...]\n"
     "  --out FILE    CSV output (default performance.csv)\n"
     "  --quick       fewer sizes, steps and repeats: a smoke run, not a report\n"
-    "  --only CASES  run only these cases: rope, cloth, hang64, springs, emitters\n";
+    "  --only CASES  run only these cases: rope, cloth, hang64, stopping, springs, emitters\n";
 
 core::Environment noGround()
 {
@@ -304,6 +305,82 @@ void hang(std::ostream& out, bool quick)
   }
 }
 
+// --- The stopping rule (goal 9): every CG scene of the bench, from rest, with the default rule
+// (IntegratorDef's cg_velocity_tolerance and cg_tolerance) and no cap in practice: the iterations
+// the rule needs each step, how many steps it would leave at the default cap, the worst velocity
+// error, and any step that did not meet it.
+void stoppingRule(std::ostream& out, bool quick)
+{
+  const core::IntegratorDef defaults;
+  struct Scene
+  {
+    std::string name;
+    int size;
+    core::SpringNetworkDef def;
+    double dt;
+    int steps;
+  };
+  std::vector<Scene> scenes;
+  for (int segments : quick ? std::vector<int>{100} : std::vector<int>{100, 300, 1000, 3000})
+  {
+    core::RopeDef def;
+    def.name = "rope";
+    def.particles = segments + 1;
+    def.start = {0.0, 0.0, 6.0};
+    def.end = {5.0, 0.0, 6.0};
+    def.mass = 1.0;
+    def.stretch_stiffness = 20000.0;
+    def.stretch_damping = 0.0;
+    def.pins = {0};
+    scenes.push_back({"rope", segments, core::buildRope(def), 1.0 / 60.0, segments > 1000 ? 20 : 60});
+  }
+  for (int n : quick ? std::vector<int>{32} : std::vector<int>{32, 64, 128, 256})
+    scenes.push_back({"cloth", n, core::buildClothGrid(squareCloth(n, core::LinearSolverType::ConjugateGradient)),
+                      1.0 / 60.0, n >= 256 ? 3 : (n >= 128 ? 10 : 60)});
+  scenes.push_back({"hang64", 64, hang64(64), 1.0 / 60.0, quick ? 5 : 60});
+  scenes.push_back({"hang64 dt 1/1000", 64, hang64(64), 1.0 / 1000.0, quick ? 5 : 500});
+  for (Scene& scene : scenes)
+  {
+    scene.def.integrator = core::BodyIntegratorDef{};
+    scene.def.integrator.type = core::kImplicitEulerIntegrator;
+    scene.def.integrator.linear_solver = core::LinearSolverType::ConjugateGradient;
+    scene.def.integrator.cg_max_iterations = 100000;
+    core::SpringNetworkBody body(scene.def);
+    const core::Environment env = noGround();
+    long long iterations = 0;
+    int most = 0, over_cap = 0, unconverged = 0;
+    double worst_velocity_error = 0.0;
+    const auto start = Clock::now();
+    for (int i = 0; i < scene.steps && !body.frozen(); ++i)
+    {
+      body.step(scene.dt, env);
+      const core::SolverReport& report = body.lastSolve();
+      iterations += report.iterations;
+      most = std::max(most, report.iterations);
+      over_cap += report.iterations > defaults.cg_max_iterations ? 1 : 0;
+      unconverged += report.converged ? 0 : 1;
+      worst_velocity_error = std::max(worst_velocity_error, report.velocity_error);
+    }
+    const double ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count() / scene.steps;
+    Row row;
+    row.case_name = "stopping";
+    row.variant = scene.name;
+    row.size = scene.size;
+    row.elements = static_cast<double>(scene.def.positions.size());
+    row.timing = {ms, ms, ms};
+    row.iterations = static_cast<double>(iterations) / scene.steps;
+    std::ostringstream detail;
+    detail.precision(3);
+    detail << scene.steps << " steps from rest at dt " << scene.dt << " s; max " << most << " iterations; " << over_cap
+           << " steps over the default cap of " << defaults.cg_max_iterations << "; " << unconverged
+           << " unconverged; worst velocity error " << worst_velocity_error << " m/s (tolerance "
+           << defaults.cg_velocity_tolerance << " m/s)";
+    if (body.frozen()) detail << "; FROZE: " << body.frozenReason();
+    row.detail = detail.str();
+    writeRow(out, row);
+  }
+}
+
 // --- Explicit springs against the memory roof: symplectic Euler on an n x n spring cloth (forces
 // of every spring once per substep), in ns per spring per force pass; and the machine's triad
 // bandwidth a[i] = b[i] + s c[i] over arrays far larger than the caches.
@@ -411,6 +488,7 @@ int main(int argc, char** argv)
   if (wanted("rope")) ropes(out, quick);
   if (wanted("cloth")) cloths(out, quick);
   if (wanted("hang64")) hang(out, quick);
+  if (wanted("stopping")) stoppingRule(out, quick);
   if (wanted("springs")) explicitSprings(out, quick);
   if (wanted("emitters")) emitters(out, quick);
   return 0;
