@@ -98,6 +98,7 @@ void ropes(std::ostream& out, bool quick)
       def.integrator.type = core::kImplicitEulerIntegrator;
       def.integrator.linear_solver = cg ? core::LinearSolverType::ConjugateGradient : core::LinearSolverType::Direct;
       def.integrator.cg_tolerance = 1e-8;
+      def.integrator.cg_velocity_tolerance = 0.0;  // the relative rule alone (goal 9 has its own case)
       def.integrator.cg_max_iterations = 100000;
       core::SpringNetworkBody body(core::buildRope(def));
       const int steps = quick ? 5 : (cg ? std::max(5, 20000 / segments) : std::max(30, 300000 / segments));
@@ -135,6 +136,7 @@ core::ClothGridDef squareCloth(int n, core::LinearSolverType solver)
   def.integrator.type = core::kImplicitEulerIntegrator;
   def.integrator.linear_solver = solver;
   def.integrator.cg_tolerance = 1e-6;
+  def.integrator.cg_velocity_tolerance = 0.0;  // a fixed relative tolerance (goal 2)
   def.integrator.cg_max_iterations = 100000;
   return def;
 }
@@ -260,6 +262,7 @@ void hang(std::ostream& out, bool quick)
     def.integrator.type = variant.integrator;
     def.integrator.linear_solver = variant.solver;
     def.integrator.cg_tolerance = variant.tolerance;
+    def.integrator.cg_velocity_tolerance = 0.0;  // the relative tolerance its name gives
     def.integrator.cg_max_iterations = 100000;
     def.integrator.max_substeps = 100000;
     core::SpringNetworkBody body(def);
