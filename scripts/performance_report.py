@@ -286,7 +286,8 @@ def main():
                        len(stopping), unconverged))
         if over_cap:
             measured += ('; within the default cap of 500 iterations on every step: all but %s (at most %s '
-                         'iterations), which `auto` hands to the direct solver after its first capped step'
+                         'iterations), which `auto` solves directly (a rope from its first step, a cloth from the step after its first '
+                         'capped one)'
                          % (', '.join('%s %d' % (r['variant'], r['size']) for r in over_cap),
                             ', '.join(str(count(r, r'max (\d+) iterations')) for r in over_cap)))
         goals.append(('9', 'a stopping rule that fits the physics, converging at its default (velocity error ≤ '

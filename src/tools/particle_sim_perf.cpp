@@ -2,8 +2,8 @@
 // code at a sweep of sizes and writes one CSV row per case and size: ropes and cloths solved
 // implicitly (both linear solvers), Bullet's test cloth ("hang64"), the implicit solve's stopping
 // rule on each of them, explicit springs against the machine's memory bandwidth (a STREAM-like
-// triad), and emitters. scripts/bench --performance runs it and scripts/performance_report.py turns the CSV into
-// docs/performance.md and its plots.
+// triad), and emitters. scripts/bench --performance runs it and scripts/performance_report.py
+// turns the CSV into docs/performance.md and its plots.
 //
 //   particle_sim_perf [--out FILE] [--quick] [--only CASE,...]
 //

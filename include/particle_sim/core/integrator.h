@@ -87,8 +87,9 @@ struct IntegratorDef
   /// Implicit methods: CG also stops when the bound on the new velocities' mass-weighted RMS error
   /// (SolverReport::velocity_error) is at most this [m/s], in [0, 1]; 0 leaves only cg_tolerance.
   /// An error of τ m/s a step moves the body by at most τ metres a simulated second. Unlike
-  /// |r| <= tolerance |b|, which asks for round-off once b nearly vanishes (a body coming to rest),
-  /// it does not depend on how large this step's change happens to be.
+  /// |r| <= tolerance |b|, which asks for the same relative accuracy of an ever smaller change as a
+  /// body comes to rest (as many iterations at rest as in motion), it does not depend on how large
+  /// this step's change happens to be.
   double cg_velocity_tolerance = 1e-5;
   int cg_max_iterations = 500;  ///< implicit Euler: iteration cap, >= 1
   int max_substeps = 64;        ///< explicit methods: most substeps a step may be split into to stay stable, >= 1
