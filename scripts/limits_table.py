@@ -31,6 +31,8 @@ RANGE_TEXT = {
     "kDamping": "spring damping k_d (scene `damping`, `*_damping`, `~set_spring_constants`)",
     "kGravityComponent": "each component of gravity (`world.gravity`, live `gravity_*`)",
     "kWindComponent": "each component of the wind (`world.air.wind`, `~set_wind`, live `wind_*`)",
+    "kSolverVelocityTolerance": "velocity error at which an implicit solve's CG stops (`cg_velocity_tolerance`; 0 = "
+    "only `cg_tolerance`)",
     "kGlobalDamping": "global damping (`world.global_damping`, live `global_damping`)",
     "kRealTimeFactor": "real-time factor (`~real_time_factor`, live; 0 = as fast as possible)",
     "kPublishRate": "publish rate (`~rate`, live)",

@@ -414,8 +414,8 @@ def main():
                      'it would leave unconverged at the default `cg_max_iterations` of 500, and the worst '
                      'velocity error. The rule asks for the same accuracy of the velocities at any size and step, '
                      'so its iterations follow the conditioning of the system: they grow with the side of a '
-                     'cloth and the length of a rope at dt = 1/60, and vanish at dt = 1/1000, where the warm start '
-                     'is nearly the answer.')
+                     'cloth and the length of a rope at dt = 1/60, and fall to about a dozen at dt = 1/1000, where '
+                     'the warm start is nearly the answer.')
         lines.append('')
         lines.append('| scene | size | particles | ms per step (one run) | CG iterations per step (mean) | detail |')
         lines.append('|---|---|---|---|---|---|')

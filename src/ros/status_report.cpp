@@ -197,7 +197,7 @@ std::string statusLine(const core::World& world, double real_time_factor, double
   }
   char solver[160] = "";
   if (any_implicit && direct_solves == implicit_solves && cg_iterations == 0)
-    std::snprintf(solver, sizeof(solver), " | direct solve, residual %.1e", cg_residual);
+    std::snprintf(solver, sizeof(solver), " | direct solve, residual %.1e, %.1e m/s", cg_residual, velocity_error);
   else if (any_implicit && direct_solves > 0)
     std::snprintf(solver, sizeof(solver), " | %d of %d solves direct, CG %d iterations, residual %.1e, %.1e m/s",
                   direct_solves, implicit_solves, cg_iterations, cg_residual, velocity_error);

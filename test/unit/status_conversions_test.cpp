@@ -255,6 +255,7 @@ TEST(StatusConversions, StatusLineShowsTimeRateParticlesStepAndTheImplicitSolves
             0u)
       << line;
   EXPECT_EQ(line.substr(line.size() - 9), " | paused");
+  EXPECT_NE(line.find(" m/s | paused"), std::string::npos) << line;  // the velocity error
 
   // By the conjugate gradient: its iterations.
   core::World cg_world = makeWorld(core::kImplicitEulerIntegrator, core::LinearSolverType::ConjugateGradient);

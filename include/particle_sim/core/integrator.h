@@ -60,14 +60,15 @@ std::string integratorTypeNames();
 enum class LinearSolverType
 {
   Auto,               ///< the cheaper of the two, from flop counts and the CG iterations measured (see below)
-  ConjugateGradient,  ///< Baraff & Witkin's modified preconditioned conjugate gradient, to cg_tolerance
+  ConjugateGradient,  ///< Baraff & Witkin's modified preconditioned conjugate gradient, to cg_velocity_tolerance
+                      ///< or cg_tolerance
   Direct,             ///< sparse block L D Lᵀ in a fill-reducing order (exact; O(n) on a rope)
 };
 /// `auto` picks the direct solver when one factorization and solve cost at most this many
 /// conjugate-gradient iterations, counted in floating-point operations from the pattern: true of
 /// ropes and chains (no fill) and of small sheets. Larger sheets and lattices start with CG, and
 /// switch to the direct solver for good once a CG solve takes more iterations than the direct solve
-/// costs, or ends at cg_max_iterations short of cg_tolerance (stiff sheets at large steps, and
+/// costs, or ends at cg_max_iterations short of both tolerances (stiff sheets at large steps, and
 /// large sheets whose direct solve costs more than the iteration cap).
 inline constexpr double kDirectSolverCgIterations = 40.0;
 
@@ -86,7 +87,8 @@ struct IntegratorDef
   double cg_tolerance = 1e-8;   ///< implicit Euler: stop when |r| <= tolerance |b| (filtered residuals), > 0
   /// Implicit methods: CG also stops when the bound on the new velocities' mass-weighted RMS error
   /// (SolverReport::velocity_error) is at most this [m/s], in [0, 1]; 0 leaves only cg_tolerance.
-  /// An error of τ m/s a step moves the body by at most τ metres a simulated second. Unlike
+  /// An error of τ m/s a step moves the body's mass-weighted RMS position (so its centre of mass) by
+  /// at most τ metres a simulated second; one light particle can be off by more. Unlike
   /// |r| <= tolerance |b|, which asks for the same relative accuracy of an ever smaller change as a
   /// body comes to rest (as many iterations at rest as in motion), it does not depend on how large
   /// this step's change happens to be.
@@ -136,8 +138,9 @@ struct SolverReport
   int iterations = 0;              ///< conjugate-gradient iterations
   double relative_residual = 0.0;  ///< |r| / |b| at the end
   /// [m/s] sqrt(Σ |r_i|² / m_i / Σ m_i) over the free particles at the end: a bound on the mass-weighted
-  /// RMS error of the new velocities, exact while every force's Jacobian is negative semi-definite
-  /// (then the system A = M − h ∂f/∂v − h² ∂f/∂x is at least M, and |A⁻¹ r|_M <= |r|_M⁻¹).
+  /// RMS error of the new velocities, rigorous while every force's Jacobian is negative semi-definite
+  /// (then the system A = M − h ∂f/∂v − h² ∂f/∂x is at least M, and |A⁻¹ r|_M <= |r|_M⁻¹). It is
+  /// the error of the last linear solve (after implicit Euler's Newton corrections, of the last one).
   double velocity_error = 0.0;
   bool converged = true;   ///< the residual reached a tolerance within the iteration cap, and the
                            ///< resting contacts' holds settled within kMaxContactSolves
