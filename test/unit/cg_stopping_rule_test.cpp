@@ -66,6 +66,18 @@ RandomSystem randomSystem(int n, unsigned seed, double stiffness = 1e4)
   return system;
 }
 
+// Settings for CG alone, stopping at the relative residual `relative` or the velocity error
+// `velocity` [m/s] (0: that rule off), with no cap in practice.
+IntegratorDef cgSettings(double relative, double velocity)
+{
+  IntegratorDef settings;
+  settings.linear_solver = LinearSolverType::ConjugateGradient;
+  settings.cg_tolerance = relative;
+  settings.cg_velocity_tolerance = velocity;
+  settings.cg_max_iterations = 100000;
+  return settings;
+}
+
 // Δv from ImplicitEulerSolver with `settings` (h = 1, v0 = 0, so that A = M + K and b = rhs).
 Eigen::Matrix3Xd solveWith(const RandomSystem& system, const IntegratorDef& settings, SolverReport& report)
 {
@@ -141,24 +153,14 @@ TEST(CgStoppingRule, VelocityErrorBoundsTheTrueErrorOfAStoppedSolve)
   {
     const RandomSystem system = randomSystem(10, seed);
     const Eigen::Matrix3Xd exact = solveDense(system);
-    IntegratorDef to_round_off;
-    to_round_off.linear_solver = LinearSolverType::ConjugateGradient;
-    to_round_off.cg_tolerance = 1e-14;
-    to_round_off.cg_velocity_tolerance = 0.0;
-    to_round_off.cg_max_iterations = 100000;
     SolverReport full;
-    solveWith(system, to_round_off, full);
+    solveWith(system, cgSettings(1e-14, 0.0), full);
     ASSERT_TRUE(full.converged);
     int previous_iterations = -1;
     for (double tolerance : {1e-2, 1e-3, 1e-4, 1e-5})
     {
-      IntegratorDef settings;
-      settings.linear_solver = LinearSolverType::ConjugateGradient;
-      settings.cg_tolerance = 1e-300;
-      settings.cg_velocity_tolerance = tolerance;
-      settings.cg_max_iterations = 100000;
       SolverReport report;
-      const Eigen::Matrix3Xd cg = solveWith(system, settings, report);
+      const Eigen::Matrix3Xd cg = solveWith(system, cgSettings(1e-300, tolerance), report);
       const double true_error = massWeightedRms(system, cg - exact);
       EXPECT_TRUE(report.converged) << "seed " << seed << ", tolerance " << tolerance;
       EXPECT_LE(report.velocity_error, tolerance) << "seed " << seed;
@@ -180,12 +182,8 @@ TEST(CgStoppingRule, TheBoundIsTheTrueErrorWhenTheSystemIsTheMassMatrix)
   // inequality of the stiff systems cannot.
   RandomSystem system = randomSystem(6, 5, 0.0);
   system.rhs *= 0.1;  // [kg·m/s]: an answer of about 0.1 m/s, within the tolerance of 1 m/s
-  IntegratorDef settings;
-  settings.linear_solver = LinearSolverType::ConjugateGradient;
-  settings.cg_tolerance = 1e-300;
-  settings.cg_velocity_tolerance = 1.0;
   SolverReport report;
-  const Eigen::Matrix3Xd stopped = solveWith(system, settings, report);
+  const Eigen::Matrix3Xd stopped = solveWith(system, cgSettings(1e-300, 1.0), report);
   ASSERT_EQ(report.iterations, 0);
   EXPECT_EQ(stopped.cwiseAbs().maxCoeff(), 0.0);
   const double true_error = massWeightedRms(system, stopped - solveDense(system));
@@ -198,13 +196,8 @@ TEST(CgStoppingRule, OnlyTheRelativeRuleWhenTheVelocityToleranceIsZero)
   // cg_velocity_tolerance 0: the solve goes on to the relative residual, far past the velocity
   // error the default would have stopped at.
   const RandomSystem system = randomSystem(10, 4);
-  IntegratorDef settings;
-  settings.linear_solver = LinearSolverType::ConjugateGradient;
-  settings.cg_tolerance = 1e-12;
-  settings.cg_velocity_tolerance = 0.0;
-  settings.cg_max_iterations = 100000;
   SolverReport report;
-  const Eigen::Matrix3Xd cg = solveWith(system, settings, report);
+  const Eigen::Matrix3Xd cg = solveWith(system, cgSettings(1e-12, 0.0), report);
   EXPECT_TRUE(report.converged);
   EXPECT_LE(report.relative_residual, 1e-12);
   EXPECT_LT(report.velocity_error, IntegratorDef().cg_velocity_tolerance * 1e-3);
