@@ -94,6 +94,11 @@ Status validate(const SpringNetworkDef& def, int max_particles)
   }
   if (Status s = validate(def.strain_limit); !s) return s;
   if (Status s = checkRange("contact_thickness", def.contact_thickness, limits::kContactThickness); !s) return s;
+  if (Status s = checkRange("tear_strain", def.tear_strain, limits::kTearStrain); !s) return s;
+  if (def.tear_strain > 0.0 && (!def.baraff_witkin.empty() || !def.rod_bending.empty() || !def.plate_bending.empty()))
+    return Status::failure("tear_strain = " + formatValue(def.tear_strain) +
+                           ": tearing breaks springs only; a body with Baraff–Witkin, rod or plate bending "
+                           "energies cannot tear yet (set tear_strain to 0)");
   const BaraffWitkinDef& bw = def.baraff_witkin;
   for (const BwTriangle& t : bw.triangles)
     for (int c : t.v)
@@ -151,6 +156,13 @@ SpringNetworkBody::SpringNetworkBody(const SpringNetworkDef& def, const Integrat
   saved_velocity_.setZero(3, n);
   substep_start_.setZero(3, n);
   resting_contacts_.reserve(n);
+  if (def_.tear_strain > 0.0)
+  {
+    // A tear allocates nothing: its lists can hold every spring.
+    torn_.springs.reserve(def_.springs.size());
+    joined_pairs_.reserve(def_.springs.size());
+    cut_pairs_.reserve(def_.springs.size());
+  }
   // The implicit system's pattern: the particle pairs every force element couples. The elements
   // look up their block indices once; they depend only on the pattern, which every implicit
   // method's solver is given.
@@ -198,7 +210,12 @@ void SpringNetworkBody::reset()
     p.inverse_mass[index] = 0.0;
     pin_target_.col(index) = def_.positions[index];
   }
+  forces_.mend();
   forces_.resetConstants();
+  surface_ = def_.triangles;
+  strain_limit_.setSprings(def_.springs);
+  torn_.clear();
+  torn_springs_ = 0;
   integrator_ = built_integrator_;
   guard_.clear();
   updateStabilityBound();
@@ -366,6 +383,7 @@ SubstepPlan SpringNetworkBody::planStep(double dt, const Environment& env) const
 
 void SpringNetworkBody::step(double dt, const Environment& env)
 {
+  torn_.clear();
   if (frozen()) return;
   air_ = env.air;
   damping_ = env.damping;
@@ -434,7 +452,43 @@ void SpringNetworkBody::step(double dt, const Environment& env)
     p.position = saved_position_;
     p.velocity = saved_velocity_;
     frozen_reason_ = guard_.freezeReason(type, dt, last_solve_.breakdown);
+    return;
   }
+  if (def_.tear_strain > 0.0) tearOverstretched();
+}
+
+void SpringNetworkBody::tearOverstretched()
+{
+  forces_.tear(particles_.position, def_.tear_strain, torn_);
+  if (torn_.empty()) return;
+  torn_springs_ += static_cast<long long>(torn_.springs.size());
+
+  // A surface triangle goes when one of its edges has no spring left joining its corners (a pair
+  // that had springs and lost them all). Runs only when something broke.
+  auto ordered = [](int a, int b) { return a < b ? std::make_pair(a, b) : std::make_pair(b, a); };
+  std::vector<std::pair<int, int>>& joined = joined_pairs_;
+  joined.clear();
+  for (const Spring& spring : springs())
+    joined.push_back(ordered(spring.i, spring.j));
+  std::sort(joined.begin(), joined.end());
+  std::vector<std::pair<int, int>>& cut = cut_pairs_;
+  cut.clear();
+  for (const std::pair<int, int>& pair : torn_.springs)
+  {
+    const std::pair<int, int> edge = ordered(pair.first, pair.second);
+    if (!std::binary_search(joined.begin(), joined.end(), edge)) cut.push_back(edge);
+  }
+  std::sort(cut.begin(), cut.end());
+  auto is_cut = [&](int a, int b) { return std::binary_search(cut.begin(), cut.end(), ordered(a, b)); };
+  const std::size_t before = surface_.size();
+  surface_.erase(std::remove_if(surface_.begin(), surface_.end(),
+                                [&](const Eigen::Vector3i& t) {
+                                  return is_cut(t[0], t[1]) || is_cut(t[1], t[2]) || is_cut(t[2], t[0]);
+                                }),
+                 surface_.end());
+  if (surface_.size() != before) forces_.setSurface(surface_);
+  strain_limit_.setSprings(springs());
+  updateStabilityBound();
 }
 
 void SpringNetworkBody::pinReactions(Eigen::Matrix3Xd& reactions) const

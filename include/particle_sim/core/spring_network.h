@@ -53,6 +53,10 @@ struct SpringNetworkDef
   StrainLimitDef strain_limit;
   BodyIntegratorDef integrator;    ///< what the body sets; the rest is the world's default
   double contact_thickness = 0.0;  ///< [m] in limits::kContactThickness: kept from ground and spheres (0 = touch)
+  /// [-] in limits::kTearStrain: a spring of positive rest length stretched past (1 + tear_strain)
+  /// times its rest length at the end of a step breaks; 0 = never. Springs only for now: refused
+  /// together with Baraff–Witkin, rod or plate bending.
+  double tear_strain = 0.0;
 };
 
 /// Checks sizes, indices, masses, spring constants, pins and the integrator; the message names the
@@ -173,6 +177,16 @@ public:
   long long stabilityEvents() const { return guard_.events(); }
   const std::string& lastStabilityEvent() const { return guard_.lastEvent(); }
 
+  // Tearing ------------------------------------------------------------------------------------
+  /// The surface triangles left: the definition's, less every triangle one of whose edges lost its
+  /// last spring to a tear (drawn, published and under the air).
+  const std::vector<Eigen::Vector3i>& surfaceTriangles() const { return surface_; }
+  /// Springs broken since build or reset, and in the last step.
+  long long tornSprings() const { return torn_springs_; }
+  int lastTornSprings() const { return static_cast<int>(torn_.springs.size()); }
+  /// What the last step tore (empty when nothing).
+  const TearRecord& lastTear() const { return torn_; }
+
   // Measurements -------------------------------------------------------------------------------
   /// Largest (|x_j − x_i| − L) / L over the stretch and shear springs [-].
   double maxStrain() const;
@@ -192,6 +206,9 @@ private:
   void substep(double h, IntegratorType type, const Environment& env);
   // c_max [1/s] under the air and global damping [1/s] of a step.
   double dampingBound(const AirDef& air, double damping) const;
+  // Breaks what is stretched past def_.tear_strain and updates the surface, the strain limit and
+  // the stability bound when something broke.
+  void tearOverstretched();
   // Recomputes omega_bound_ and damping_bound_ from the current constants.
   void updateStabilityBound();
   // Kinetic plus potential energy of the current state [J].
@@ -246,8 +263,12 @@ private:
   Eigen::Matrix3Xd saved_position_, saved_velocity_;
   Eigen::Matrix3Xd substep_start_;                // positions at the start of a substep, when boxes or capsules sweep
   std::vector<RestingContact> resting_contacts_;  // implicit methods: found before each substep
-  double last_dt_ = 0.0;          // [s] of the last step (pinReactions' accelerations); 0 before the first
-  Eigen::Matrix3Xd step_target_;  // pin targets at the end of the whole step (substeps approach them)
+  double last_dt_ = 0.0;                  // [s] of the last step (pinReactions' accelerations); 0 before the first
+  Eigen::Matrix3Xd step_target_;          // pin targets at the end of the whole step (substeps approach them)
+  std::vector<Eigen::Vector3i> surface_;  // the surface triangles a tear left
+  TearRecord torn_;                       // what the last step tore
+  std::vector<std::pair<int, int>> joined_pairs_, cut_pairs_;  // tear work arrays, reserved at build
+  long long torn_springs_ = 0;            // since build or reset
 };
 
 }  // namespace core

@@ -185,6 +185,7 @@ SpringNetworkDef buildClothGrid(const ClothGridDef& def)
   const SpringConstants stretch = def.constants(SpringClass::Stretch), shear = def.constants(SpringClass::Shear),
                         bend = def.constants(SpringClass::Bend);
   SpringNetworkDef net = emptyCloth(def.name, def.integrator, def.strain_limit, def.contact_thickness);
+  net.tear_strain = def.tear_strain;
   const int nu = def.nu, nv = def.nv, n = nu * nv;
   auto index = [nu](int a, int b) { return b * nu + a; };
 

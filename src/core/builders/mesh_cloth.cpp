@@ -74,6 +74,7 @@ SpringNetworkDef buildMeshCloth(const MeshClothDef& def)
   const SpringConstants stretch = def.constants(SpringClass::Stretch), shear = def.constants(SpringClass::Shear),
                         bend = def.constants(SpringClass::Bend);
   SpringNetworkDef net = emptyCloth(def.name, def.integrator, def.strain_limit, def.contact_thickness);
+  net.tear_strain = def.tear_strain;
   net.positions = def.vertices;
   net.triangles = def.triangles;
   const int n = static_cast<int>(def.vertices.size());

@@ -79,6 +79,7 @@ SpringNetworkDef buildRope(const RopeDef& def)
   net.shape = NetworkShape::Rope;
   net.integrator = def.integrator;
   net.contact_thickness = def.contact_thickness;
+  net.tear_strain = def.tear_strain;
   const int n = def.particles;
   const double total_rest = totalRestLength(def);
   const double segment = total_rest / (n - 1);

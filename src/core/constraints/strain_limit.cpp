@@ -20,11 +20,17 @@ Status validate(const StrainLimitDef& def)
 
 StrainLimit::StrainLimit(const StrainLimitDef& def, const std::vector<Spring>& springs, int particles) : def_(def)
 {
+  setSprings(springs);
+  unlimited_position_.setZero(3, particles);
+}
+
+void StrainLimit::setSprings(const std::vector<Spring>& springs)
+{
+  springs_.clear();
   for (const Spring& s : springs)
   {
     if (s.spring_class != SpringClass::Bend) springs_.push_back(s);
   }
-  unlimited_position_.setZero(3, particles);
 }
 
 void StrainLimit::apply(double h, ParticlePool& p)

@@ -104,5 +104,24 @@ double ForceSet::maxStrain(const Eigen::Matrix3Xd& x) const
   return strain;
 }
 
+void ForceSet::tear(const Eigen::Matrix3Xd& x, double tear_strain, TearRecord& torn)
+{
+  torn.clear();
+  for (const std::unique_ptr<ForceElement>& element : elements_)
+    element->tear(x, tear_strain, torn);
+}
+
+void ForceSet::setSurface(const std::vector<Eigen::Vector3i>& triangles)
+{
+  for (const std::unique_ptr<ForceElement>& element : elements_)
+    element->setSurface(triangles);
+}
+
+void ForceSet::mend()
+{
+  for (const std::unique_ptr<ForceElement>& element : elements_)
+    element->mend();
+}
+
 }  // namespace core
 }  // namespace particle_sim

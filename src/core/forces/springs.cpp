@@ -1,11 +1,18 @@
 #include "particle_sim/core/forces/springs.h"
 
 #include <algorithm>
+#include <numeric>
 
 namespace particle_sim
 {
 namespace core
 {
+SpringForces::SpringForces(std::vector<Spring> springs)
+    : built_(springs), springs_(std::move(springs)), origin_(springs_.size())
+{
+  std::iota(origin_.begin(), origin_.end(), 0);
+}
+
 void SpringForces::addForces(const ForceContext& /*context*/, const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v,
                              Eigen::Matrix3Xd& force) const
 {
@@ -26,12 +33,17 @@ void SpringForces::coupledPairs(std::vector<std::pair<int, int>>& pairs) const
 
 void SpringForces::bindPattern(const ImplicitEulerSolver& solver)
 {
-  blocks_.clear();
-  for (const Spring& spring : springs_)
+  // Every built spring keeps its blocks in the pattern, torn or not: a tear leaves them zero, so
+  // the pattern (and the solver's storage) never changes.
+  built_blocks_.clear();
+  for (const Spring& spring : built_)
   {
-    blocks_.push_back({solver.blockIndex(spring.i, spring.i), solver.blockIndex(spring.i, spring.j),
-                       solver.blockIndex(spring.j, spring.i), solver.blockIndex(spring.j, spring.j)});
+    built_blocks_.push_back({solver.blockIndex(spring.i, spring.i), solver.blockIndex(spring.i, spring.j),
+                             solver.blockIndex(spring.j, spring.i), solver.blockIndex(spring.j, spring.j)});
   }
+  blocks_.clear();
+  for (int origin : origin_)
+    blocks_.push_back(built_blocks_[origin]);
 }
 
 void SpringForces::addJacobians(const ForceContext& /*context*/, const Eigen::Matrix3Xd& x,
@@ -70,6 +82,44 @@ void SpringForces::addEnergy(const ForceContext& /*context*/, const Eigen::Matri
 {
   for (const Spring& s : springs_)
     energy += springEnergy(x.col(s.i), x.col(s.j), s.rest_length, s.stiffness);
+}
+
+void SpringForces::resetConstants()
+{
+  for (std::size_t s = 0; s < springs_.size(); ++s)
+    springs_[s] = built_[origin_[s]];
+}
+
+void SpringForces::tear(const Eigen::Matrix3Xd& x, double tear_strain, TearRecord& torn)
+{
+  // One pass that keeps the springs within the tear strain in their order (the force sums keep
+  // theirs) and drops the others, with their blocks.
+  std::size_t kept = 0;
+  for (std::size_t s = 0; s < springs_.size(); ++s)
+  {
+    const Spring& spring = springs_[s];
+    const double length = (x.col(spring.j) - x.col(spring.i)).norm();
+    if (spring.rest_length > 0.0 && length > (1.0 + tear_strain) * spring.rest_length)
+    {
+      torn.springs.emplace_back(spring.i, spring.j);
+      continue;
+    }
+    springs_[kept] = spring;
+    origin_[kept] = origin_[s];
+    if (!blocks_.empty()) blocks_[kept] = blocks_[s];
+    ++kept;
+  }
+  springs_.resize(kept);
+  origin_.resize(kept);
+  if (!blocks_.empty()) blocks_.resize(kept);
+}
+
+void SpringForces::mend()
+{
+  springs_ = built_;
+  blocks_ = built_blocks_;
+  origin_.resize(built_.size());
+  std::iota(origin_.begin(), origin_.end(), 0);
 }
 
 bool SpringForces::hasClass(SpringClass spring_class) const

@@ -30,6 +30,7 @@ struct JellyDef
   StrainLimitDef strain_limit;
   BodyIntegratorDef integrator;    ///< what the body sets; the rest is the world's default
   double contact_thickness = 0.0;  ///< [m] in limits::kContactThickness: kept from ground and spheres (0 = touch)
+  double tear_strain = 0.0;        ///< [-] in limits::kTearStrain: springs stretched past it break (SpringNetworkDef)
 };
 
 Status validate(const JellyDef& def, int max_particles);

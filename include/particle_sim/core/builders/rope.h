@@ -29,13 +29,14 @@ struct RopeDef
   double mass = 1.0;                                 ///< [kg] total, shared equally
   double rest_length =
       0.0;  ///< [m] total rest length; 0 = |end − start| (a larger or smaller value starts it slack or stretched)
-  double stretch_stiffness = 500.0;      ///< [N/m]
-  double stretch_damping = 0.5;          ///< [N·s/m]
-  double bend_stiffness = 0.0;           ///< [N/m]; 0 = no bend springs
-  double bend_damping = 0.0;             ///< [N·s/m]
-  std::vector<int> pins;                 ///< indices pinned where they start; negative counts from the end (-1 = last)
-  BodyIntegratorDef integrator;          ///< what the body sets; the rest is the world's default
-  double contact_thickness = 0.0;        ///< [m] in limits::kContactThickness: kept from ground and spheres (0 = touch)
+  double stretch_stiffness = 500.0;  ///< [N/m]
+  double stretch_damping = 0.5;      ///< [N·s/m]
+  double bend_stiffness = 0.0;       ///< [N/m]; 0 = no bend springs
+  double bend_damping = 0.0;         ///< [N·s/m]
+  std::vector<int> pins;             ///< indices pinned where they start; negative counts from the end (-1 = last)
+  BodyIntegratorDef integrator;      ///< what the body sets; the rest is the world's default
+  double contact_thickness = 0.0;    ///< [m] in limits::kContactThickness: kept from ground and spheres (0 = touch)
+  double tear_strain = 0.0;          ///< [-] in limits::kTearStrain: springs stretched past it break (SpringNetworkDef)
   std::optional<RopeMaterial> material;  ///< physical units; when set, replaces mass and the spring constants
 };
 

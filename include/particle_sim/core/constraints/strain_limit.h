@@ -33,6 +33,8 @@ public:
   StrainLimit(const StrainLimitDef& def, const std::vector<Spring>& springs, int particles);
 
   bool enabled() const { return def_.max_strain > 0.0; }
+  /// Limits these springs from now on (the body's after a tear; bend ones are skipped).
+  void setSprings(const std::vector<Spring>& springs);
   /// Moves over-stretched springs' ends back (in proportion to their inverse masses), then adds
   /// the correction over `h` [s] to the velocities.
   void apply(double h, ParticlePool& pool);

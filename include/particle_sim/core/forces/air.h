@@ -16,7 +16,7 @@ namespace core
 class AirForce : public ForceElement
 {
 public:
-  explicit AirForce(std::vector<Eigen::Vector3i> triangles) : triangles_(std::move(triangles)) {}
+  explicit AirForce(std::vector<Eigen::Vector3i> triangles) : built_(triangles), triangles_(std::move(triangles)) {}
 
   void addForces(const ForceContext& context, const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v,
                  Eigen::Matrix3Xd& force) const override;
@@ -25,7 +25,12 @@ public:
     return context.air.drag != 0.0 && !context.air.wind.isZero();
   }
 
+  /// The air acts on the triangles a tear left.
+  void setSurface(const std::vector<Eigen::Vector3i>& triangles) override { triangles_ = triangles; }
+  void mend() override { triangles_ = built_; }
+
 private:
+  std::vector<Eigen::Vector3i> built_;  // the surface as built
   std::vector<Eigen::Vector3i> triangles_;
 };
 

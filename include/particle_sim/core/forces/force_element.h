@@ -24,6 +24,21 @@ struct ForceContext
   double damping = 0.0;             ///< [1/s] global damping of the current step (Environment::damping)
 };
 
+/// What one tear removed: the particle pairs of the broken springs and the corners of the removed
+/// triangles, in the order the elements hold them.
+struct TearRecord
+{
+  std::vector<std::pair<int, int>> springs;
+  std::vector<Eigen::Vector3i> triangles;
+
+  void clear()
+  {
+    springs.clear();
+    triangles.clear();
+  }
+  bool empty() const { return springs.empty() && triangles.empty(); }
+};
+
 /// One kind of force acting on a spring body (springs, Baraff–Witkin conditions, air, global
 /// damping, gravity). A body is composed of elements and asks each, in a fixed order, for:
 /// its forces at (x, v), its Jacobian blocks (pattern bound once), its rows of the stability
@@ -74,6 +89,15 @@ public:
   {}
   /// Puts back the constants the element was built with.
   virtual void resetConstants() {}
+
+  // Tearing ------------------------------------------------------------------------------------
+  /// Removes every part stretched at x past `tear_strain` [-] (> 0) and appends what broke to
+  /// `torn`; the rest keep their order. Nothing for an element that cannot tear.
+  virtual void tear(const Eigen::Matrix3Xd& /*x*/, double /*tear_strain*/, TearRecord& /*torn*/) {}
+  /// The body's surface after a tear (elements that act on the surface triangles keep only these).
+  virtual void setSurface(const std::vector<Eigen::Vector3i>& /*triangles*/) {}
+  /// Puts back every part tearing removed, with the constants it was built with.
+  virtual void mend() {}
 
   // Measurements ----------------------------------------------------------------------------------
   /// The largest strain [-] of what the element stretches at x; 0 when it stretches nothing.

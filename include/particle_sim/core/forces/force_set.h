@@ -41,6 +41,10 @@ public:
   void setClassConstants(std::optional<SpringClass> spring_class, double stiffness, double damping);
   void resetConstants();
   double maxStrain(const Eigen::Matrix3Xd& x) const;
+  /// Every element's tear, in add() order; `torn` is cleared first.
+  void tear(const Eigen::Matrix3Xd& x, double tear_strain, TearRecord& torn);
+  void setSurface(const std::vector<Eigen::Vector3i>& triangles);
+  void mend();
 
   /// The first element of type `Element`, or null (for read-only views of one element's data).
   template <class Element>

@@ -13,11 +13,12 @@ namespace core
 /// The lecture's springs ("Interaction between particles", spring force = elastic + damping;
 /// kernels in spring.h): forces, energy k_e (l − L)²/2, Jacobian blocks in the definite form of
 /// Choi & Ko 2002 (compressed springs keep no transverse stiffness), and Gershgorin rows 2 k at
-/// both ends. Stiffness and damping are set per SpringClass at run time.
+/// both ends. Stiffness and damping are set per SpringClass at run time. A spring stretched past
+/// the body's tear strain breaks: it leaves the list (tear(); mend() puts every spring back).
 class SpringForces : public ForceElement
 {
 public:
-  explicit SpringForces(std::vector<Spring> springs) : built_(springs), springs_(std::move(springs)) {}
+  explicit SpringForces(std::vector<Spring> springs);
 
   /// The springs with their current constants.
   const std::vector<Spring>& springs() const { return springs_; }
@@ -32,14 +33,19 @@ public:
   void addEnergy(const ForceContext& context, const Eigen::Matrix3Xd& x, double& energy) const override;
   bool hasClass(SpringClass spring_class) const override;
   void setClassConstants(std::optional<SpringClass> spring_class, double stiffness, double damping) override;
-  void resetConstants() override { springs_ = built_; }
+  void resetConstants() override;
+  /// Breaks every spring of positive rest length whose strain (l − L) / L exceeds `tear_strain`.
+  void tear(const Eigen::Matrix3Xd& x, double tear_strain, TearRecord& torn) override;
+  void mend() override;
   /// Largest (|x_j − x_i| − L) / L over the stretch and shear springs of positive rest length.
   double maxStrain(const Eigen::Matrix3Xd& x) const override;
 
 private:
-  std::vector<Spring> built_;               // as built (reset puts these constants back)
-  std::vector<Spring> springs_;             // current constants
-  std::vector<std::array<int, 4>> blocks_;  // per spring: its blocks ii, ij, ji, jj
+  std::vector<Spring> built_;                     // as built (reset puts these constants back)
+  std::vector<std::array<int, 4>> built_blocks_;  // per built spring: its blocks ii, ij, ji, jj
+  std::vector<Spring> springs_;                   // the springs not torn, with their current constants
+  std::vector<std::array<int, 4>> blocks_;        // per spring of springs_: its blocks
+  std::vector<int> origin_;                       // per spring of springs_: its index in built_
 };
 
 }  // namespace core
