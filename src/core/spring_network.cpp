@@ -95,10 +95,10 @@ Status validate(const SpringNetworkDef& def, int max_particles)
   if (Status s = validate(def.strain_limit); !s) return s;
   if (Status s = checkRange("contact_thickness", def.contact_thickness, limits::kContactThickness); !s) return s;
   if (Status s = checkRange("tear_strain", def.tear_strain, limits::kTearStrain); !s) return s;
-  if (def.tear_strain > 0.0 && (!def.baraff_witkin.empty() || !def.rod_bending.empty() || !def.plate_bending.empty()))
+  if (def.tear_strain > 0.0 && (!def.rod_bending.empty() || !def.plate_bending.empty()))
     return Status::failure("tear_strain = " + formatValue(def.tear_strain) +
-                           ": tearing breaks springs only; a body with Baraff–Witkin, rod or plate bending "
-                           "energies cannot tear yet (set tear_strain to 0)");
+                           ": tearing breaks springs and Baraff–Witkin triangles; a body with rod or plate bending "
+                           "(a rope or cloth given by its material) cannot tear yet (set tear_strain to 0)");
   const BaraffWitkinDef& bw = def.baraff_witkin;
   for (const BwTriangle& t : bw.triangles)
     for (int c : t.v)
@@ -160,6 +160,7 @@ SpringNetworkBody::SpringNetworkBody(const SpringNetworkDef& def, const Integrat
   {
     // A tear allocates nothing: its lists can hold every spring.
     torn_.springs.reserve(def_.springs.size());
+    torn_.triangles.reserve(def_.baraff_witkin.triangles.size());
     joined_pairs_.reserve(def_.springs.size());
     cut_pairs_.reserve(def_.springs.size());
   }
@@ -216,6 +217,7 @@ void SpringNetworkBody::reset()
   strain_limit_.setSprings(def_.springs);
   torn_.clear();
   torn_springs_ = 0;
+  torn_triangles_ = 0;
   integrator_ = built_integrator_;
   guard_.clear();
   updateStabilityBound();
@@ -462,9 +464,11 @@ void SpringNetworkBody::tearOverstretched()
   forces_.tear(particles_.position, def_.tear_strain, torn_);
   if (torn_.empty()) return;
   torn_springs_ += static_cast<long long>(torn_.springs.size());
+  torn_triangles_ += static_cast<long long>(torn_.triangles.size());
 
-  // A surface triangle goes when one of its edges has no spring left joining its corners (a pair
-  // that had springs and lost them all). Runs only when something broke.
+  // A surface triangle goes with its Baraff–Witkin triangle, or when one of its edges has no spring
+  // left joining its corners (a pair that had springs and lost them all). Runs only when something
+  // broke.
   auto ordered = [](int a, int b) { return a < b ? std::make_pair(a, b) : std::make_pair(b, a); };
   std::vector<std::pair<int, int>>& joined = joined_pairs_;
   joined.clear();
@@ -480,10 +484,13 @@ void SpringNetworkBody::tearOverstretched()
   }
   std::sort(cut.begin(), cut.end());
   auto is_cut = [&](int a, int b) { return std::binary_search(cut.begin(), cut.end(), ordered(a, b)); };
+  auto is_torn = [&](const Eigen::Vector3i& t) {
+    return std::find(torn_.triangles.begin(), torn_.triangles.end(), t) != torn_.triangles.end();
+  };
   const std::size_t before = surface_.size();
   surface_.erase(std::remove_if(surface_.begin(), surface_.end(),
                                 [&](const Eigen::Vector3i& t) {
-                                  return is_cut(t[0], t[1]) || is_cut(t[1], t[2]) || is_cut(t[2], t[0]);
+                                  return is_cut(t[0], t[1]) || is_cut(t[1], t[2]) || is_cut(t[2], t[0]) || is_torn(t);
                                 }),
                  surface_.end());
   if (surface_.size() != before) forces_.setSurface(surface_);

@@ -53,9 +53,10 @@ struct SpringNetworkDef
   StrainLimitDef strain_limit;
   BodyIntegratorDef integrator;    ///< what the body sets; the rest is the world's default
   double contact_thickness = 0.0;  ///< [m] in limits::kContactThickness: kept from ground and spheres (0 = touch)
-  /// [-] in limits::kTearStrain: a spring of positive rest length stretched past (1 + tear_strain)
-  /// times its rest length at the end of a step breaks; 0 = never. Springs only for now: refused
-  /// together with Baraff–Witkin, rod or plate bending.
+  /// [-] in limits::kTearStrain, 0 = never. At the end of a step, a spring of positive rest length
+  /// stretched past (1 + tear_strain) times its rest length breaks, and a Baraff–Witkin triangle
+  /// whose strain max(|w_u|/b_u, |w_v|/b_v) − 1 exceeds it is removed with the bends across its
+  /// edges. Refused together with rod or plate bending (ropes and cloths given by a material).
   double tear_strain = 0.0;
 };
 
@@ -179,11 +180,14 @@ public:
 
   // Tearing ------------------------------------------------------------------------------------
   /// The surface triangles left: the definition's, less every triangle one of whose edges lost its
-  /// last spring to a tear (drawn, published and under the air).
+  /// last spring to a tear and every torn Baraff–Witkin triangle (drawn, published and under the air).
   const std::vector<Eigen::Vector3i>& surfaceTriangles() const { return surface_; }
   /// Springs broken since build or reset, and in the last step.
   long long tornSprings() const { return torn_springs_; }
   int lastTornSprings() const { return static_cast<int>(torn_.springs.size()); }
+  /// Baraff–Witkin triangles removed since build or reset, and in the last step.
+  long long tornTriangles() const { return torn_triangles_; }
+  int lastTornTriangles() const { return static_cast<int>(torn_.triangles.size()); }
   /// What the last step tore (empty when nothing).
   const TearRecord& lastTear() const { return torn_; }
 
@@ -268,7 +272,8 @@ private:
   std::vector<Eigen::Vector3i> surface_;  // the surface triangles a tear left
   TearRecord torn_;                       // what the last step tore
   std::vector<std::pair<int, int>> joined_pairs_, cut_pairs_;  // tear work arrays, reserved at build
-  long long torn_springs_ = 0;            // since build or reset
+  long long torn_springs_ = 0;                                 // since build or reset
+  long long torn_triangles_ = 0;                               // since build or reset
 };
 
 }  // namespace core

@@ -1,5 +1,8 @@
 #include "particle_sim/core/forces/baraff_witkin_model.h"
 
+#include <algorithm>
+#include <map>
+#include <numeric>
 #include <string>
 
 #include "particle_sim/core/builders/mesh_topology.h"
@@ -44,6 +47,36 @@ bool buildBaraffWitkin(const std::vector<Eigen::Vector3d>& positions, const std:
                                (def.triangles[sides[0].triangle].area + def.triangles[sides[1].triangle].area));
   }
   return true;
+}
+
+BaraffWitkinModel::BaraffWitkinModel(const BaraffWitkinDef& def)
+    : def_(def), built_def_(def), built_{def.stretch, def.shear, def.bend}
+{
+  // Each bend's two triangles, (x_0, x_1, x_2) and (x_3, x_2, x_1), found by their corners (once,
+  // at build), so that a torn triangle takes the bends across its edges with it.
+  auto key = [](int a, int b, int c) {
+    std::array<int, 3> k{a, b, c};
+    std::sort(k.begin(), k.end());
+    return k;
+  };
+  std::map<std::array<int, 3>, int> triangle_of;
+  for (std::size_t k = 0; k < def.triangles.size(); ++k)
+  {
+    const BwTriangle& t = def.triangles[k];
+    triangle_of.emplace(key(t.v[0], t.v[1], t.v[2]), static_cast<int>(k));
+  }
+  for (const BwBend& b : def.bends)
+  {
+    auto side = [&](int a, int c, int d) {
+      const auto found = triangle_of.find(key(a, c, d));
+      return found == triangle_of.end() ? -1 : found->second;
+    };
+    built_bend_sides_.push_back({side(b.v[0], b.v[1], b.v[2]), side(b.v[3], b.v[2], b.v[1])});
+  }
+  bend_sides_ = built_bend_sides_;
+  triangle_origin_.resize(def.triangles.size());
+  std::iota(triangle_origin_.begin(), triangle_origin_.end(), 0);
+  triangle_torn_.assign(def.triangles.size(), 0);
 }
 
 void BaraffWitkinModel::setConstants(SpringClass spring_class, double stiffness, double damping)
@@ -108,6 +141,8 @@ void BaraffWitkinModel::bindPattern(const ImplicitEulerSolver& solver)
         blocks[4 * m + n] = solver.blockIndex(b.v[m], b.v[n]);
     bend_blocks_.push_back(blocks);
   }
+  built_triangle_blocks_ = triangle_blocks_;
+  built_bend_blocks_ = bend_blocks_;
 }
 
 Eigen::Matrix3d BaraffWitkinModel::corners(const Eigen::Matrix3Xd& x, const BwTriangle& t) const
@@ -304,6 +339,63 @@ void BaraffWitkinModel::vertexStrains(const Eigen::Matrix3Xd& x, std::vector<dou
     for (int m = 0; m < 3; ++m)
       strains[t.v[m]] = std::max(strains[t.v[m]], strain);
   }
+}
+
+void BaraffWitkinModel::tear(const Eigen::Matrix3Xd& x, double tear_strain, TearRecord& torn)
+{
+  // Triangles past the tear strain go, in one pass that keeps the others in order (with their
+  // blocks); then every bend with a torn triangle on either side of its edge.
+  const bool bound = !triangle_blocks_.empty();
+  std::size_t kept = 0;
+  bool any = false;
+  for (std::size_t k = 0; k < def_.triangles.size(); ++k)
+  {
+    const BwTriangle& t = def_.triangles[k];
+    if (triangleStrain(t, corners(x, t), def_.b_u, def_.b_v) > tear_strain)
+    {
+      torn.triangles.emplace_back(t.v[0], t.v[1], t.v[2]);
+      triangle_torn_[triangle_origin_[k]] = 1;
+      any = true;
+      continue;
+    }
+    def_.triangles[kept] = t;
+    triangle_origin_[kept] = triangle_origin_[k];
+    if (bound) triangle_blocks_[kept] = triangle_blocks_[k];
+    ++kept;
+  }
+  if (!any) return;
+  def_.triangles.resize(kept);
+  triangle_origin_.resize(kept);
+  if (bound) triangle_blocks_.resize(kept);
+
+  kept = 0;
+  for (std::size_t k = 0; k < def_.bends.size(); ++k)
+  {
+    const std::array<int, 2>& sides = bend_sides_[k];
+    if ((sides[0] >= 0 && triangle_torn_[sides[0]]) || (sides[1] >= 0 && triangle_torn_[sides[1]])) continue;
+    def_.bends[kept] = def_.bends[k];
+    def_.bend_weights[kept] = def_.bend_weights[k];
+    bend_sides_[kept] = sides;
+    if (bound) bend_blocks_[kept] = bend_blocks_[k];
+    ++kept;
+  }
+  def_.bends.resize(kept);
+  def_.bend_weights.resize(kept);
+  bend_sides_.resize(kept);
+  if (bound) bend_blocks_.resize(kept);
+}
+
+void BaraffWitkinModel::mend()
+{
+  def_.triangles = built_def_.triangles;
+  def_.bends = built_def_.bends;
+  def_.bend_weights = built_def_.bend_weights;
+  triangle_blocks_ = built_triangle_blocks_;
+  bend_blocks_ = built_bend_blocks_;
+  bend_sides_ = built_bend_sides_;
+  triangle_origin_.resize(built_def_.triangles.size());
+  std::iota(triangle_origin_.begin(), triangle_origin_.end(), 0);
+  std::fill(triangle_torn_.begin(), triangle_torn_.end(), 0);
 }
 
 }  // namespace core

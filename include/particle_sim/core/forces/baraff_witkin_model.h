@@ -56,11 +56,13 @@ bool buildBaraffWitkin(const std::vector<Eigen::Vector3d>& positions, const std:
 /// Baraff & Witkin's (1998) cloth conditions as a force element: stretch, shear and bend
 /// (kernels in baraff_witkin.h; bend gradient after Bridson et al. 2003). Evaluates forces,
 /// energy, Jacobians and stability rows. The implicit solver's block indices of every element
-/// are looked up once, in bindPattern().
+/// are looked up once, in bindPattern(). A triangle stretched past the body's tear strain is
+/// removed with its stretch and shear conditions and every bend condition across its edges
+/// (tear(); mend() puts them back).
 class BaraffWitkinModel : public ForceElement
 {
 public:
-  explicit BaraffWitkinModel(const BaraffWitkinDef& def) : def_(def), built_{def.stretch, def.shear, def.bend} {}
+  explicit BaraffWitkinModel(const BaraffWitkinDef& def);
 
   const BaraffWitkinDef& definition() const { return def_; }
   /// Sets stiffness and damping of one class (stretch, shear or bend).
@@ -110,15 +112,24 @@ public:
   double maxStrain(const Eigen::Matrix3Xd& x) const override;
   /// Per vertex, the largest strain of its triangles (assigned into `strains`, sized by the caller).
   void vertexStrains(const Eigen::Matrix3Xd& x, std::vector<double>& strains) const;
+  /// Removes every triangle whose strain max(|w_u|/b_u, |w_v|/b_v) − 1 exceeds `tear_strain`, and
+  /// the bends of its edges; appends the removed triangles' corners to `torn`.
+  void tear(const Eigen::Matrix3Xd& x, double tear_strain, TearRecord& torn) override;
+  void mend() override;
 
 private:
   Eigen::Matrix3d corners(const Eigen::Matrix3Xd& x, const BwTriangle& t) const;
   Eigen::Matrix<double, 3, 4> corners(const Eigen::Matrix3Xd& x, const BwBend& b) const;
 
-  BaraffWitkinDef def_;
-  std::array<SpringConstants, 3> built_;             // stretch, shear, bend as built (reset puts them back)
-  std::vector<std::array<int, 9>> triangle_blocks_;  // block (m, n) at 3m + n
-  std::vector<std::array<int, 16>> bend_blocks_;     // block (m, n) at 4m + n
+  BaraffWitkinDef def_;                   // the triangles and bends not torn, with the current constants
+  BaraffWitkinDef built_def_;             // as built (mend() puts its triangles and bends back)
+  std::array<SpringConstants, 3> built_;  // stretch, shear, bend as built (reset puts them back)
+  std::vector<std::array<int, 9>> triangle_blocks_, built_triangle_blocks_;  // block (m, n) at 3m + n
+  std::vector<std::array<int, 16>> bend_blocks_, built_bend_blocks_;         // block (m, n) at 4m + n
+  std::vector<std::array<int, 2>> bend_sides_;  // per bend of def_: its two triangles' indices in built_def_
+  std::vector<std::array<int, 2>> built_bend_sides_;
+  std::vector<int> triangle_origin_;  // per triangle of def_: its index in built_def_
+  std::vector<char> triangle_torn_;   // per triangle of built_def_
 };
 
 }  // namespace core
