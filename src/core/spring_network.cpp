@@ -615,7 +615,10 @@ void SpringNetworkBody::updateStabilityBound()
   // Gershgorin: each element adds k |∂C/∂x_i| Σ_n |∂C/∂x_n| to row i (springs: 2 k at both ends),
   // alike for damping; the bound is the largest row over the mass of its (free) particle.
   const int n = particles_.size();
-  std::vector<double> stiffness_rows(n, 0.0), damping_rows(n, 0.0);
+  std::vector<double>& stiffness_rows = stiffness_rows_;
+  std::vector<double>& damping_rows = damping_rows_;
+  stiffness_rows.assign(n, 0.0);  // sized once: a tear recomputes the bound without allocating
+  damping_rows.assign(n, 0.0);
   forces_.addStabilityRows(def_.positions, stiffness_rows, damping_rows);
   omega_bound_ = 0.0;
   damping_bound_ = 0.0;

@@ -272,6 +272,7 @@ private:
   std::vector<Eigen::Vector3i> surface_;  // the surface triangles a tear left
   TearRecord torn_;                       // what the last step tore
   std::vector<std::pair<int, int>> joined_pairs_, cut_pairs_;  // tear work arrays, reserved at build
+  std::vector<double> stiffness_rows_, damping_rows_;          // updateStabilityBound()'s Gershgorin rows
   long long torn_springs_ = 0;                                 // since build or reset
   long long torn_triangles_ = 0;                               // since build or reset
 };
