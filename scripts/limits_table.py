@@ -38,6 +38,7 @@ RANGE_TEXT = {
     "kPublishRate": "publish rate (`~rate`, live)",
     "kMarkerPoints": "points of one particle marker (`~max_marker_points`; more live particles are decimated evenly)",
     "kContactThickness": "distance a body keeps from ground and spheres (`contact_thickness`)",
+    "kTearStrain": "strain past which a spring breaks (`tear_strain` of ropes, cloth, jelly and networks; 0 = never)",
     "kGraspSize": "grasp region: a sphere's `radius`, a box's `half_extents` (`~grasp`)",
     "kGraspOffset": "each component of a grasp region's centre in the gripper frame (`~grasp` `offset`)",
     "kGraspCount": "particles a `nearest` grasp takes (`~grasp` `count`)",

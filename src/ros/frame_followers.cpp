@@ -115,9 +115,9 @@ void FrameFollowers::moveTargets(core::World& world, std::uint64_t step, std::ui
   {
     const double s = static_cast<double>(step + 1) / static_cast<double>(steps);
     const FramePin& pin = pins_[k];
-    const Eigen::Vector3d target = pin.scripted
-                                       ? Eigen::Vector3d(pin.scripted->position(world.simTime() + world.dt()) + pin.offset)
-                                       : Eigen::Vector3d(start_[k] + s * (goal_[k] - start_[k]));
+    const Eigen::Vector3d target =
+        pin.scripted ? Eigen::Vector3d(pin.scripted->position(world.simTime() + world.dt()) + pin.offset)
+                     : Eigen::Vector3d(start_[k] + s * (goal_[k] - start_[k]));
     world.findSpringBody(pin.body)->setPinTarget(pin.index, target);
   }
   // Boxes and capsules likewise, one step's worth of their frame's motion at a time.

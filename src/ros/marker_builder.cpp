@@ -78,12 +78,13 @@ void deleteIfEmpty(visualization_msgs::Marker& marker)
 // A cloth or jelly surface: TRIANGLE_LIST with a colour per vertex. rviz draws triangle lists
 // without culling (both sides show) and, given vertex colours, without lighting, so the shading is
 // done here: the base colour dimmed by the angle between the vertex normal and a fixed light,
-// the same from either side. With style.color_by_strain the colour is the strain's instead.
+// the same from either side. With style.color_by_strain the colour is the strain's instead. The
+// surface is the current one: triangles a tear cut out are gone.
 visualization_msgs::Marker surfaceMarker(const core::SpringNetworkBody& body, const ros::Time& stamp,
                                          const MarkerStyle& style)
 {
   const core::ParticlePool& p = body.particles();
-  const auto& triangles = body.definition().triangles;
+  const auto& triangles = body.surfaceTriangles();
   visualization_msgs::Marker surface = makeMarker(body.name(), kLinesMarkerId, stamp, style);
   surface.type = visualization_msgs::Marker::TRIANGLE_LIST;
   surface.color = body.frozen()                               ? rgba(0.5f, 0.5f, 0.5f)
@@ -157,11 +158,13 @@ void addSpringBody(const core::SpringNetworkBody& body, const ros::Time& stamp, 
     return;
   }
 
-  // The rope as one line through its particles in order; a network as one segment per spring.
+  // The rope as one line through its particles in order; a network as one segment per spring. A
+  // rope that tore is drawn by the stretch springs it has left (one segment each), so that the
+  // line shows its breaks.
   visualization_msgs::Marker lines = makeMarker(body.name(), kLinesMarkerId, stamp, style);
   lines.scale.x = style.line_width;
   lines.color = body.frozen() ? rgba(0.5f, 0.5f, 0.5f) : rgba(0.95f, 0.85f, 0.6f);
-  if (body.shape() == core::NetworkShape::Rope)
+  if (body.shape() == core::NetworkShape::Rope && body.tornSprings() == 0)
   {
     lines.type = visualization_msgs::Marker::LINE_STRIP;
     lines.points.reserve(n);
@@ -170,10 +173,12 @@ void addSpringBody(const core::SpringNetworkBody& body, const ros::Time& stamp, 
   }
   else
   {
+    const bool torn_rope = body.shape() == core::NetworkShape::Rope;
     lines.type = visualization_msgs::Marker::LINE_LIST;
     lines.points.reserve(2 * body.springs().size());
     for (const core::Spring& spring : body.springs())
     {
+      if (torn_rope && spring.spring_class != core::SpringClass::Stretch) continue;
       lines.points.push_back(toPoint(p.position.col(spring.i)));
       lines.points.push_back(toPoint(p.position.col(spring.j)));
     }

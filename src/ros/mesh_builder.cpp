@@ -12,14 +12,15 @@ ClothMesh buildClothMesh(const core::SpringNetworkBody& body, const ros::Time& s
 {
   const core::ParticlePool& p = body.particles();
   const int n = p.size();
-  const auto& triangles = body.definition().triangles;
+  const auto& triangles = body.surfaceTriangles();  // without the triangles a tear cut out
   std::vector<Eigen::Vector3d> normals;
   std::vector<double> strains;
   core::vertexNormals(p.position, n, triangles, normals);
   core::vertexStrains(body, strains);
 
-  // The vertices are the particles some triangle uses, in particle order (a jelly's inside
-  // particles are left out); `vertex_of` maps a particle to its vertex.
+  // The vertices are the particles some triangle of the current surface uses, in particle order (a
+  // jelly's inside particles are left out, and so are particles a tear left in no triangle);
+  // `vertex_of` maps a particle to its vertex. Rebuilt every call: a tear changes both.
   std::vector<int> vertex_of(n, -1);
   for (const Eigen::Vector3i& t : triangles)
     for (int c = 0; c < 3; ++c)

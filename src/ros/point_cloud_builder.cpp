@@ -22,16 +22,17 @@ sensor_msgs::PointField field(const char* name, std::uint32_t offset, std::uint8
   return f;
 }
 
-// Which particles of `body` go into the cloud: all, or with surface_only those its surface
-// triangles use (cloth and jelly; a body without triangles keeps all). Empty = all.
+// Which particles of `body` go into the cloud: all, or with surface_only those its current surface
+// triangles use (cloth and jelly; a body built without triangles keeps all, a body whose triangles
+// all tore away keeps none). Empty = all.
 std::vector<std::uint8_t> selectedParticles(const core::Body& body, bool surface_only)
 {
   std::vector<std::uint8_t> selected;
   if (!surface_only || body.kind() != core::BodyKind::SpringNetwork) return selected;
-  const auto& triangles = static_cast<const core::SpringNetworkBody&>(body).definition().triangles;
-  if (triangles.empty()) return selected;
+  const auto& spring_body = static_cast<const core::SpringNetworkBody&>(body);
+  if (spring_body.definition().triangles.empty()) return selected;
   selected.assign(static_cast<std::size_t>(body.particles().size()), 0);
-  for (const Eigen::Vector3i& t : triangles)
+  for (const Eigen::Vector3i& t : spring_body.surfaceTriangles())
     for (int c = 0; c < 3; ++c)
       selected[static_cast<std::size_t>(t[c])] = 1;
   return selected;

@@ -89,6 +89,7 @@ core::Status toRopeDef(const SpawnRope::Request& req, const core::IntegratorDef&
     def.bend_damping = req.bend_damping;
   }
   def.pins.assign(req.pins.begin(), req.pins.end());
+  def.tear_strain = req.tear_strain;
   def.integrator = core::settingEveryField(default_integrator);
   return parseIntegratorField(req.integrator, def.integrator);
 }
@@ -122,6 +123,7 @@ core::Status toClothGridDef(const SpawnCloth::Request& req, const core::Integrat
   def.pins.assign(req.pins.begin(), req.pins.end());
   def.named_pins = req.named_pins;
   def.strain_limit.max_strain = req.max_strain;
+  def.tear_strain = req.tear_strain;
   def.integrator = core::settingEveryField(default_integrator);
   return parseIntegratorField(req.integrator, def.integrator);
 }
@@ -142,6 +144,7 @@ core::Status toJellyDef(const SpawnJelly::Request& req, const core::IntegratorDe
   def.velocity = toEigen(req.velocity);
   def.pins.assign(req.pins.begin(), req.pins.end());
   def.strain_limit.max_strain = req.max_strain;
+  def.tear_strain = req.tear_strain;
   def.integrator = core::settingEveryField(default_integrator);
   return parseIntegratorField(req.integrator, def.integrator);
 }

@@ -441,6 +441,8 @@ void SimNode::publish()
     {
       if (body->kind() != core::BodyKind::SpringNetwork) continue;
       const auto& spring_body = static_cast<const core::SpringNetworkBody&>(*body);
+      // Every body built with a surface, also one whose triangles all tore away: its empty mesh
+      // replaces the last one it had.
       if (spring_body.definition().triangles.empty()) continue;
       meshes_pub_.publish(boost::make_shared<ClothMesh>(buildClothMesh(spring_body, stamp, settings_.frame_id)));
     }

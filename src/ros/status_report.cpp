@@ -66,6 +66,8 @@ SimStatus buildSimStatus(const core::World& world, const ros::Time& stamp, const
       b.stability_events = static_cast<std::uint64_t>(spring_body.stabilityEvents());
       b.last_stability_event = spring_body.lastStabilityEvent();
       b.max_strain = spring_body.maxStrain();
+      b.torn_springs = static_cast<std::uint64_t>(spring_body.tornSprings());
+      b.torn_triangles = static_cast<std::uint64_t>(spring_body.tornTriangles());
       b.pinned_count = static_cast<std::uint32_t>(spring_body.pinnedCount());
       if (b.pinned_count > 0)
       {
@@ -92,15 +94,18 @@ void buildDiagnostics(const core::World& world, const LoopFigures& loop, double 
   using diagnostic_msgs::DiagnosticStatus;
 
   // Over the spring bodies: the last implicit solves (how many, how many direct, most CG iterations,
-  // worst residual), strain and frozen bodies.
+  // worst residual), strain, springs and triangles torn and frozen bodies.
   int iterations = 0, not_converged = 0, implicit_solves = 0, direct_solves = 0;
   double residual = 0.0, velocity_error = 0.0, max_strain = 0.0;
+  long long torn_springs = 0, torn_triangles = 0;
   std::string strained_body;
   std::vector<std::string> frozen;
   for (const auto& body : world.bodies())
   {
     if (body->kind() != core::BodyKind::SpringNetwork) continue;
     const auto& spring_body = static_cast<const core::SpringNetworkBody&>(*body);
+    torn_springs += spring_body.tornSprings();
+    torn_triangles += spring_body.tornTriangles();
     if (spring_body.frozen())
     {
       frozen.push_back(toMessageText(body->name(), kMaxQuotedBytes) + " (" +
@@ -172,6 +177,8 @@ void buildDiagnostics(const core::World& world, const LoopFigures& loop, double 
   stat.add("solver residual (max, last step)", residual);
   stat.add("solver velocity error [m/s] (max, last step)", velocity_error);
   stat.add("max strain", max_strain);
+  stat.add("torn springs", torn_springs);
+  stat.add("torn triangles", torn_triangles);
   stat.add("frozen bodies", static_cast<int>(frozen.size()));
   stat.add("stability events since last report", loop.stability_events);
 }
@@ -204,11 +211,22 @@ std::string statusLine(const core::World& world, double real_time_factor, double
   else if (any_implicit)
     std::snprintf(solver, sizeof(solver), " | CG %d iterations, residual %.1e, %.1e m/s", cg_iterations, cg_residual,
                   velocity_error);
+  // Springs (and Baraff–Witkin triangles) torn since build or reset, of each body that can tear
+  // (tear_strain > 0) only.
+  std::string torn;
+  for (const auto& body : world.bodies())
+  {
+    if (body->kind() != core::BodyKind::SpringNetwork) continue;
+    const auto& spring_body = static_cast<const core::SpringNetworkBody&>(*body);
+    if (!(spring_body.definition().tear_strain > 0.0)) continue;
+    torn += (torn.empty() ? " | torn: " : ", ") + quoteName(body->name()) + " " +
+            std::to_string(spring_body.tornSprings()) + " springs";
+    if (spring_body.baraffWitkin()) torn += " " + std::to_string(spring_body.tornTriangles()) + " triangles";
+  }
   char line[512];
-  std::snprintf(line, sizeof(line), "sim time %.3f s | real-time factor %.2f | live particles %d | step %.1f us%s%s",
-                world.simTime(), real_time_factor, world.particleCount(), step_time_us, solver,
-                paused ? " | paused" : "");
-  return line;
+  std::snprintf(line, sizeof(line), "sim time %.3f s | real-time factor %.2f | live particles %d | step %.1f us%s",
+                world.simTime(), real_time_factor, world.particleCount(), step_time_us, solver);
+  return line + torn + (paused ? " | paused" : "");
 }
 
 long long stabilityEventCount(const core::World& world)

@@ -272,7 +272,7 @@ int main(int argc, char** argv)
   std::printf("steps %llu, sim time %.6g s, wall %.3f s, %.3f us/step, live particles %d\n",
               static_cast<unsigned long long>(steps), world->simTime(), wall,
               steps ? 1e6 * stepping_seconds / steps : 0.0, world->particleCount());
-  // What the stability guard did and what `auto` picked, per spring body.
+  // What the stability guard did, what `auto` picked and what tore, per spring body.
   for (const auto& body : world->bodies())
   {
     const auto* spring_body = dynamic_cast<const particle_sim::core::SpringNetworkBody*>(body.get());
@@ -282,6 +282,18 @@ int main(int argc, char** argv)
     if (spring_body->stabilityEvents() > 0)
       std::printf("body '%s': %lld stability events, last: %s\n", body->name().c_str(), spring_body->stabilityEvents(),
                   spring_body->lastStabilityEvent().c_str());
+    // Only a body that can tear says what tore, and what is left of its surface when it has one.
+    const particle_sim::core::SpringNetworkDef& def = spring_body->definition();
+    if (def.tear_strain > 0.0)
+    {
+      std::printf("body '%s': %lld springs torn (tear_strain %g)", body->name().c_str(), spring_body->tornSprings(),
+                  def.tear_strain);
+      if (spring_body->baraffWitkin()) std::printf(", %lld triangles torn", spring_body->tornTriangles());
+      if (!def.triangles.empty())
+        std::printf(", %zu of %zu surface triangles left", spring_body->surfaceTriangles().size(),
+                    def.triangles.size());
+      std::printf("\n");
+    }
   }
   // The solver figures of every implicit method that ran, named as it ran: "body 'cloth' bdf2: ..."
   // for a body's own method; "body 'rope' auto ran implicit_euler for 40 of 120 steps: ..." (and

@@ -9,6 +9,8 @@
 #include <cmath>
 #include <set>
 
+#include "torn_square.h"
+
 using namespace particle_sim;
 using visualization_msgs::Marker;
 
@@ -320,6 +322,44 @@ TEST(MarkerBuilder, ClothAndJellySurfacesAreShadedTriangleListsThatPassRvizCheck
     EXPECT_EQ(array.markers[4].type, Marker::TRIANGLE_LIST);
     EXPECT_EQ(array.markers[4].points.size(), 6u * 4u * 2u * 3u);  // 6 faces of 2 x 2 quads
   }
+}
+
+TEST(MarkerBuilder, ATornSurfaceAndATornRopeAreDrawnAsTheyAreLeft)
+{
+  // The square's surface: only the triangle (0, 1, 2) is left.
+  const core::World square = particle_sim_test::tornSquareWorld();
+  const auto drawn = ros_interface::buildMarkers(square, ros::Time(1.0), {}, false, {});
+  ASSERT_EQ(drawn.markers.size(), 3u);
+  for (const Marker& m : drawn.markers)
+    expectRvizValid(m);
+  const Marker& surface = drawn.markers[1];
+  EXPECT_EQ(surface.type, Marker::TRIANGLE_LIST);
+  ASSERT_EQ(surface.points.size(), 3u);
+  const core::ParticlePool& p = square.bodies()[0]->particles();
+  for (int c = 0; c < 3; ++c)
+    EXPECT_EQ(surface.points[c].z, p.position(2, c));
+  EXPECT_EQ(drawn.markers[2].points.size(), 3u);  // the pins, particle 3's too
+
+  // A rope whose last segment tore: a LINE_LIST of the segments left, no line across the break.
+  core::World world{core::WorldDef{}};
+  core::RopeDef rope;
+  rope.name = "rope";
+  rope.particles = 7;
+  rope.pins = {0, -1};
+  rope.tear_strain = 0.5;
+  ASSERT_TRUE(world.addRope(rope).ok);
+  core::SpringNetworkBody& body = *world.findSpringBody("rope");
+  ASSERT_TRUE(body.setPinTarget(6, body.pinTarget(6) + Eigen::Vector3d(1.0, 0.0, 0.0)).ok);
+  world.step();
+  ASSERT_EQ(body.tornSprings(), 1);
+  const auto array = ros_interface::buildMarkers(world, ros::Time(1.0), {}, false, {});
+  ASSERT_EQ(array.markers.size(), 3u);
+  for (const Marker& m : array.markers)
+    expectRvizValid(m);
+  const Marker& line = array.markers[1];
+  EXPECT_EQ(line.type, Marker::LINE_LIST);
+  ASSERT_EQ(line.points.size(), 2u * 5u);  // segments 0-1 ... 4-5
+  EXPECT_EQ(line.points[9].x, body.particles().position(0, 5));
 }
 
 TEST(MarkerBuilder, StrainColoursGoFromBlueToRed)

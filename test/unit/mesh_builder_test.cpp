@@ -1,5 +1,6 @@
 // ClothMesh messages: vertices are the surface particles with their indices, triangles are
-// renumbered to them and stay fixed, normals are unit and strains match the springs.
+// renumbered to them and stay fixed until the body tears, normals are unit and strains match the
+// springs.
 
 #include "particle_sim/ros/mesh_builder.h"
 
@@ -8,6 +9,7 @@
 #include <cmath>
 
 #include "particle_sim/core/world.h"
+#include "torn_square.h"
 
 using namespace particle_sim;
 
@@ -67,5 +69,25 @@ TEST(MeshBuilder, JellyLeavesItsInsideParticlesOutAndRenumbersItsTriangles)
   {
     for (std::uint32_t v : t.vertex_indices)
       EXPECT_LT(v, 56u);
+  }
+}
+
+TEST(MeshBuilder, ATornSurfaceLosesItsCutTrianglesAndTheParticlesLeftInNone)
+{
+  const core::World world = particle_sim_test::tornSquareWorld();
+  const auto& body = static_cast<const core::SpringNetworkBody&>(*world.bodies()[0]);
+  const ClothMesh msg = ros_interface::buildClothMesh(body, ros::Time(1.0), "world");
+  // Triangle (0, 1, 2) is left; particle 3 is in none.
+  ASSERT_EQ(msg.mesh.triangles.size(), 1u);
+  ASSERT_EQ(msg.particles.size(), 3u);
+  ASSERT_EQ(msg.mesh.vertices.size(), 3u);
+  ASSERT_EQ(msg.normals.size(), 3u);
+  ASSERT_EQ(msg.strain.size(), 3u);
+  for (std::uint32_t v = 0; v < 3; ++v)
+  {
+    EXPECT_EQ(msg.particles[v], v);
+    EXPECT_EQ(msg.mesh.triangles[0].vertex_indices[v], v);
+    EXPECT_EQ(msg.mesh.vertices[v].z, body.particles().position(2, v));
+    EXPECT_NEAR(std::hypot(msg.normals[v].x, msg.normals[v].y, msg.normals[v].z), 1.0, 1e-12);
   }
 }

@@ -10,6 +10,7 @@
 #include <map>
 
 #include "particle_sim/core/world.h"
+#include "torn_square.h"
 
 using namespace particle_sim;
 
@@ -146,4 +147,14 @@ TEST(PointCloudBuilder, SurfaceOnlyDropsTheJellysInteriorAndKeepsEveryOtherBody)
     EXPECT_EQ(surface[k].particle, all[k].particle);
     EXPECT_EQ(surface[k].z, all[k].z);
   }
+}
+
+TEST(PointCloudBuilder, SurfaceOnlyDropsTheParticlesATearLeftInNoTriangle)
+{
+  const core::World world = particle_sim_test::tornSquareWorld();
+  EXPECT_EQ(ros_interface::buildPointCloud(world, ros::Time(0.0), "w", false).width, 4u);
+  const std::vector<CloudPoint> surface = decode(ros_interface::buildPointCloud(world, ros::Time(0.0), "w", true));
+  ASSERT_EQ(surface.size(), 3u);  // particle 3 is in no triangle left
+  for (std::uint32_t k = 0; k < 3; ++k)
+    EXPECT_EQ(surface[k].particle, k);
 }

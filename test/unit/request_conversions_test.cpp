@@ -16,6 +16,7 @@
 #include "particle_sim/core/integrators/rk4.h"
 #include "particle_sim/core/integrators/verlet.h"
 #include "particle_sim/core/spring_network.h"
+#include "particle_sim/core/world.h"
 #include "test_helpers.h"
 
 using namespace particle_sim;
@@ -182,9 +183,11 @@ TEST(RequestConversions, RopeRequestGivesItsDefinitionFieldByField)
   req.bend_stiffness = 30.0;
   req.bend_damping = 0.1;
   req.pins = {0, -1};
+  req.tear_strain = 0.4;
   req.integrator = "rk4";
   core::RopeDef def;
   ASSERT_TRUE(toRopeDef(req, worldDefaultIntegrator(), def).ok);
+  EXPECT_EQ(def.tear_strain, 0.4);
   EXPECT_EQ(def.name, "line");
   EXPECT_EQ(def.particles, 12);
   EXPECT_EQ(def.start, Eigen::Vector3d(0.0, 1.0, 3.0));  // [m]
@@ -264,6 +267,7 @@ TEST(RequestConversions, ClothRequestGivesItsDefinitionFieldByField)
   req.b_u = 1.1;
   req.b_v = 0.9;
   req.max_strain = 0.1;
+  req.tear_strain = 0.5;
   req.integrator = "implicit_euler";
   core::ClothGridDef def;
   ASSERT_TRUE(toClothGridDef(req, worldDefaultIntegrator(), def).ok);
@@ -286,6 +290,7 @@ TEST(RequestConversions, ClothRequestGivesItsDefinitionFieldByField)
   EXPECT_EQ(def.b_u, 1.1);
   EXPECT_EQ(def.b_v, 0.9);
   EXPECT_EQ(def.strain_limit.max_strain, 0.1);
+  EXPECT_EQ(def.tear_strain, 0.5);
   EXPECT_EQ(def.integrator.type, core::kImplicitEulerIntegrator);
   expectSameSettings(def.integrator, worldDefaultIntegrator());
 }
@@ -303,6 +308,7 @@ TEST(RequestConversions, ClothFieldsLeftAtZeroKeepTheDefaults)
   EXPECT_EQ(def.b_u, 1.0);   // 0 = the default, 1
   EXPECT_EQ(def.b_v, 1.0);
   EXPECT_EQ(def.strain_limit.max_strain, 0.0);  // off
+  EXPECT_EQ(def.tear_strain, 0.0);              // never
   EXPECT_EQ(def.integrator.type, core::kVerletIntegrator);
 }
 
@@ -347,6 +353,7 @@ TEST(RequestConversions, JellyRequestGivesItsDefinitionFieldByField)
   req.velocity = vector(1.0, 0.0, -0.5);
   req.pins = {-1};
   req.max_strain = 0.2;
+  req.tear_strain = 0.6;
   core::JellyDef def;
   ASSERT_TRUE(toJellyDef(req, worldDefaultIntegrator(), def).ok);
   EXPECT_EQ(def.name, "cube");
@@ -365,6 +372,7 @@ TEST(RequestConversions, JellyRequestGivesItsDefinitionFieldByField)
   EXPECT_EQ(def.velocity, Eigen::Vector3d(1.0, 0.0, -0.5));  // [m/s]
   EXPECT_EQ(def.pins, (std::vector<int>{-1}));
   EXPECT_EQ(def.strain_limit.max_strain, 0.2);
+  EXPECT_EQ(def.tear_strain, 0.6);
   EXPECT_EQ(def.integrator.type, core::kVerletIntegrator);
   EXPECT_TRUE(core::validate(def, 1000).ok);
 }
@@ -582,4 +590,26 @@ TEST(RequestConversions, SpawnColliderGivesABoxOrACapsuleAndRefusesTheOtherShape
   s = core::validate(box);
   EXPECT_NE(s.message.find("box 'table'.orientation"), std::string::npos) << s.message;
   EXPECT_NE(s.message.find("is not a unit quaternion"), std::string::npos) << s.message;
+}
+
+// A spawn request's tear strain out of range is refused when the body is added, as a scene's is, by
+// a message that names the field, the value and the range; the world keeps what it had.
+TEST(RequestConversions, SpawnedClothWithATearStrainOutOfRangeIsRefused)
+{
+  SpawnCloth::Request req;
+  req.name = "sheet";
+  req.edge_u.x = 1.0;  // [m]
+  req.edge_v.y = 1.0;
+  req.tear_strain = -0.5;
+  core::ClothGridDef def;
+  ASSERT_TRUE(toClothGridDef(req, worldDefaultIntegrator(), def).ok);
+  core::World world(core::WorldDef{});
+  const core::Status status = world.addClothGrid(def);
+  EXPECT_FALSE(status.ok);
+  EXPECT_NE(status.message.find("tear_strain = -0.5"), std::string::npos) << status.message;
+  EXPECT_NE(status.message.find("[0, 100]"), std::string::npos) << status.message;
+  EXPECT_TRUE(world.bodies().empty());
+  req.tear_strain = 0.3;
+  ASSERT_TRUE(toClothGridDef(req, worldDefaultIntegrator(), def).ok);
+  EXPECT_TRUE(world.addClothGrid(def).ok);
 }

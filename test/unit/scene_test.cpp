@@ -436,6 +436,73 @@ TEST(SceneFiles, RefusesBadClothJellyFramesAndMeshes)
   EXPECT_TRUE(contains(refusal("frames:\n  - {name: f}\n  - {name: f}\n"), "name = 'f' is already taken"));
 }
 
+TEST(SceneFiles, ReadsWritesAndChecksTheTearStrain)
+{
+  // A grid cloth and a rope that tear past 30 %, a mesh cloth, a jelly and a network that tear too,
+  // and a rope that does not (no key: 0).
+  const std::string text =
+      "bodies:\n"
+      "  - {name: c, kind: cloth, resolution: [4, 4], tear_strain: 0.3}\n"
+      "  - {name: r, kind: rope, tear_strain: 0.3}\n"
+      "  - {name: m, kind: cloth, vertices: [[0, 0, 0], [1, 0, 0], [0, 1, 0]], triangles: [[0, 1, 2]], "
+      "tear_strain: 0.5}\n"
+      "  - {name: j, kind: jelly, tear_strain: 2}\n"
+      "  - {name: n, kind: spring_network, particles: [{position: [0, 0, 0]}, {position: [1, 0, 0]}], "
+      "springs: [{particles: [0, 1]}], tear_strain: 0.1}\n"
+      "  - {name: plain, kind: rope}\n";
+  const scene::SceneDef def = parseOk(text);
+  ASSERT_EQ(def.bodies.size(), 6u);
+  EXPECT_EQ(std::get<core::ClothGridDef>(def.bodies[0]).tear_strain, 0.3);
+  EXPECT_EQ(std::get<core::RopeDef>(def.bodies[1]).tear_strain, 0.3);
+  EXPECT_EQ(std::get<core::MeshClothDef>(def.bodies[2]).tear_strain, 0.5);
+  EXPECT_EQ(std::get<core::JellyDef>(def.bodies[3]).tear_strain, 2.0);
+  EXPECT_EQ(std::get<core::SpringNetworkDef>(def.bodies[4]).tear_strain, 0.1);
+  EXPECT_EQ(std::get<core::RopeDef>(def.bodies[5]).tear_strain, 0.0);
+
+  // Written back by the bodies that set it (only those), and read back the same.
+  const std::string written = scene::toYaml(def);
+  std::size_t keys = 0;
+  for (std::size_t at = written.find("tear_strain"); at != std::string::npos; at = written.find("tear_strain", at + 1))
+    ++keys;
+  EXPECT_EQ(keys, 5u) << written;
+  const scene::SceneDef again = parseOk(written);
+  ASSERT_EQ(again.bodies.size(), 6u);
+  EXPECT_EQ(std::get<core::ClothGridDef>(again.bodies[0]).tear_strain, 0.3);
+  EXPECT_EQ(std::get<core::RopeDef>(again.bodies[1]).tear_strain, 0.3);
+  EXPECT_EQ(std::get<core::MeshClothDef>(again.bodies[2]).tear_strain, 0.5);
+  EXPECT_EQ(std::get<core::JellyDef>(again.bodies[3]).tear_strain, 2.0);
+  EXPECT_EQ(std::get<core::SpringNetworkDef>(again.bodies[4]).tear_strain, 0.1);
+  EXPECT_EQ(std::get<core::RopeDef>(again.bodies[5]).tear_strain, 0.0);
+  EXPECT_EQ(scene::toYaml(again), written);
+
+  // The built bodies carry it.
+  std::unique_ptr<core::World> world;
+  ASSERT_TRUE(scene::buildWorld(def, world).ok);
+  EXPECT_EQ(world->findSpringBody("c")->definition().tear_strain, 0.3);
+  EXPECT_EQ(world->findSpringBody("r")->definition().tear_strain, 0.3);
+  EXPECT_EQ(world->findSpringBody("plain")->definition().tear_strain, 0.0);
+
+  // Out of its range, in the file (named by the entry and the key, with the range), for every kind.
+  EXPECT_TRUE(contains(refusal("bodies:\n  - {name: r, kind: rope, tear_strain: -1}\n"),
+                       "test.yaml:2: bodies[0].tear_strain = -1 is out of range: must be in [0, 100]"));
+  EXPECT_TRUE(contains(refusal("bodies:\n  - {name: c, kind: cloth, tear_strain: -1}\n"),
+                       "bodies[0].tear_strain = -1 is out of range: must be in [0, 100]"));
+  EXPECT_TRUE(contains(refusal("bodies:\n  - {name: j, kind: jelly, tear_strain: 101}\n"),
+                       "bodies[0].tear_strain = 101 is out of range: must be in [0, 100]"));
+  EXPECT_TRUE(contains(refusal("bodies:\n  - {name: n, kind: spring_network, particles: [{position: [0, 0, 0]}], "
+                               "tear_strain: -1}\n"),
+                       "bodies[0].tear_strain = -1 is out of range: must be in [0, 100]"));
+  EXPECT_TRUE(contains(refusal("bodies:\n  - {name: r, kind: rope, tear_strain: .nan}\n"),
+                       "bodies[0].tear_strain = nan is not a finite number"));
+  EXPECT_TRUE(contains(refusal("bodies:\n  - {name: r, kind: rope, tear_strain: far}\n"),
+                       "bodies[0].tear_strain = 'far' must be a number"));
+  // A body with rod or plate bending cannot tear (yet): a rope of a material that bends is refused
+  // in the file, naming the entry and the key.
+  const std::string bending = refusal("bodies:\n  - {name: r, kind: rope, material: nylon_rope, tear_strain: 0.3}\n");
+  EXPECT_TRUE(contains(bending, "test.yaml:2: bodies[0].tear_strain = 0.3: ")) << bending;
+  EXPECT_TRUE(contains(bending, "cannot tear yet")) << bending;
+}
+
 TEST(ObjMesh, ParsesVerticesFacesPolygonsAndTextureCoordinates)
 {
   scene::ObjMesh mesh;

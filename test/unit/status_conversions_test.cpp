@@ -51,6 +51,31 @@ core::World makeWorld(core::IntegratorType rope_integrator = core::kImplicitEule
   return world;
 }
 
+// A world without ground holding network `n`: two particles 1 m apart joined by one soft spring
+// (10 N/m) that tears past 10 % strain, particle 0 pinned and particle 1 leaving at 200 m/s along
+// the spring, so that the first step of 1 ms stretches it by about 20 % and it breaks.
+core::World makeTearingWorld()
+{
+  core::WorldDef def;
+  def.ground.enabled = false;
+  core::World world{def};
+  core::SpringNetworkDef net;
+  net.name = "n";
+  net.positions = {{0.0, 0.0, 1.0}, {1.0, 0.0, 1.0}};
+  net.masses = {0.1, 0.1};
+  net.velocities = {Eigen::Vector3d::Zero(), {200.0, 0.0, 0.0}};
+  core::Spring spring;
+  spring.i = 0;
+  spring.j = 1;
+  spring.rest_length = 1.0;
+  spring.stiffness = 10.0;
+  net.springs = {spring};
+  net.pins = {0};
+  net.tear_strain = 0.1;
+  EXPECT_TRUE(world.addSpringNetwork(net).ok);
+  return world;
+}
+
 const std::string* findValue(const diagnostic_updater::DiagnosticStatusWrapper& stat, const std::string& key)
 {
   for (const auto& pair : stat.values)
@@ -163,8 +188,37 @@ TEST(StatusConversions, DiagnosticsAreOkWhenRunningOnTimeAndListEveryFigure)
   for (const char* key :
        {"sim time [s]", "real-time factor", "target real-time factor", "step time [us]", "implicit solves (last step)",
         "direct solves (last step)", "solver iterations (max, last step)", "solver residual (max, last step)",
-        "solver velocity error [m/s] (max, last step)", "max strain", "stability events since last report"})
+        "solver velocity error [m/s] (max, last step)", "max strain", "torn springs", "torn triangles",
+        "stability events since last report"})
     EXPECT_NE(findValue(stat, key), nullptr) << key;
+  EXPECT_EQ(*findValue(stat, "torn springs"), "0");  // the rope cannot tear
+}
+
+TEST(StatusConversions, TornSpringsShowInStatusDiagnosticsAndTheStatusLineOfBodiesThatCanTear)
+{
+  core::World world = makeTearingWorld();
+  const auto& net = static_cast<const core::SpringNetworkBody&>(*world.bodies()[0]);
+  EXPECT_EQ(buildSimStatus(world, ros::Time(), "sim", false, 1.0).bodies[0].torn_springs, 0u);
+  const std::string before = statusLine(world, 1.0, 1.0, false);
+  EXPECT_EQ(before.substr(before.size() - 22), " | torn: 'n' 0 springs") << before;
+  world.step();
+  ASSERT_EQ(net.tornSprings(), 1);  // the spring broke in the first step
+  EXPECT_TRUE(net.springs().empty());
+  EXPECT_EQ(buildSimStatus(world, ros::Time(), "sim", false, 1.0).bodies[0].torn_springs, 1u);
+  diagnostic_updater::DiagnosticStatusWrapper stat;
+  buildDiagnostics(world, runningOnTime(), 0.9, stat);
+  ASSERT_NE(findValue(stat, "torn springs"), nullptr);
+  EXPECT_EQ(*findValue(stat, "torn springs"), "1");
+  const std::string line = statusLine(world, 1.0, 1.0, true);
+  EXPECT_NE(line.find(" | torn: 'n' 1 springs | paused"), std::string::npos) << line;
+  ASSERT_NE(findValue(stat, "torn triangles"), nullptr);
+  EXPECT_EQ(*findValue(stat, "torn triangles"), "0");  // springs only
+  EXPECT_EQ(buildSimStatus(world, ros::Time(), "sim", false, 1.0).bodies[0].torn_triangles, 0u);
+  // It stays counted in later steps, and a reset mends it.
+  world.step();
+  EXPECT_EQ(buildSimStatus(world, ros::Time(), "sim", false, 1.0).bodies[0].torn_springs, 1u);
+  world.reset();
+  EXPECT_EQ(buildSimStatus(world, ros::Time(), "sim", false, 1.0).bodies[0].torn_springs, 0u);
 }
 
 TEST(StatusConversions, DiagnosticsCountTheImplicitSolvesAndThoseSolvedDirectly)

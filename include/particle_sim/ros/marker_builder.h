@@ -30,9 +30,11 @@ struct MarkerStyle
 /// stable ids, so each array overwrites the last in place.
 ///   - `delete_all`: a DELETEALL (ns "") goes first, as at start and after reset;
 ///   - `removed`: bodies removed since the last array get a DELETE for each of their ids;
-///   - spring bodies: free particles as a SPHERE_LIST, a rope as a LINE_STRIP and a network's
-///     springs as a LINE_LIST, pinned particles as a separate, larger SPHERE_LIST (DELETE if none);
-///   - cloth and jelly: their surface as a TRIANGLE_LIST, one colour per vertex, shaded by the
+///   - spring bodies: free particles as a SPHERE_LIST, a rope as a LINE_STRIP (once it has torn, a
+///     LINE_LIST of the stretch springs left) and a network's springs as a LINE_LIST, pinned
+///     particles as a separate, larger SPHERE_LIST (DELETE if none);
+///   - cloth and jelly: their current surface (SpringNetworkBody::surfaceTriangles(): without the
+///     triangles a tear cut out) as a TRIANGLE_LIST, one colour per vertex, shaded by the
 ///     vertex normal (or coloured by strain when style.color_by_strain); rviz draws triangle lists
 ///     from both sides; and their pins;
 ///   - an emitter with no live particle gets a DELETE instead of an empty POINTS list;
@@ -53,7 +55,7 @@ std_msgs::ColorRGBA strainColor(double strain, double max);
 
 /// Marker ids used inside a body's namespace.
 constexpr int kParticlesMarkerId = 0;  ///< POINTS (emitters) or SPHERE_LIST (free particles of spring bodies)
-constexpr int kLinesMarkerId = 1;      ///< LINE_STRIP (ropes), LINE_LIST (networks) or TRIANGLE_LIST (cloth, jelly)
+constexpr int kLinesMarkerId = 1;      ///< LINE_STRIP (ropes; torn: LINE_LIST), LINE_LIST (networks) or TRIANGLE_LIST
 constexpr int kPinsMarkerId = 2;       ///< SPHERE_LIST of pinned particles, drawn apart
 constexpr int kMarkerIdsPerBody = 3;
 /// Namespace of the collider markers (one SPHERE per sphere collider, id = its index). Body names

@@ -59,7 +59,8 @@ void buildDiagnostics(const core::World& world, const LoopFigures& loop, double 
                       diagnostic_updater::DiagnosticStatusWrapper& stat);
 
 /// The periodic status line: sim time [s], measured real-time factor, live particles, mean step
-/// time [µs], the last implicit solves (most CG iterations, worst residual) and whether paused.
+/// time [µs], the last implicit solves (most CG iterations, worst residual), the springs (and
+/// Baraff–Witkin triangles) torn of each body that can tear (tear_strain > 0; nothing for the others) and whether paused.
 std::string statusLine(const core::World& world, double real_time_factor, double step_time_us, bool paused);
 
 /// Stability events of every spring body so far.

@@ -48,6 +48,16 @@ YAML::Node indexList(const std::vector<int>& values);
 // Pins given by index (negative counts from the end) or, where `names` is given, by name.
 void readPins(MapReader& reader, std::vector<int>& indices, std::vector<std::string>* names);
 
+// A rope's, cloth's or jelly's tear_strain, checked where its builder's validate() does not look:
+// when set (not 0), core::validate() of the network `build()` gives (its range, and that only a
+// body of springs can tear), so that a refusal names the entry and its file line. A spring network
+// is validated as a whole already.
+template <typename Build>
+void checkTearStrain(const MapReader& reader, double tear_strain, int max_particles, Build build)
+{
+  if (tear_strain != 0.0) check(reader, reader.field(""), core::validate(build(), max_particles));
+}
+
 // Provot's strain limit keys (max_strain, strain_iterations) of cloth and jelly.
 void readStrainLimit(MapReader& reader, core::StrainLimitDef& limit);
 void writeStrainLimit(YAML::Node node, const core::StrainLimitDef& limit);

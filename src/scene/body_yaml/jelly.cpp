@@ -29,8 +29,10 @@ core::JellyDef readJelly(MapReader& reader, SceneDef& scene, const std::string& 
   readStrainLimit(reader, def.strain_limit);
   readIntegrator(reader, def.integrator);
   reader.read("contact_thickness", def.contact_thickness);
+  reader.read("tear_strain", def.tear_strain);
   reader.finish();
   check(reader, reader.field(""), core::validate(def, scene.world.max_particles_per_body));
+  checkTearStrain(reader, def.tear_strain, scene.world.max_particles_per_body, [&] { return core::buildJelly(def); });
   return def;
 }
 
@@ -49,6 +51,7 @@ YAML::Node writeJelly(const core::JellyDef& def)
   node["bend"] = springConstants(def.bend.stiffness, def.bend.damping);
   node["pins"] = indexList(def.pins);
   node["contact_thickness"] = def.contact_thickness;
+  if (def.tear_strain != 0.0) node["tear_strain"] = def.tear_strain;
   writeStrainLimit(node, def.strain_limit);
   writeIntegrator(node, def.integrator);
   return node;

@@ -68,6 +68,7 @@ core::SpringNetworkDef readSpringNetwork(MapReader& reader, const core::WorldDef
   def.pins = readIndexList(reader, "pins");
   readIntegrator(reader, def.integrator);
   reader.read("contact_thickness", def.contact_thickness);
+  reader.read("tear_strain", def.tear_strain);
   reader.finish();
   check(reader, reader.field(""), core::validate(def, world.max_particles_per_body));
   return def;
@@ -100,6 +101,7 @@ YAML::Node writeSpringNetwork(const core::SpringNetworkDef& def)
   }
   node["pins"] = indexList(def.pins);
   node["contact_thickness"] = def.contact_thickness;
+  if (def.tear_strain != 0.0) node["tear_strain"] = def.tear_strain;
   writeIntegrator(node, def.integrator);
   return node;
 }
