@@ -402,8 +402,15 @@ void SpringNetworkBody::step(double dt, const Environment& env)
   const bool explicit_method = !isImplicit(type);
   const bool had_history = method(type).hasHistory();
   int substeps = guard_.substeps(type, dt, omega_bound_, dampingBound(), integrator_.max_substeps, last_substeps_);
-  guard_.beginStep(explicit_method, explicit_method ? mechanicalEnergy(env.gravity) : 0.0, energy_scale_,
-                   env.gravity.norm());
+  // The blow-up check's energy before the step: what the last explicit step measured after itself,
+  // when nothing has changed it since (updateStabilityBound() forgets it on every change of pins,
+  // constants or springs, and the gravity is the same), else measured now: one pass over the
+  // springs a step instead of two.
+  const bool energy_known = explicit_method && energy_after_valid_ && env.gravity == energy_after_gravity_;
+  const double energy_before = explicit_method ? (energy_known ? energy_after_ : mechanicalEnergy(env.gravity)) : 0.0;
+  energy_after_valid_ = false;
+  guard_.beginStep(explicit_method, energy_before, energy_scale_, env.gravity.norm());
+  double energy_after = 0.0;
 
   for (;;)
   {
@@ -425,7 +432,8 @@ void SpringNetworkBody::step(double dt, const Environment& env)
 
     // Blow-up of an explicit method: roll back and retry with more substeps, or freeze.
     const bool finite = p.position.allFinite() && p.velocity.allFinite();
-    if (!guard_.blewUp(finite, explicit_method ? mechanicalEnergy(env.gravity) : 0.0)) break;
+    energy_after = explicit_method ? mechanicalEnergy(env.gravity) : 0.0;
+    if (!guard_.blewUp(finite, energy_after)) break;
     p.position = saved_position_;
     p.velocity = saved_velocity_;
     if (!had_history) method(type).restart();
@@ -456,7 +464,13 @@ void SpringNetworkBody::step(double dt, const Environment& env)
     frozen_reason_ = guard_.freezeReason(type, dt, last_solve_.breakdown);
     return;
   }
-  if (def_.tear_strain > 0.0) tearOverstretched();
+  if (explicit_method)
+  {
+    energy_after_ = energy_after;
+    energy_after_gravity_ = env.gravity;
+    energy_after_valid_ = true;
+  }
+  if (def_.tear_strain > 0.0) tearOverstretched();  // a tear forgets energy_after_ (updateStabilityBound)
 }
 
 void SpringNetworkBody::tearOverstretched()
@@ -495,7 +509,9 @@ void SpringNetworkBody::tearOverstretched()
                  surface_.end());
   if (surface_.size() != before) forces_.setSurface(surface_);
   strain_limit_.setSprings(springs());
-  updateStabilityBound();
+  // `auto` re-decides from the new bound at the next step anyway; its explanation is kept (rebuilt
+  // when its choice changes), as writing it anew would allocate in the step.
+  updateStabilityBound(false);
 }
 
 void SpringNetworkBody::pinReactions(Eigen::Matrix3Xd& reactions) const
@@ -610,10 +626,11 @@ void SpringNetworkBody::addJacobians(const Eigen::Matrix3Xd& x, ImplicitEulerSol
   forces_.addJacobians(forceContext(gravity_), x, solver);
 }
 
-void SpringNetworkBody::updateStabilityBound()
+void SpringNetworkBody::updateStabilityBound(bool re_explain)
 {
   // Gershgorin: each element adds k |∂C/∂x_i| Σ_n |∂C/∂x_n| to row i (springs: 2 k at both ends),
   // alike for damping; the bound is the largest row over the mass of its (free) particle.
+  energy_after_valid_ = false;  // whatever changed the bound may have changed the energy
   const int n = particles_.size();
   std::vector<double>& stiffness_rows = stiffness_rows_;
   std::vector<double>& damping_rows = damping_rows_;
@@ -628,7 +645,7 @@ void SpringNetworkBody::updateStabilityBound()
     omega_bound_ = std::max(omega_bound_, std::sqrt(stiffness_rows[i] / mass_[i]));
     damping_bound_ = std::max(damping_bound_, damping_rows[i] / mass_[i]);
   }
-  guard_.forgetChoice();  // re-decide and re-explain at the next step
+  if (re_explain) guard_.forgetChoice();  // re-explain at the next step
 }
 
 }  // namespace core

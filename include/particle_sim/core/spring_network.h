@@ -213,8 +213,10 @@ private:
   // Breaks what is stretched past def_.tear_strain and updates the surface, the strain limit and
   // the stability bound when something broke.
   void tearOverstretched();
-  // Recomputes omega_bound_ and damping_bound_ from the current constants.
-  void updateStabilityBound();
+  // Recomputes omega_bound_ and damping_bound_ from the current constants (and forgets the energy
+  // the last step measured: whatever changes the bound may change the energy).
+  // `re_explain`: have `auto` write its explanation anew at the next step.
+  void updateStabilityBound(bool re_explain = true);
   // Kinetic plus potential energy of the current state [J].
   double mechanicalEnergy(const Eigen::Vector3d& gravity) const { return kineticEnergy() + potentialEnergy(gravity); }
   // The method of `type` (not auto).
@@ -273,8 +275,13 @@ private:
   TearRecord torn_;                       // what the last step tore
   std::vector<std::pair<int, int>> joined_pairs_, cut_pairs_;  // tear work arrays, reserved at build
   std::vector<double> stiffness_rows_, damping_rows_;          // updateStabilityBound()'s Gershgorin rows
-  long long torn_springs_ = 0;                                 // since build or reset
-  long long torn_triangles_ = 0;                               // since build or reset
+  // The mechanical energy [J] the last explicit step measured after itself, under that gravity: the
+  // next step's energy before, while valid (nothing changed the state, pins, constants or springs).
+  double energy_after_ = 0.0;
+  Eigen::Vector3d energy_after_gravity_ = Eigen::Vector3d::Zero();
+  bool energy_after_valid_ = false;
+  long long torn_springs_ = 0;    // since build or reset
+  long long torn_triangles_ = 0;  // since build or reset
 };
 
 }  // namespace core

@@ -116,7 +116,7 @@ void SpringForces::tear(const Eigen::Matrix3Xd& x, double tear_strain, TearRecor
 
 void SpringForces::mend()
 {
-  springs_ = built_;
+  springs_ = built_;  // with the built constants too (resetConstants() would put them back anyway)
   blocks_ = built_blocks_;
   origin_.resize(built_.size());
   std::iota(origin_.begin(), origin_.end(), 0);

@@ -96,7 +96,7 @@ public:
   virtual void tear(const Eigen::Matrix3Xd& /*x*/, double /*tear_strain*/, TearRecord& /*torn*/) {}
   /// The body's surface after a tear (elements that act on the surface triangles keep only these).
   virtual void setSurface(const std::vector<Eigen::Vector3i>& /*triangles*/) {}
-  /// Puts back every part tearing removed, with the constants it was built with.
+  /// Puts back every part tearing removed (its constants are resetConstants()' business).
   virtual void mend() {}
 
   // Measurements ----------------------------------------------------------------------------------
