@@ -138,13 +138,22 @@ void addSpringBody(const core::SpringNetworkBody& body, const ros::Time& stamp, 
   // Free particles beyond style.max_points: every k-th of them.
   const int stride = has_surface ? 1 : decimationStride(n - body.pinnedCount(), style.max_points);
   free.points.reserve(has_surface ? 0 : n / stride + 1);
+  // Cloth and jelly are drawn by their surface; only their pinned particles get spheres, and, once
+  // they have torn, the free particles a tear left in no surface triangle (still held by springs).
+  std::vector<char> on_surface;
+  if (has_surface && body.tornSprings() + body.tornTriangles() > 0)
+  {
+    on_surface.assign(static_cast<std::size_t>(n), 0);
+    for (const Eigen::Vector3i& t : body.surfaceTriangles())
+      for (int c = 0; c < 3; ++c)
+        on_surface[static_cast<std::size_t>(t[c])] = 1;
+  }
   int free_index = 0;
   for (int i = 0; i < n; ++i)
   {
-    // Cloth and jelly are drawn by their surface; only their pinned particles get spheres.
     if (body.isPinned(i))
       pins.points.push_back(toPoint(p.position.col(i)));
-    else if (!has_surface && free_index++ % stride == 0)
+    else if (has_surface ? !on_surface.empty() && !on_surface[static_cast<std::size_t>(i)] : free_index++ % stride == 0)
       free.points.push_back(toPoint(p.position.col(i)));
   }
   deleteIfEmpty(free);

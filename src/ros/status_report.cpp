@@ -220,7 +220,7 @@ std::string statusLine(const core::World& world, double real_time_factor, double
     const auto& spring_body = static_cast<const core::SpringNetworkBody&>(*body);
     if (!(spring_body.definition().tear_strain > 0.0)) continue;
     torn += (torn.empty() ? " | torn: " : ", ") + quoteName(body->name()) + " " +
-            std::to_string(spring_body.tornSprings()) + " springs";
+            std::to_string(spring_body.tornSprings()) + (spring_body.tornSprings() == 1 ? " spring" : " springs");
     if (spring_body.baraffWitkin()) torn += " " + std::to_string(spring_body.tornTriangles()) + " triangles";
   }
   char line[512];

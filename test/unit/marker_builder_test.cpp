@@ -338,7 +338,18 @@ TEST(MarkerBuilder, ATornSurfaceAndATornRopeAreDrawnAsTheyAreLeft)
   const core::ParticlePool& p = square.bodies()[0]->particles();
   for (int c = 0; c < 3; ++c)
     EXPECT_EQ(surface.points[c].z, p.position(2, c));
-  EXPECT_EQ(drawn.markers[2].points.size(), 3u);  // the pins, particle 3's too
+  EXPECT_EQ(drawn.markers[2].points.size(), 3u);       // the pins, particle 3's too
+  EXPECT_EQ(drawn.markers[0].action, Marker::DELETE);  // no free particle is off the surface
+
+  // Released, particle 3 (in no triangle now, still held by the bend spring 1-3) is drawn as a sphere.
+  core::World released = particle_sim_test::tornSquareWorld();
+  ASSERT_TRUE(released.findSpringBody("square")->unpin(3).ok);
+  const auto loose = ros_interface::buildMarkers(released, ros::Time(1.0), {}, false, {});
+  ASSERT_EQ(loose.markers.size(), 3u);
+  expectRvizValid(loose.markers[0]);
+  ASSERT_EQ(loose.markers[0].points.size(), 1u);
+  EXPECT_EQ(loose.markers[0].points[0].z, released.bodies()[0]->particles().position(2, 3));
+  EXPECT_EQ(loose.markers[2].points.size(), 2u);
 
   // A rope whose last segment tore: a LINE_LIST of the segments left, no line across the break.
   core::World world{core::WorldDef{}};

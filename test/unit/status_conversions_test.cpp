@@ -210,7 +210,7 @@ TEST(StatusConversions, TornSpringsShowInStatusDiagnosticsAndTheStatusLineOfBodi
   ASSERT_NE(findValue(stat, "torn springs"), nullptr);
   EXPECT_EQ(*findValue(stat, "torn springs"), "1");
   const std::string line = statusLine(world, 1.0, 1.0, true);
-  EXPECT_NE(line.find(" | torn: 'n' 1 springs | paused"), std::string::npos) << line;
+  EXPECT_NE(line.find(" | torn: 'n' 1 spring | paused"), std::string::npos) << line;
   ASSERT_NE(findValue(stat, "torn triangles"), nullptr);
   EXPECT_EQ(*findValue(stat, "torn triangles"), "0");  // springs only
   EXPECT_EQ(buildSimStatus(world, ros::Time(), "sim", false, 1.0).bodies[0].torn_triangles, 0u);
