@@ -12,8 +12,10 @@
 #include "particle_sim/core/integrators/implicit_euler.h"
 #include "particle_sim/core/world.h"
 #include "particle_sim/scene/scene.h"
+#include "test_helpers.h"
 
 using namespace particle_sim::core;
+using particle_sim_test::noGravity;
 
 namespace
 {
@@ -32,14 +34,6 @@ ClothGridDef bwSheet(int n = 6)
   def.shear = {100.0, 0.1};
   def.bend = {0.01, 1e-4};
   return def;
-}
-
-Environment noGravity()
-{
-  Environment env;
-  env.gravity.setZero();
-  env.ground.enabled = false;
-  return env;
 }
 
 double sheetArea(const ParticlePool& p, const std::vector<Eigen::Vector3i>& triangles)

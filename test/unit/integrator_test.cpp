@@ -17,21 +17,15 @@
 #include "particle_sim/core/integrators/symplectic_euler.h"
 #include "particle_sim/core/integrators/verlet.h"
 #include "particle_sim/core/spring_network.h"
+#include "test_helpers.h"
 
 using namespace particle_sim::core;
+using particle_sim_test::noGravity;
 
 namespace
 {
 const IntegratorType kAllIntegrators[] = {kSymplecticEulerIntegrator, kVerletIntegrator, kImplicitEulerIntegrator,
                                           kRk4Integrator, kBdf2Integrator};
-
-Environment noGravity()
-{
-  Environment env;
-  env.gravity.setZero();
-  env.ground.enabled = false;
-  return env;
-}
 
 Environment gravityOnly()
 {

@@ -20,8 +20,10 @@
 #include "particle_sim/core/integrators/implicit_euler.h"
 #include "particle_sim/core/integrators/symplectic_euler.h"
 #include "particle_sim/core/spring_network.h"
+#include "test_helpers.h"
 
 using namespace particle_sim::core;
+using particle_sim_test::noGravity;
 
 namespace
 {
@@ -62,12 +64,17 @@ ClothGridDef grippedCloth(IntegratorType integrator, double tear_strain = kTearS
   return def;
 }
 
-Environment noGravity()
+// Two particles 1 m apart, both pinned, joined by one stretch spring of 100 N/m.
+SpringNetworkDef pinnedPair(double tear_strain)
 {
-  Environment env;
-  env.gravity.setZero();
-  env.ground.enabled = false;
-  return env;
+  SpringNetworkDef def;
+  def.name = "pair";
+  def.positions = {Eigen::Vector3d::Zero(), Eigen::Vector3d(1.0, 0.0, 0.0)};
+  def.masses = {1.0, 1.0};
+  def.springs = {Spring{0, 1, 1.0, 100.0, 0.0, SpringClass::Stretch}};
+  def.pins = {0, 1};
+  def.tear_strain = tear_strain;
+  return def;
 }
 
 // Moves the right gripper by one step of the pull.
@@ -467,14 +474,8 @@ TEST(Tearing, TornBodyStepsLikeOneBuiltFromTheSpringsLeft)
 // spring a pin tears apart fly apart once released; the limit would pull them back to 10 %.
 TEST(Tearing, StrainLimitLetsGoOfTornSprings)
 {
-  SpringNetworkDef def;
-  def.name = "pair";
-  def.positions = {Eigen::Vector3d::Zero(), Eigen::Vector3d(1.0, 0.0, 0.0)};
-  def.masses = {1.0, 1.0};
-  def.springs = {Spring{0, 1, 1.0, 100.0, 0.0, SpringClass::Stretch}};
-  def.pins = {0, 1};
+  SpringNetworkDef def = pinnedPair(0.5);
   def.strain_limit.max_strain = 0.1;
-  def.tear_strain = 0.5;
   SpringNetworkBody body(def);
   const Environment env = noGravity();
   ASSERT_TRUE(body.setPinTarget(1, Eigen::Vector3d(2.0, 0.0, 0.0)).ok);  // both ends pinned: the limit cannot hold it
@@ -516,14 +517,7 @@ TEST(Tearing, BreaksPastTheTearStrainOnly)
 {
   for (double stretch : {0.5, 0.5 + 1e-9})
   {
-    SpringNetworkDef def;
-    def.name = "pair";
-    def.positions = {Eigen::Vector3d::Zero(), Eigen::Vector3d(1.0, 0.0, 0.0)};
-    def.masses = {1.0, 1.0};
-    def.springs = {Spring{0, 1, 1.0, 100.0, 0.0, SpringClass::Stretch}};
-    def.pins = {0, 1};
-    def.tear_strain = 0.5;
-    SpringNetworkBody body(def);
+    SpringNetworkBody body(pinnedPair(0.5));
     ASSERT_TRUE(body.setPinTarget(1, Eigen::Vector3d(1.0 + stretch, 0.0, 0.0)));
     body.step(0.01, noGravity());
     EXPECT_EQ(body.tornSprings(), stretch > 0.5 ? 1 : 0) << "stretch " << stretch;

@@ -18,6 +18,15 @@ namespace particle_sim_test
 {
 inline const double kNaN = std::numeric_limits<double>::quiet_NaN();
 
+// An environment without gravity or ground: a body moves under its own forces only.
+inline particle_sim::core::Environment noGravity()
+{
+  particle_sim::core::Environment env;
+  env.gravity.setZero();
+  env.ground.enabled = false;
+  return env;
+}
+
 // Whether a refusal's message names `field`.
 inline bool mentions(const particle_sim::core::Status& status, const std::string& field)
 {
