@@ -450,14 +450,18 @@ TEST(SceneFiles, ReadsWritesAndChecksTheTearStrain)
       "  - {name: n, kind: spring_network, particles: [{position: [0, 0, 0]}, {position: [1, 0, 0]}], "
       "springs: [{particles: [0, 1]}], tear_strain: 0.1}\n"
       "  - {name: plain, kind: rope}\n";
+  // The six bodies above, in order, with their tear strains (the plain rope's default, 0).
+  auto expectTearStrains = [](const scene::SceneDef& scene_def) {
+    ASSERT_EQ(scene_def.bodies.size(), 6u);
+    EXPECT_EQ(std::get<core::ClothGridDef>(scene_def.bodies[0]).tear_strain, 0.3);
+    EXPECT_EQ(std::get<core::RopeDef>(scene_def.bodies[1]).tear_strain, 0.3);
+    EXPECT_EQ(std::get<core::MeshClothDef>(scene_def.bodies[2]).tear_strain, 0.5);
+    EXPECT_EQ(std::get<core::JellyDef>(scene_def.bodies[3]).tear_strain, 2.0);
+    EXPECT_EQ(std::get<core::SpringNetworkDef>(scene_def.bodies[4]).tear_strain, 0.1);
+    EXPECT_EQ(std::get<core::RopeDef>(scene_def.bodies[5]).tear_strain, 0.0);
+  };
   const scene::SceneDef def = parseOk(text);
-  ASSERT_EQ(def.bodies.size(), 6u);
-  EXPECT_EQ(std::get<core::ClothGridDef>(def.bodies[0]).tear_strain, 0.3);
-  EXPECT_EQ(std::get<core::RopeDef>(def.bodies[1]).tear_strain, 0.3);
-  EXPECT_EQ(std::get<core::MeshClothDef>(def.bodies[2]).tear_strain, 0.5);
-  EXPECT_EQ(std::get<core::JellyDef>(def.bodies[3]).tear_strain, 2.0);
-  EXPECT_EQ(std::get<core::SpringNetworkDef>(def.bodies[4]).tear_strain, 0.1);
-  EXPECT_EQ(std::get<core::RopeDef>(def.bodies[5]).tear_strain, 0.0);
+  expectTearStrains(def);
 
   // Written back by the bodies that set it (only those), and read back the same.
   const std::string written = scene::toYaml(def);
@@ -466,13 +470,7 @@ TEST(SceneFiles, ReadsWritesAndChecksTheTearStrain)
     ++keys;
   EXPECT_EQ(keys, 5u) << written;
   const scene::SceneDef again = parseOk(written);
-  ASSERT_EQ(again.bodies.size(), 6u);
-  EXPECT_EQ(std::get<core::ClothGridDef>(again.bodies[0]).tear_strain, 0.3);
-  EXPECT_EQ(std::get<core::RopeDef>(again.bodies[1]).tear_strain, 0.3);
-  EXPECT_EQ(std::get<core::MeshClothDef>(again.bodies[2]).tear_strain, 0.5);
-  EXPECT_EQ(std::get<core::JellyDef>(again.bodies[3]).tear_strain, 2.0);
-  EXPECT_EQ(std::get<core::SpringNetworkDef>(again.bodies[4]).tear_strain, 0.1);
-  EXPECT_EQ(std::get<core::RopeDef>(again.bodies[5]).tear_strain, 0.0);
+  expectTearStrains(again);
   EXPECT_EQ(scene::toYaml(again), written);
 
   // The built bodies carry it.
