@@ -95,6 +95,13 @@ Status validate(const SpringNetworkDef& def, int max_particles)
   if (Status s = validate(def.strain_limit); !s) return s;
   if (Status s = checkRange("contact_thickness", def.contact_thickness, limits::kContactThickness); !s) return s;
   if (Status s = checkRange("tear_strain", def.tear_strain, limits::kTearStrain); !s) return s;
+  if (def.self_collision.enabled)
+  {
+    if (Status s =
+            checkRange("self_collision.thickness", def.self_collision.thickness, limits::kSelfCollisionThickness);
+        !s)
+      return s;
+  }
   if (def.tear_strain > 0.0 && (!def.rod_bending.empty() || !def.plate_bending.empty()))
     return Status::failure("tear_strain = " + formatValue(def.tear_strain) +
                            ": tearing breaks springs and Baraff–Witkin triangles; a body with rod or plate bending "

@@ -213,6 +213,19 @@ void World::step()
 {
   for (const std::unique_ptr<Body>& body : bodies_)
     body->step(def_.dt, env_);
+  // Surfaces that enable self_collision collide with themselves and each other after the step.
+  colliding_bodies_.clear();
+  colliding_index_.clear();
+  for (std::size_t b = 0; b < bodies_.size(); ++b)
+  {
+    if (bodies_[b]->kind() != BodyKind::SpringNetwork) continue;
+    auto* spring_body = static_cast<SpringNetworkBody*>(bodies_[b].get());
+    if (!spring_body->definition().self_collision.enabled || spring_body->frozen()) continue;
+    colliding_bodies_.push_back(spring_body);
+    colliding_index_.push_back(static_cast<int>(b));
+  }
+  collision_report_.bodies.resize(bodies_.size());
+  self_collision_.resolve(def_.dt, colliding_bodies_, colliding_index_, collision_report_);
   ++step_count_;
 }
 
@@ -220,6 +233,8 @@ void World::reset()
 {
   for (const std::unique_ptr<Body>& body : bodies_)
     body->reset();
+  collision_report_ = CollisionReport{};
+  collision_report_.bodies.resize(bodies_.size());
 }
 
 Status World::addEmitter(const EmitterDef& def)

@@ -33,6 +33,7 @@ constexpr Range kPublishRate{0.1, 1000.0, "Hz"};
 constexpr Range kMarkerPoints{1, 1e7, "points"};       // points per particle marker (~max_marker_points)
 constexpr Range kContactThickness{0.0, 1.0, "m"};      // distance a body keeps from ground and spheres
 constexpr Range kTearStrain{0.0, 100.0, "-"};          // tear_strain: a spring stretched past it breaks; 0 = never
+constexpr Range kSelfCollisionThickness{1e-4, 0.5, "m"};  // self_collision.thickness: distance kept between surfaces
 constexpr Range kGraspSize{1e-6, 100.0, "m"};          // grasp region: sphere radius, box half-extents
 constexpr Range kGraspOffset{-1e4, 1e4, "m"};          // grasp region centre in the gripper frame, each component
 constexpr Range kGraspCount{1, 1e6, "particles"};      // grasp region: the N particles nearest its centre

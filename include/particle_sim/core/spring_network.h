@@ -8,6 +8,7 @@
 
 #include "particle_sim/core/body.h"
 #include "particle_sim/core/cloth_model.h"
+#include "particle_sim/core/constraints/self_collision.h"
 #include "particle_sim/core/constraints/strain_limit.h"
 #include "particle_sim/core/forces/baraff_witkin_model.h"
 #include "particle_sim/core/forces/force_set.h"
@@ -58,6 +59,9 @@ struct SpringNetworkDef
   /// whose strain max(|w_u|/b_u, |w_v|/b_v) − 1 exceeds it is removed with the bends across its
   /// edges. Refused together with rod or plate bending (ropes and cloths given by a material).
   double tear_strain = 0.0;
+  /// Collisions of the body with itself and with the other bodies that enable theirs (the World's
+  /// SelfCollisionSolver, after each step); off by default.
+  SelfCollisionDef self_collision;
 };
 
 /// Checks sizes, indices, masses, spring constants, pins and the integrator; the message names the
@@ -190,6 +194,16 @@ public:
   int lastTornTriangles() const { return static_cast<int>(torn_.triangles.size()); }
   /// What the last step tore (empty when nothing).
   const TearRecord& lastTear() const { return torn_; }
+
+  // Collisions between surfaces ------------------------------------------------------------------
+  /// What the World's SelfCollisionSolver reads and moves after the step: the positions at the
+  /// step's start [m], and the particles (positions and velocities), which it changes only through
+  /// impulses; it then calls particlesMovedAfterStep().
+  const Eigen::Matrix3Xd& stepStartPositions() const { return saved_position_; }
+  ParticlePool& particlesForContacts() { return particles_; }
+  /// Says that something outside the step moved the particles (the energy the step measured after
+  /// itself no longer holds).
+  void particlesMovedAfterStep() { energy_after_valid_ = false; }
 
   // Measurements -------------------------------------------------------------------------------
   /// Largest (|x_j − x_i| − L) / L over the stretch and shear springs [-].

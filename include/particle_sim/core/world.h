@@ -10,6 +10,7 @@
 #include "particle_sim/core/builders/jelly.h"
 #include "particle_sim/core/builders/mesh_cloth.h"
 #include "particle_sim/core/builders/rope.h"
+#include "particle_sim/core/constraints/self_collision.h"
 #include "particle_sim/core/emitter.h"
 #include "particle_sim/core/environment.h"
 #include "particle_sim/core/integrator.h"
@@ -124,11 +125,20 @@ public:
   /// Live particles over all bodies.
   int particleCount() const;
 
+  /// What the collision pass between surfaces (self_collision) did in the last step: its passes and
+  /// impact zones, and per body (in bodies() order) its proximity pairs, collisions and the particles
+  /// the fail-safe moved. All zero when no body enables self_collision (the pass does not run).
+  const CollisionReport& lastCollisions() const { return collision_report_; }
+
 private:
   WorldDef def_;
   Environment env_;
   std::vector<std::unique_ptr<Body>> bodies_;
   std::uint64_t step_count_ = 0;
+  SelfCollisionSolver self_collision_;
+  CollisionReport collision_report_;
+  std::vector<SpringNetworkBody*> colliding_bodies_;  // scratch of step(): the bodies that enable self_collision,
+  std::vector<int> colliding_index_;                  // and their places in bodies_
 };
 
 }  // namespace core

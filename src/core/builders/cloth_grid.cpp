@@ -186,6 +186,7 @@ SpringNetworkDef buildClothGrid(const ClothGridDef& def)
                         bend = def.constants(SpringClass::Bend);
   SpringNetworkDef net = emptyCloth(def.name, def.integrator, def.strain_limit, def.contact_thickness);
   net.tear_strain = def.tear_strain;
+  net.self_collision = def.self_collision;
   const int nu = def.nu, nv = def.nv, n = nu * nv;
   auto index = [nu](int a, int b) { return b * nu + a; };
 

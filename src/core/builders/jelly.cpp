@@ -46,6 +46,7 @@ SpringNetworkDef buildJelly(const JellyDef& def)
   net.integrator = def.integrator;
   net.contact_thickness = def.contact_thickness;
   net.tear_strain = def.tear_strain;
+  net.self_collision = def.self_collision;
   net.strain_limit = def.strain_limit;
   const int nx = def.nx, ny = def.ny, nz = def.nz, n = nx * ny * nz;
   auto index = [=](int a, int b, int c) { return (c * ny + b) * nx + a; };

@@ -75,6 +75,7 @@ SpringNetworkDef buildMeshCloth(const MeshClothDef& def)
                         bend = def.constants(SpringClass::Bend);
   SpringNetworkDef net = emptyCloth(def.name, def.integrator, def.strain_limit, def.contact_thickness);
   net.tear_strain = def.tear_strain;
+  net.self_collision = def.self_collision;
   net.positions = def.vertices;
   net.triangles = def.triangles;
   const int n = static_cast<int>(def.vertices.size());

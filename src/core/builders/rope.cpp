@@ -80,6 +80,7 @@ SpringNetworkDef buildRope(const RopeDef& def)
   net.integrator = def.integrator;
   net.contact_thickness = def.contact_thickness;
   net.tear_strain = def.tear_strain;
+  net.self_collision = def.self_collision;
   const int n = def.particles;
   const double total_rest = totalRestLength(def);
   const double segment = total_rest / (n - 1);

@@ -49,9 +49,10 @@ struct ClothGridDef
   std::vector<std::string>
       named_pins;  ///< corner_00, corner_10, corner_01, corner_11, edge_u0, edge_u1, edge_v0, edge_v1
   StrainLimitDef strain_limit;
-  BodyIntegratorDef integrator;    ///< what the body sets; the rest is the world's default
-  double contact_thickness = 0.0;  ///< [m] in limits::kContactThickness: kept from ground and spheres (0 = touch)
-  double tear_strain = 0.0;        ///< [-] in limits::kTearStrain: springs stretched past it break (SpringNetworkDef)
+  BodyIntegratorDef integrator;     ///< what the body sets; the rest is the world's default
+  double contact_thickness = 0.0;   ///< [m] in limits::kContactThickness: kept from ground and spheres (0 = touch)
+  double tear_strain = 0.0;         ///< [-] in limits::kTearStrain: springs stretched past it break (SpringNetworkDef)
+  SelfCollisionDef self_collision;  ///< with itself and others (SpringNetworkDef); off by default
   /// The cloth's material in physical units (issue 17). Set, it gives the particle masses (areal
   /// density, lumped: a quarter of each cell's rest area to each corner; `mass` is then unused) and
   /// every constant, for the mesh built (cloth_common.h); no stretch, shear or bend constant may be

@@ -28,9 +28,10 @@ struct JellyDef
   std::vector<int> pins;
   Eigen::Vector3d velocity = Eigen::Vector3d::Zero();  ///< [m/s] initial velocity of every particle
   StrainLimitDef strain_limit;
-  BodyIntegratorDef integrator;    ///< what the body sets; the rest is the world's default
-  double contact_thickness = 0.0;  ///< [m] in limits::kContactThickness: kept from ground and spheres (0 = touch)
-  double tear_strain = 0.0;        ///< [-] in limits::kTearStrain: springs stretched past it break (SpringNetworkDef)
+  BodyIntegratorDef integrator;     ///< what the body sets; the rest is the world's default
+  double contact_thickness = 0.0;   ///< [m] in limits::kContactThickness: kept from ground and spheres (0 = touch)
+  double tear_strain = 0.0;         ///< [-] in limits::kTearStrain: springs stretched past it break (SpringNetworkDef)
+  SelfCollisionDef self_collision;  ///< with itself and others (SpringNetworkDef); off by default
 };
 
 Status validate(const JellyDef& def, int max_particles);

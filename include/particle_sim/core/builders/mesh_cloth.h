@@ -37,9 +37,10 @@ struct MeshClothDef
   double b_v = kBaraffWitkinRestStretch;  ///< Baraff–Witkin rest stretch along v
   std::vector<int> pins;
   StrainLimitDef strain_limit;
-  BodyIntegratorDef integrator;    ///< what the body sets; the rest is the world's default
-  double contact_thickness = 0.0;  ///< [m] in limits::kContactThickness: kept from ground and spheres (0 = touch)
-  double tear_strain = 0.0;        ///< [-] in limits::kTearStrain: springs stretched past it break (SpringNetworkDef)
+  BodyIntegratorDef integrator;     ///< what the body sets; the rest is the world's default
+  double contact_thickness = 0.0;   ///< [m] in limits::kContactThickness: kept from ground and spheres (0 = touch)
+  double tear_strain = 0.0;         ///< [-] in limits::kTearStrain: springs stretched past it break (SpringNetworkDef)
+  SelfCollisionDef self_collision;  ///< with itself and others (SpringNetworkDef); off by default
   /// The cloth's material in physical units (issue 17). Set, it gives the particle masses (areal
   /// density, lumped: a third of each triangle's rest area to each corner; `mass` is then unused) and
   /// every constant, for the mesh built (cloth_common.h); no stretch, shear or bend constant may be

@@ -37,6 +37,7 @@ struct RopeDef
   BodyIntegratorDef integrator;      ///< what the body sets; the rest is the world's default
   double contact_thickness = 0.0;    ///< [m] in limits::kContactThickness: kept from ground and spheres (0 = touch)
   double tear_strain = 0.0;          ///< [-] in limits::kTearStrain: springs stretched past it break (SpringNetworkDef)
+  SelfCollisionDef self_collision;   ///< with itself and others (SpringNetworkDef); off by default
   std::optional<RopeMaterial> material;  ///< physical units; when set, replaces mass and the spring constants
 };
 

@@ -1,0 +1,167 @@
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <vector>
+
+namespace particle_sim
+{
+namespace core
+{
+class SpringNetworkBody;
+
+/// A body's collisions with itself and with the other bodies that enable theirs: cloth and jelly by
+/// their surface triangles and edges, ropes as chains of capsules (their edges).
+struct SelfCollisionDef
+{
+  bool enabled = false;
+  /// [m] in limits::kSelfCollisionThickness: the distance kept between two parts of the body (between
+  /// two bodies, the mean of their thicknesses). A rope's thickness is its diameter.
+  double thickness = 0.005;
+};
+
+/// What the collision pass of one step did, for one body or for the world.
+struct CollisionCounts
+{
+  int proximity_pairs = 0;        ///< pairs closer than their thickness at the step's start, repelled
+  int collisions = 0;             ///< pairs found crossing during the step, stopped by an impulse
+  int impact_zone_particles = 0;  ///< particles the fail-safe moved rigidly with their impact zone
+};
+
+struct CollisionReport
+{
+  int passes = 0;        ///< continuous-detection passes run (those of the fail-safe included)
+  int impact_zones = 0;  ///< rigid impact zones the fail-safe formed (0: the impulses sufficed)
+  CollisionCounts total;
+  std::vector<CollisionCounts> bodies;  ///< one per world body, in order (zero where it is off)
+};
+
+/// Self- and body–body collision of surfaces after each world step (Bridson, Fedkiw & Anderson
+/// 2002), on the bodies that enable it. Each body has stepped from x0 (its positions at the step's
+/// start) to x1 with whatever method it uses; the pass works on the average velocities
+/// v̄ = (x1 − x0) / h of the step and changes them by impulses between pairs:
+/// 1. proximity: a point and a triangle, or two edges, closer than their thickness at x0 are pushed
+///    apart: an inelastic impulse cancels their approach and a repulsion separates them by a tenth
+///    of the missing distance over the step;
+/// 2. continuous detection: every point–triangle and edge–edge pair that becomes coplanar during the
+///    step (the cubic in t of their linear paths) and touches there gets an impulse that stops its
+///    approach, pass after pass (Gauss–Seidel), until a pass finds nothing or the passes run out;
+/// 3. fail-safe (rigid impact zones, Provot 1997): the particles of the pairs still colliding are
+///    merged into zones that move rigidly (their momentum and angular momentum kept), growing until
+///    nothing collides; x0 had no intersection, so then no step ends with one.
+/// Then x1 = x0 + h v̄, and each particle's end velocity gets the change of the inelastic part of its
+/// v̄ (the repulsion moves positions only, and so adds no kinetic energy).
+///
+/// Broad phase: a uniform grid over the swept boxes of points, edges and triangles, kept as one
+/// array of (cell, item) sorted by cell: deterministic, and allocation-free once its arrays have
+/// grown to the scene's size. Pinned particles have infinite mass: they move as their pins say.
+class SelfCollisionSolver
+{
+public:
+  /// Runs the pass over `bodies` (the world's bodies that enable self_collision and are not frozen)
+  /// after a step of `h` [s]. `report` is cleared; bodies[k]'s counts go to
+  /// report.bodies[report_index[k]] (report.bodies must be large enough). Nothing runs for none.
+  void resolve(double h, const std::vector<SpringNetworkBody*>& bodies, const std::vector<int>& report_index,
+               CollisionReport& report);
+
+private:
+  struct Item
+  {
+    std::uint64_t cell;  // the grid cell's key
+    std::uint32_t item;  // index into codes_
+  };
+  struct Pair
+  {
+    std::uint32_t a, b;  // point and triangle (kind 0) or two edges (kind 1)
+    std::uint32_t kind;
+  };
+  // A pair's four particles with their weights: the relative velocity is Σ w_k v̄_k (point–triangle:
+  // the point, then the corners; edge–edge: the first edge's ends, then the second's).
+  struct Stencil
+  {
+    int particle[4];
+    double weight[4];
+  };
+  struct TopologyKey
+  {
+    const SpringNetworkBody* body;
+    int particles;
+    long long torn;
+  };
+  struct ZoneSum
+  {
+    double mass = 0.0;
+    Eigen::Vector3d moment = Eigen::Vector3d::Zero();    // Σ m x0
+    Eigen::Vector3d momentum = Eigen::Vector3d::Zero();  // Σ m v̄
+    Eigen::Vector3d angular_momentum = Eigen::Vector3d::Zero();
+    Eigen::Matrix3d inertia = Eigen::Matrix3d::Zero();
+    Eigen::Vector3d omega = Eigen::Vector3d::Zero();
+    int pinned = 0;
+    Eigen::Vector3d pinned_velocity = Eigen::Vector3d::Zero();
+  };
+
+  void gather(double h, const std::vector<SpringNetworkBody*>& bodies);
+  void buildTopology(const std::vector<SpringNetworkBody*>& bodies);
+  void scatter(double h, const std::vector<SpringNetworkBody*>& bodies);
+  // Candidate pairs whose boxes (swept from x0 to x0 + h v̄, grown by half the largest thickness)
+  // overlap, found through a uniform grid.
+  void findCandidates(double h);
+  // Whether the candidates found last still cover the paths after the impulses since.
+  bool pathsInsideBoxes(double h) const;
+  // The stencil of `pair` at time t·h of the step, its distance and the direction from the second
+  // item to the first; false when the geometry is degenerate.
+  bool stencil(const Pair& pair, double t, Stencil& s, Eigen::Vector3d& normal, double& distance) const;
+  double normalVelocity(const Stencil& s, const Eigen::Vector3d& n) const;
+  // False when the pair cannot come within touching distance during the step (a bound from its
+  // distances at the start and end and its relative motion).
+  bool mayTouch(const Pair& pair, double h) const;
+  void repelProximities(double h, CollisionReport& report);
+  // One Gauss–Seidel pass of continuous detection over the candidates: the number of pairs that
+  // touch during the step while approaching. Each gets an impulse (`apply_impulses`) or has its
+  // particles merged into one impact zone (`merge_zones`).
+  int detectCollisions(double h, bool apply_impulses, bool merge_zones, CollisionReport& report);
+  void mergeImpactZones(double h, CollisionReport& report);
+  // Replaces `v` of every zone's particles by the zone's rigid motion.
+  void rigidifyZones(Eigen::Matrix3Xd& v);
+  void countZones(CollisionReport& report);
+  int findZone(int i);
+  void unite(int a, int b);
+  // Changes the relative normal velocity of `s` along `n` by `dv` [m/s] with an impulse shared by
+  // inverse mass, and stops the approach of the end velocities along n.
+  void applyImpulse(const Stencil& s, const Eigen::Vector3d& n, double dv);
+  void count(const Stencil& s, int CollisionCounts::*field, CollisionReport& report) const;
+  double pairThickness(int particle_a, int particle_b) const;
+
+  const std::vector<int>* report_index_ = nullptr;
+  double step_h_ = 0.0;
+  // The participating particles, all bodies in one numbering, and their surfaces.
+  std::vector<TopologyKey> topology_bodies_;
+  std::vector<int> body_first_;
+  Eigen::Matrix3Xd x0_, vbar_, vbar_gathered_, v_end_;  // v_end_: the velocities the step ended with
+  std::vector<double> inverse_mass_, thickness_;
+  std::vector<int> body_of_;
+  std::vector<char> is_point_;  // in some edge or triangle
+  std::vector<Eigen::Vector3i> triangles_;
+  std::vector<Eigen::Vector2i> edges_;
+  double cell_size_ = 0.0;
+  double max_thickness_ = 0.0;
+  // Broad phase.
+  std::vector<std::uint32_t> codes_;    // kind << 30 | index, points then edges then triangles
+  Eigen::Matrix3Xd box_lo_, box_hi_;    // per code
+  Eigen::Matrix3Xd path_lo_, path_hi_;  // per particle: the box of its path when the candidates were found
+  std::size_t buckets_ = 1;             // of the grid's hash table, a power of 2 (16 per item)
+  std::vector<std::size_t> bucket_start_, bucket_fill_;
+  std::vector<Item> entries_;
+  std::vector<std::uint32_t> big_;  // codes_ indices whose box spans too many cells: tested against all
+  std::vector<char> big_flag_;      // per code
+  std::vector<long long> seen_;     // per code: the last item that found it (a pair once)
+  std::vector<Pair> pairs_;
+  bool new_candidates_ = true;
+  std::vector<char> moved_, moving_;  // per particle: moved by the last pass, by this one
+  // Fail-safe.
+  std::vector<int> zone_;  // union–find parent per particle (−1: in no zone)
+  std::vector<ZoneSum> zone_sums_;
+};
+
+}  // namespace core
+}  // namespace particle_sim
