@@ -39,6 +39,8 @@ RANGE_TEXT = {
     "kMarkerPoints": "points of one particle marker (`~max_marker_points`; more live particles are decimated evenly)",
     "kContactThickness": "distance a body keeps from ground and spheres (`contact_thickness`)",
     "kTearStrain": "strain past which a spring breaks (`tear_strain` of ropes, cloth, jelly and networks; 0 = never)",
+    "kSelfCollisionThickness": "distance a surface keeps from itself and other colliding surfaces (`self_collision` "
+    "`thickness` of ropes, cloth, jelly and networks, when enabled; spawn requests' `self_collision_thickness`)",
     "kGraspSize": "grasp region: a sphere's `radius`, a box's `half_extents` (`~grasp`)",
     "kGraspOffset": "each component of a grasp region's centre in the gripper frame (`~grasp` `offset`)",
     "kGraspCount": "particles a `nearest` grasp takes (`~grasp` `count`)",

@@ -33,6 +33,14 @@ core::Status readCountOrDefault(const char* field, std::uint32_t value, int& cou
   return readCount(field, value, count);
 }
 
+// The self_collision fields of a spawn request: on or off, and the thickness [m], 0 keeping the
+// default (core::SelfCollisionDef); the core checks its range when the body is added.
+void toSelfCollision(bool enabled, double thickness, core::SelfCollisionDef& def)
+{
+  def.enabled = enabled;
+  if (thickness != 0.0) def.thickness = thickness;
+}
+
 std::string formatVector(const Eigen::Vector3d& v)
 {
   return "[" + formatReceived(v.x()) + ", " + formatReceived(v.y()) + ", " + formatReceived(v.z()) + "]";
@@ -90,6 +98,7 @@ core::Status toRopeDef(const SpawnRope::Request& req, const core::IntegratorDef&
   }
   def.pins.assign(req.pins.begin(), req.pins.end());
   def.tear_strain = req.tear_strain;
+  toSelfCollision(req.self_collision, req.self_collision_thickness, def.self_collision);
   def.integrator = core::settingEveryField(default_integrator);
   return parseIntegratorField(req.integrator, def.integrator);
 }
@@ -124,6 +133,7 @@ core::Status toClothGridDef(const SpawnCloth::Request& req, const core::Integrat
   def.named_pins = req.named_pins;
   def.strain_limit.max_strain = req.max_strain;
   def.tear_strain = req.tear_strain;
+  toSelfCollision(req.self_collision, req.self_collision_thickness, def.self_collision);
   def.integrator = core::settingEveryField(default_integrator);
   return parseIntegratorField(req.integrator, def.integrator);
 }
@@ -145,6 +155,7 @@ core::Status toJellyDef(const SpawnJelly::Request& req, const core::IntegratorDe
   def.pins.assign(req.pins.begin(), req.pins.end());
   def.strain_limit.max_strain = req.max_strain;
   def.tear_strain = req.tear_strain;
+  toSelfCollision(req.self_collision, req.self_collision_thickness, def.self_collision);
   def.integrator = core::settingEveryField(default_integrator);
   return parseIntegratorField(req.integrator, def.integrator);
 }
@@ -256,10 +267,11 @@ core::Status inRequestTerms(SpawnRequest request, core::Status status)
     const char* core_field;
     const char* request_field;
   };
-  // The spring constants of every spring body, then what differs per request.
+  // The spring constants and the self-collision thickness of every spring body, then what differs per request.
   static const Rename kSprings[] = {{"stretch.stiffness", "stretch_stiffness"}, {"stretch.damping", "stretch_damping"},
                                     {"shear.stiffness", "shear_stiffness"},     {"shear.damping", "shear_damping"},
                                     {"bend.stiffness", "bend_stiffness"},       {"bend.damping", "bend_damping"}};
+  static const Rename kSelfCollision[] = {{"self_collision.thickness", "self_collision_thickness"}};
   static const Rename kEmitter[] = {{"particle_mass", "mass"}};
   static const Rename kCloth[] = {{"resolution[0]", "nu"}, {"resolution[1]", "nv"}};
   static const Rename kJelly[] = {{"resolution[0]", "nx"}, {"resolution[1]", "ny"}, {"resolution[2]", "nz"}};
@@ -271,6 +283,8 @@ core::Status inRequestTerms(SpawnRequest request, core::Status status)
     return true;
   };
   for (const Rename& r : kSprings)
+    if (request != SpawnRequest::Emitter && rename(r)) return status;
+  for (const Rename& r : kSelfCollision)
     if (request != SpawnRequest::Emitter && rename(r)) return status;
   if (request == SpawnRequest::Emitter)
     for (const Rename& r : kEmitter)

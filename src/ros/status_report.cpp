@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <numeric>
 #include <sstream>
+#include <utility>
 #include <vector>
 
 #include "particle_sim/core/cloth_model.h"
@@ -38,13 +39,22 @@ SimStatus buildSimStatus(const core::World& world, const ros::Time& stamp, const
   status.global_damping = env.damping;
   status.wind = toVector3(env.air.wind);
   status.bodies.reserve(world.bodies().size());
-  for (const auto& body : world.bodies())
+  const std::vector<core::CollisionCounts>& collisions = world.lastCollisions().bodies;
+  for (std::size_t i = 0; i < world.bodies().size(); ++i)
   {
+    const auto& body = world.bodies()[i];
     BodyStatus b;
     b.name = body->name();
     b.particle_count = static_cast<std::uint32_t>(body->particles().size());
     b.kinetic_energy = body->kineticEnergy();
     b.potential_energy = body->potentialEnergy(env.gravity);
+    // The last step's collisions between surfaces (zero for a body without self_collision).
+    if (i < collisions.size())
+    {
+      b.proximity_pairs = collisions[i].proximity_pairs;
+      b.collisions = collisions[i].collisions;
+      b.impact_zone_particles = collisions[i].impact_zone_particles;
+    }
     if (body->kind() == core::BodyKind::Emitter)
     {
       const auto& emitter = static_cast<const core::EmitterBody&>(*body);
@@ -87,6 +97,48 @@ SimStatus buildSimStatus(const core::World& world, const ros::Time& stamp, const
   }
   return status;
 }
+
+namespace
+{
+// The spring bodies that enable self_collision, with their places in world.bodies() (and so in
+// world.lastCollisions().bodies).
+std::vector<std::pair<std::size_t, const core::SpringNetworkBody*>> collidingBodies(const core::World& world)
+{
+  std::vector<std::pair<std::size_t, const core::SpringNetworkBody*>> colliding;
+  for (std::size_t i = 0; i < world.bodies().size(); ++i)
+  {
+    const auto& body = world.bodies()[i];
+    if (body->kind() != core::BodyKind::SpringNetwork) continue;
+    const auto& spring_body = static_cast<const core::SpringNetworkBody&>(*body);
+    if (spring_body.definition().self_collision.enabled) colliding.emplace_back(i, &spring_body);
+  }
+  return colliding;
+}
+
+// The last step's counts of world body `i` (zero before the first step).
+core::CollisionCounts lastCollisionsOf(const core::World& world, std::size_t i)
+{
+  const std::vector<core::CollisionCounts>& bodies = world.lastCollisions().bodies;
+  return i < bodies.size() ? bodies[i] : core::CollisionCounts{};
+}
+
+// The collision pass of the last step, only when some body enables self_collision: its passes and
+// impact zones, and the contacts (proximity pairs) and collisions of each such body.
+void addCollisionFigures(const core::World& world, diagnostic_updater::DiagnosticStatusWrapper& stat)
+{
+  const auto colliding = collidingBodies(world);
+  if (colliding.empty()) return;
+  stat.add("collision passes (last step)", world.lastCollisions().passes);
+  stat.add("impact zones (last step)", world.lastCollisions().impact_zones);
+  for (const auto& [i, body] : colliding)
+  {
+    const core::CollisionCounts counts = lastCollisionsOf(world, i);
+    const std::string name = quoteName(body->name());
+    stat.add("contacts of " + name + " (last step)", counts.proximity_pairs);
+    stat.add("collisions of " + name + " (last step)", counts.collisions);
+  }
+}
+}  // namespace
 
 void buildDiagnostics(const core::World& world, const LoopFigures& loop, double max_strain_warn,
                       diagnostic_updater::DiagnosticStatusWrapper& stat)
@@ -179,6 +231,7 @@ void buildDiagnostics(const core::World& world, const LoopFigures& loop, double 
   stat.add("max strain", max_strain);
   stat.add("torn springs", torn_springs);
   stat.add("torn triangles", torn_triangles);
+  addCollisionFigures(world, stat);
   stat.add("frozen bodies", static_cast<int>(frozen.size()));
   stat.add("stability events since last report", loop.stability_events);
 }
@@ -223,10 +276,20 @@ std::string statusLine(const core::World& world, double real_time_factor, double
             std::to_string(spring_body.tornSprings()) + (spring_body.tornSprings() == 1 ? " spring" : " springs");
     if (spring_body.baraffWitkin()) torn += " " + std::to_string(spring_body.tornTriangles()) + " triangles";
   }
+  // The last step's contacts (proximity pairs) and collisions, of each body that enables
+  // self_collision only.
+  std::string contacts;
+  for (const auto& [i, body] : collidingBodies(world))
+  {
+    const core::CollisionCounts counts = lastCollisionsOf(world, i);
+    contacts += (contacts.empty() ? " | contacts: " : ", ") + quoteName(body->name()) + " " +
+                std::to_string(counts.proximity_pairs) + " (" + std::to_string(counts.collisions) +
+                (counts.collisions == 1 ? " collision)" : " collisions)");
+  }
   char line[512];
   std::snprintf(line, sizeof(line), "sim time %.3f s | real-time factor %.2f | live particles %d | step %.1f us%s",
                 world.simTime(), real_time_factor, world.particleCount(), step_time_us, solver);
-  return line + torn + (paused ? " | paused" : "");
+  return line + torn + contacts + (paused ? " | paused" : "");
 }
 
 long long stabilityEventCount(const core::World& world)

@@ -215,17 +215,32 @@ int main(int argc, char** argv)
     long long unconverged = 0;
     long long direct = 0;  // steps whose last solve was direct
   };
+  // A body that enables self_collision also sums the counts of its collision passes (and the world
+  // those of the passes and impact zones), over the run.
+  struct CollisionTotals
+  {
+    long long proximity_pairs = 0;
+    long long collisions = 0;
+    long long impact_zone_particles = 0;
+  };
   struct BodyStats
   {
     const particle_sim::core::SpringNetworkBody* body;
+    std::size_t index;                 // in world->bodies() and lastCollisions().bodies
     std::vector<MethodStats> methods;  // in the order they first ran
+    CollisionTotals collisions;
   };
   std::vector<BodyStats> body_stats;
-  for (const auto& body : world->bodies())
+  bool any_self_collision = false;
+  for (std::size_t i = 0; i < world->bodies().size(); ++i)
   {
-    if (const auto* spring_body = dynamic_cast<const particle_sim::core::SpringNetworkBody*>(body.get()))
-      body_stats.push_back({spring_body, {}});
+    if (const auto* spring_body = dynamic_cast<const particle_sim::core::SpringNetworkBody*>(world->bodies()[i].get()))
+    {
+      body_stats.push_back({spring_body, i, {}, {}});
+      any_self_collision = any_self_collision || spring_body->definition().self_collision.enabled;
+    }
   }
+  long long collision_passes = 0, impact_zones = 0;
 
   for (std::uint64_t k = 1; k <= steps; ++k)
   {
@@ -247,6 +262,20 @@ int main(int argc, char** argv)
       method->worst_velocity_error = std::max(method->worst_velocity_error, report.velocity_error);
       method->unconverged += report.converged ? 0 : 1;
       method->direct += report.direct ? 1 : 0;
+    }
+    if (any_self_collision)
+    {
+      const particle_sim::core::CollisionReport& report = world->lastCollisions();
+      collision_passes += report.passes;
+      impact_zones += report.impact_zones;
+      for (BodyStats& stats : body_stats)
+      {
+        if (stats.index >= report.bodies.size()) continue;
+        const particle_sim::core::CollisionCounts& counts = report.bodies[stats.index];
+        stats.collisions.proximity_pairs += counts.proximity_pairs;
+        stats.collisions.collisions += counts.collisions;
+        stats.collisions.impact_zone_particles += counts.impact_zone_particles;
+      }
     }
     if (output.is_open() && (k % write_every == 0 || k == steps)) writeStates(output, *world);
     if (pin_forces.is_open() && (k % write_every == 0 || k == steps)) writePinForces(pin_forces, *world);
@@ -272,11 +301,11 @@ int main(int argc, char** argv)
   std::printf("steps %llu, sim time %.6g s, wall %.3f s, %.3f us/step, live particles %d\n",
               static_cast<unsigned long long>(steps), world->simTime(), wall,
               steps ? 1e6 * stepping_seconds / steps : 0.0, world->particleCount());
-  // What the stability guard did, what `auto` picked and what tore, per spring body.
-  for (const auto& body : world->bodies())
+  // What the stability guard did, what `auto` picked, what tore and what collided, per spring body.
+  for (const BodyStats& stats : body_stats)
   {
-    const auto* spring_body = dynamic_cast<const particle_sim::core::SpringNetworkBody*>(body.get());
-    if (!spring_body) continue;
+    const particle_sim::core::SpringNetworkBody* spring_body = stats.body;
+    const particle_sim::core::Body* body = spring_body;
     if (!spring_body->autoChoice().empty())
       std::printf("body '%s' auto: %s\n", body->name().c_str(), spring_body->autoChoice().c_str());
     if (spring_body->stabilityEvents() > 0)
@@ -294,7 +323,17 @@ int main(int argc, char** argv)
                     def.triangles.size());
       std::printf("\n");
     }
+    // Only a body that enables self_collision says what its collision passes found, summed over the run.
+    if (def.self_collision.enabled)
+      std::printf(
+          "body '%s': %lld contacts, %lld collisions, %lld impact-zone particles over %llu steps "
+          "(self_collision, thickness %g m)\n",
+          body->name().c_str(), stats.collisions.proximity_pairs, stats.collisions.collisions,
+          stats.collisions.impact_zone_particles, static_cast<unsigned long long>(steps), def.self_collision.thickness);
   }
+  if (any_self_collision)
+    std::printf("self_collision: %lld passes, %lld impact zones over %llu steps\n", collision_passes, impact_zones,
+                static_cast<unsigned long long>(steps));
   // The solver figures of every implicit method that ran, named as it ran: "body 'cloth' bdf2: ..."
   // for a body's own method; "body 'rope' auto ran implicit_euler for 40 of 120 steps: ..." (and
   // each explicit method auto ran, with its step count) for an `auto` body.

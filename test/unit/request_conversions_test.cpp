@@ -184,10 +184,14 @@ TEST(RequestConversions, RopeRequestGivesItsDefinitionFieldByField)
   req.bend_damping = 0.1;
   req.pins = {0, -1};
   req.tear_strain = 0.4;
+  req.self_collision = true;
+  req.self_collision_thickness = 0.01;
   req.integrator = "rk4";
   core::RopeDef def;
   ASSERT_TRUE(toRopeDef(req, worldDefaultIntegrator(), def).ok);
   EXPECT_EQ(def.tear_strain, 0.4);
+  EXPECT_TRUE(def.self_collision.enabled);
+  EXPECT_EQ(def.self_collision.thickness, 0.01);  // [m]
   EXPECT_EQ(def.name, "line");
   EXPECT_EQ(def.particles, 12);
   EXPECT_EQ(def.start, Eigen::Vector3d(0.0, 1.0, 3.0));  // [m]
@@ -268,6 +272,8 @@ TEST(RequestConversions, ClothRequestGivesItsDefinitionFieldByField)
   req.b_v = 0.9;
   req.max_strain = 0.1;
   req.tear_strain = 0.5;
+  req.self_collision = true;
+  req.self_collision_thickness = 0.02;
   req.integrator = "implicit_euler";
   core::ClothGridDef def;
   ASSERT_TRUE(toClothGridDef(req, worldDefaultIntegrator(), def).ok);
@@ -291,6 +297,8 @@ TEST(RequestConversions, ClothRequestGivesItsDefinitionFieldByField)
   EXPECT_EQ(def.b_v, 0.9);
   EXPECT_EQ(def.strain_limit.max_strain, 0.1);
   EXPECT_EQ(def.tear_strain, 0.5);
+  EXPECT_TRUE(def.self_collision.enabled);
+  EXPECT_EQ(def.self_collision.thickness, 0.02);  // [m]
   EXPECT_EQ(def.integrator.type, core::kImplicitEulerIntegrator);
   expectSameSettings(def.integrator, worldDefaultIntegrator());
 }
@@ -309,6 +317,9 @@ TEST(RequestConversions, ClothFieldsLeftAtZeroKeepTheDefaults)
   EXPECT_EQ(def.b_v, 1.0);
   EXPECT_EQ(def.strain_limit.max_strain, 0.0);  // off
   EXPECT_EQ(def.tear_strain, 0.0);              // never
+  EXPECT_FALSE(def.self_collision.enabled);     // off
+  // 0 = the default thickness, 0.005 m.
+  EXPECT_EQ(def.self_collision.thickness, core::SelfCollisionDef{}.thickness);
   EXPECT_EQ(def.integrator.type, core::kVerletIntegrator);
 }
 
@@ -354,6 +365,8 @@ TEST(RequestConversions, JellyRequestGivesItsDefinitionFieldByField)
   req.pins = {-1};
   req.max_strain = 0.2;
   req.tear_strain = 0.6;
+  req.self_collision = true;
+  req.self_collision_thickness = 0.03;
   core::JellyDef def;
   ASSERT_TRUE(toJellyDef(req, worldDefaultIntegrator(), def).ok);
   EXPECT_EQ(def.name, "cube");
@@ -373,6 +386,8 @@ TEST(RequestConversions, JellyRequestGivesItsDefinitionFieldByField)
   EXPECT_EQ(def.pins, (std::vector<int>{-1}));
   EXPECT_EQ(def.strain_limit.max_strain, 0.2);
   EXPECT_EQ(def.tear_strain, 0.6);
+  EXPECT_TRUE(def.self_collision.enabled);
+  EXPECT_EQ(def.self_collision.thickness, 0.03);  // [m]
   EXPECT_EQ(def.integrator.type, core::kVerletIntegrator);
   EXPECT_TRUE(core::validate(def, 1000).ok);
 }
@@ -612,4 +627,62 @@ TEST(RequestConversions, SpawnedClothWithATearStrainOutOfRangeIsRefused)
   req.tear_strain = 0.3;
   ASSERT_TRUE(toClothGridDef(req, worldDefaultIntegrator(), def).ok);
   EXPECT_TRUE(world.addClothGrid(def).ok);
+}
+
+// A spawn request's self-collision thickness out of range is refused when the body is added, as a
+// scene's is, by a message that names the request's field, the value, the range and the unit; the
+// world keeps what it had. 0 is the default thickness; a thickness beside self_collision false is
+// not used, and not checked.
+TEST(RequestConversions, SpawnedBodiesWithASelfCollisionThicknessOutOfRangeAreRefused)
+{
+  const std::string expected = "self_collision_thickness = 0.9 is out of range: must be in [0.0001, 0.5] m";
+  core::World world(core::WorldDef{});
+
+  SpawnRope::Request rope;
+  rope.name = "line";
+  rope.end = point(1.0, 0.0, 0.0);
+  rope.self_collision = true;
+  rope.self_collision_thickness = 0.9;
+  core::RopeDef rope_def;
+  ASSERT_TRUE(toRopeDef(rope, worldDefaultIntegrator(), rope_def).ok);
+  core::Status status = inRequestTerms(SpawnRequest::Rope, world.addRope(rope_def));
+  EXPECT_EQ(status.message.rfind(expected, 0), 0u) << status.message;
+
+  SpawnCloth::Request cloth;
+  cloth.name = "sheet";
+  cloth.edge_u.x = 1.0;  // [m]
+  cloth.edge_v.y = 1.0;
+  cloth.self_collision = true;
+  cloth.self_collision_thickness = 0.9;
+  core::ClothGridDef cloth_def;
+  ASSERT_TRUE(toClothGridDef(cloth, worldDefaultIntegrator(), cloth_def).ok);
+  status = inRequestTerms(SpawnRequest::Cloth, world.addClothGrid(cloth_def));
+  EXPECT_EQ(status.message.rfind(expected, 0), 0u) << status.message;
+
+  SpawnJelly::Request jelly;
+  jelly.name = "cube";
+  jelly.size = vector(0.5, 0.5, 0.5);
+  jelly.self_collision = true;
+  jelly.self_collision_thickness = 0.9;
+  core::JellyDef jelly_def;
+  ASSERT_TRUE(toJellyDef(jelly, worldDefaultIntegrator(), jelly_def).ok);
+  status = inRequestTerms(SpawnRequest::Jelly, world.addJelly(jelly_def));
+  EXPECT_EQ(status.message.rfind(expected, 0), 0u) << status.message;
+  EXPECT_TRUE(world.bodies().empty());
+
+  // The default thickness (0), and a thickness left unused, are accepted.
+  cloth.self_collision_thickness = 0.0;
+  core::ClothGridDef default_thickness;
+  ASSERT_TRUE(toClothGridDef(cloth, worldDefaultIntegrator(), default_thickness).ok);
+  status = world.addClothGrid(default_thickness);
+  EXPECT_TRUE(status.ok) << status.message;
+  ASSERT_NE(world.findSpringBody("sheet"), nullptr);
+  EXPECT_EQ(world.findSpringBody("sheet")->definition().self_collision.thickness, core::SelfCollisionDef{}.thickness);
+  jelly.self_collision = false;
+  core::JellyDef unused_thickness;
+  ASSERT_TRUE(toJellyDef(jelly, worldDefaultIntegrator(), unused_thickness).ok);
+  status = world.addJelly(unused_thickness);
+  EXPECT_TRUE(status.ok) << status.message;
+  ASSERT_NE(world.findSpringBody("cube"), nullptr);
+  EXPECT_FALSE(world.findSpringBody("cube")->definition().self_collision.enabled);
 }

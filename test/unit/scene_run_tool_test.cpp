@@ -7,6 +7,7 @@
 #include <array>
 #include <cstdio>
 #include <fstream>
+#include <sstream>
 #include <string>
 
 namespace
@@ -50,4 +51,41 @@ TEST(SceneRunTool, IntegratorOptionReachesEverySpringBody)
   for (const char* body : {"r", "n", "g", "m", "j"})
     EXPECT_NE(output.find(std::string("body '") + body + "' auto: "), std::string::npos) << body << "\n" << output;
   EXPECT_EQ(output.find("body 'f' auto"), std::string::npos) << output;
+}
+
+TEST(SceneRunTool, SummaryShowsCollisionCountsOnlyForBodiesThatEnableSelfCollision)
+{
+  // Two cloths that collide with themselves and each other, 5 mm apart (closer than their thickness),
+  // and a rope and a cloth that do not.
+  const std::string scene = ::testing::TempDir() + "scene_run_tool_self_collision_test.yaml";
+  std::ofstream(scene)
+      << "world: {ground: {enabled: false}}\n"
+         "bodies:\n"
+         "  - {name: lower, kind: cloth, resolution: [5, 5], origin: [0, 0, 1], edge_u: [0.2, 0, 0],\n"
+         "     edge_v: [0, 0.2, 0], self_collision: {enabled: true, thickness: 0.01}}\n"
+         "  - {name: plain, kind: rope}\n"
+         "  - {name: sheet, kind: cloth, resolution: [3, 3], origin: [2, 0, 1]}\n"
+         "  - {name: upper, kind: cloth, resolution: [5, 5], origin: [0, 0, 1.005], edge_u: [0.2, 0, 0],\n"
+         "     edge_v: [0, 0.2, 0], self_collision: {enabled: true, thickness: 0.01}}\n";
+  int exit_code = -1;
+  const std::string output = run(std::string(PARTICLE_SIM_RUN) + " " + scene + " --duration 0.003", exit_code);
+  EXPECT_EQ(exit_code, 0) << output;
+  // The summary line of each body that says what its collision passes found, or empty.
+  auto contactLine = [&output](const std::string& body) {
+    std::istringstream lines(output);
+    for (std::string line; std::getline(lines, line);)
+      if (line.rfind("body '" + body + "': ", 0) == 0 && line.find(" contacts, ") != std::string::npos) return line;
+    return std::string();
+  };
+  for (const char* body : {"lower", "upper"})
+  {
+    const std::string line = contactLine(body);
+    EXPECT_NE(line.find(" collisions, "), std::string::npos) << body << "\n" << output;
+    EXPECT_NE(line.find(" impact-zone particles over 3 steps (self_collision, thickness 0.01 m)"), std::string::npos)
+        << body << "\n"
+        << output;
+  }
+  EXPECT_NE(output.find("\nself_collision: "), std::string::npos) << output;
+  EXPECT_EQ(contactLine("plain"), "") << output;
+  EXPECT_EQ(contactLine("sheet"), "") << output;
 }

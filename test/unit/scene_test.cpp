@@ -501,6 +501,99 @@ TEST(SceneFiles, ReadsWritesAndChecksTheTearStrain)
   EXPECT_TRUE(contains(bending, "cannot tear yet")) << bending;
 }
 
+TEST(SceneFiles, ReadsWritesAndChecksSelfCollision)
+{
+  // A grid cloth, a rope (the default thickness), a mesh cloth, a jelly and a network that collide
+  // with themselves and each other, a rope that gives a thickness but leaves it off, and one without
+  // the key (off).
+  const std::string text =
+      "bodies:\n"
+      "  - {name: c, kind: cloth, resolution: [4, 4], self_collision: {enabled: true, thickness: 0.006}}\n"
+      "  - {name: r, kind: rope, self_collision: {enabled: true}}\n"
+      "  - {name: m, kind: cloth, vertices: [[0, 0, 0], [1, 0, 0], [0, 1, 0]], triangles: [[0, 1, 2]], "
+      "self_collision: {thickness: 0.01, enabled: true}}\n"
+      "  - {name: j, kind: jelly, self_collision: {enabled: true, thickness: 0.02}}\n"
+      "  - {name: n, kind: spring_network, particles: [{position: [0, 0, 0]}, {position: [1, 0, 0]}], "
+      "springs: [{particles: [0, 1]}], self_collision: {enabled: true, thickness: 0.001}}\n"
+      "  - {name: off, kind: rope, self_collision: {enabled: false, thickness: 0.03}}\n"
+      "  - {name: plain, kind: rope}\n";
+  const double kDefault = core::SelfCollisionDef{}.thickness;  // [m]
+  // The first five bodies above, in order, with their thicknesses [m]; the last is off.
+  auto expectSelfCollision = [&](const scene::SceneDef& scene_def) {
+    ASSERT_EQ(scene_def.bodies.size(), 7u);
+    const core::SelfCollisionDef c = std::get<core::ClothGridDef>(scene_def.bodies[0]).self_collision;
+    const core::SelfCollisionDef r = std::get<core::RopeDef>(scene_def.bodies[1]).self_collision;
+    const core::SelfCollisionDef m = std::get<core::MeshClothDef>(scene_def.bodies[2]).self_collision;
+    const core::SelfCollisionDef j = std::get<core::JellyDef>(scene_def.bodies[3]).self_collision;
+    const core::SelfCollisionDef n = std::get<core::SpringNetworkDef>(scene_def.bodies[4]).self_collision;
+    EXPECT_TRUE(c.enabled && r.enabled && m.enabled && j.enabled && n.enabled);
+    EXPECT_EQ(c.thickness, 0.006);
+    EXPECT_EQ(r.thickness, kDefault);
+    EXPECT_EQ(m.thickness, 0.01);
+    EXPECT_EQ(j.thickness, 0.02);
+    EXPECT_EQ(n.thickness, 0.001);
+    EXPECT_FALSE(std::get<core::RopeDef>(scene_def.bodies[5]).self_collision.enabled);
+    EXPECT_FALSE(std::get<core::RopeDef>(scene_def.bodies[6]).self_collision.enabled);
+  };
+  const scene::SceneDef def = parseOk(text);
+  expectSelfCollision(def);
+  EXPECT_EQ(std::get<core::RopeDef>(def.bodies[5]).self_collision.thickness, 0.03);  // read, though off
+
+  // Written back by the bodies that enable it (only those), and read back the same.
+  const std::string written = scene::toYaml(def);
+  std::size_t keys = 0;
+  for (std::size_t at = written.find("self_collision"); at != std::string::npos;
+       at = written.find("self_collision", at + 1))
+    ++keys;
+  EXPECT_EQ(keys, 5u) << written;
+  const scene::SceneDef again = parseOk(written);
+  expectSelfCollision(again);
+  EXPECT_EQ(scene::toYaml(again), written);
+
+  // The built bodies carry it.
+  std::unique_ptr<core::World> world;
+  ASSERT_TRUE(scene::buildWorld(def, world).ok);
+  EXPECT_TRUE(world->findSpringBody("c")->definition().self_collision.enabled);
+  EXPECT_EQ(world->findSpringBody("c")->definition().self_collision.thickness, 0.006);
+  EXPECT_TRUE(world->findSpringBody("j")->definition().self_collision.enabled);
+  EXPECT_EQ(world->findSpringBody("r")->definition().self_collision.thickness, kDefault);
+  EXPECT_FALSE(world->findSpringBody("plain")->definition().self_collision.enabled);
+
+  // A thickness out of its range, in the file (named by the entry and the key, with the range and
+  // the unit), for every kind.
+  EXPECT_TRUE(
+      contains(refusal("bodies:\n  - {name: r, kind: rope, self_collision: {enabled: true, thickness: 1}}\n"),
+               "test.yaml:2: bodies[0].self_collision.thickness = 1 is out of range: must be in [0.0001, 0.5] m"));
+  EXPECT_TRUE(contains(refusal("bodies:\n  - {name: c, kind: cloth, self_collision: {enabled: true, thickness: 0}}\n"),
+                       "bodies[0].self_collision.thickness = 0 is out of range: must be in [0.0001, 0.5] m"));
+  EXPECT_TRUE(contains(refusal("bodies:\n  - {name: m, kind: cloth, vertices: [[0, 0, 0], [1, 0, 0], [0, 1, 0]], "
+                               "triangles: [[0, 1, 2]], self_collision: {enabled: true, thickness: 0.6}}\n"),
+                       "bodies[0].self_collision.thickness = 0.6 is out of range: must be in [0.0001, 0.5] m"));
+  EXPECT_TRUE(
+      contains(refusal("bodies:\n  - {name: j, kind: jelly, self_collision: {enabled: true, thickness: -0.01}}\n"),
+               "bodies[0].self_collision.thickness = -0.01 is out of range: must be in [0.0001, 0.5] m"));
+  EXPECT_TRUE(contains(refusal("bodies:\n  - {name: n, kind: spring_network, particles: [{position: [0, 0, 0]}], "
+                               "self_collision: {enabled: true, thickness: 0.00001}}\n"),
+                       "bodies[0].self_collision.thickness = 1e-05 is out of range: must be in [0.0001, 0.5] m"));
+  EXPECT_TRUE(
+      contains(refusal("bodies:\n  - {name: r, kind: rope, self_collision: {enabled: true, thickness: .nan}}\n"),
+               "bodies[0].self_collision.thickness = nan is not a finite number"));
+  // Wrong types, unknown sub-keys and a value that is not a mapping, each at its own line.
+  EXPECT_TRUE(contains(refusal("bodies:\n  - {name: r, kind: rope, self_collision: {enabled: true, thickness: far}}\n"),
+                       "test.yaml:2: bodies[0].self_collision.thickness = 'far' must be a number"));
+  EXPECT_TRUE(contains(refusal("bodies:\n  - name: r\n    kind: rope\n    self_collision:\n      enabled: maybe\n"),
+                       "test.yaml:5: bodies[0].self_collision.enabled = 'maybe' must be true or false"));
+  EXPECT_TRUE(contains(refusal("bodies:\n  - name: c\n    kind: cloth\n    self_collision:\n      enabled: true\n"
+                               "      radius: 0.01\n"),
+                       "test.yaml:6: bodies[0].self_collision.radius is not a known key; allowed keys: enabled, "
+                       "thickness"));
+  EXPECT_TRUE(contains(refusal("bodies:\n  - {name: j, kind: jelly, self_collision: true}\n"),
+                       "bodies[0].self_collision must be a mapping of key: value"));
+  // Emitters do not collide with themselves: the key is not theirs.
+  EXPECT_TRUE(contains(refusal(std::string(kEmitterHead) + "    self_collision: {enabled: true}\n"),
+                       "bodies[0].self_collision is not a known key"));
+}
+
 TEST(ObjMesh, ParsesVerticesFacesPolygonsAndTextureCoordinates)
 {
   scene::ObjMesh mesh;

@@ -7,6 +7,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <string>
+#include <utility>
 
 #include "particle_sim/core/integrators/implicit_euler.h"
 #include "particle_sim/core/integrators/verlet.h"
@@ -73,6 +75,36 @@ core::World makeTearingWorld()
   net.pins = {0};
   net.tear_strain = 0.1;
   EXPECT_TRUE(world.addSpringNetwork(net).ok);
+  return world;
+}
+
+// A world without ground holding two square grid cloths (0.2 m, 5 × 5 particles) that collide with
+// themselves and each other (self_collision, thickness 1 cm), `upper` lying 5 mm above `lower`,
+// closer than their thickness, and between them in the world's order a rope `plain` that does not.
+core::World makeCollidingWorld()
+{
+  core::WorldDef def;
+  def.ground.enabled = false;
+  core::World world{def};
+  auto cloth = [](const std::string& name, double height) {
+    core::ClothGridDef grid;
+    grid.name = name;
+    grid.nu = 5;
+    grid.nv = 5;
+    grid.origin = {0.0, 0.0, height};  // [m]
+    grid.edge_u = {0.2, 0.0, 0.0};
+    grid.edge_v = {0.0, 0.2, 0.0};
+    grid.self_collision.enabled = true;
+    grid.self_collision.thickness = 0.01;  // [m]
+    return grid;
+  };
+  EXPECT_TRUE(world.addClothGrid(cloth("lower", 1.0)).ok);
+  core::RopeDef rope;
+  rope.name = "plain";
+  rope.start = {0.0, 1.0, 1.0};
+  rope.end = {1.0, 1.0, 1.0};
+  EXPECT_TRUE(world.addRope(rope).ok);
+  EXPECT_TRUE(world.addClothGrid(cloth("upper", 1.005)).ok);
   return world;
 }
 
@@ -219,6 +251,100 @@ TEST(StatusConversions, TornSpringsShowInStatusDiagnosticsAndTheStatusLineOfBodi
   EXPECT_EQ(buildSimStatus(world, ros::Time(), "sim", false, 1.0).bodies[0].torn_springs, 1u);
   world.reset();
   EXPECT_EQ(buildSimStatus(world, ros::Time(), "sim", false, 1.0).bodies[0].torn_springs, 0u);
+}
+
+TEST(StatusConversions, CollisionCountsShowInStatusDiagnosticsAndTheStatusLineOfBodiesThatCollide)
+{
+  core::World world = makeCollidingWorld();
+  for (int k = 0; k < 3; ++k)
+    world.step();
+  const core::CollisionReport& report = world.lastCollisions();
+  ASSERT_EQ(report.bodies.size(), world.bodies().size());
+
+  // ~status: each body's counts of the last step, as the world reports them (zero for the rope).
+  const SimStatus status = buildSimStatus(world, ros::Time(), "sim", false, 1.0);
+  ASSERT_EQ(status.bodies.size(), 3u);
+  for (std::size_t i = 0; i < status.bodies.size(); ++i)
+  {
+    EXPECT_EQ(status.bodies[i].proximity_pairs, report.bodies[i].proximity_pairs) << i;
+    EXPECT_EQ(status.bodies[i].collisions, report.bodies[i].collisions) << i;
+    EXPECT_EQ(status.bodies[i].impact_zone_particles, report.bodies[i].impact_zone_particles) << i;
+  }
+  EXPECT_EQ(status.bodies[1].proximity_pairs, 0);  // the rope does not collide
+  EXPECT_EQ(status.bodies[1].collisions, 0);
+  EXPECT_EQ(status.bodies[1].impact_zone_particles, 0);
+
+  // Diagnostics: the world's passes and impact zones, each colliding body's contacts and collisions;
+  // nothing of the kind for the rope.
+  diagnostic_updater::DiagnosticStatusWrapper stat;
+  buildDiagnostics(world, runningOnTime(), 0.9, stat);
+  ASSERT_NE(findValue(stat, "collision passes (last step)"), nullptr);
+  EXPECT_EQ(*findValue(stat, "collision passes (last step)"), std::to_string(report.passes));
+  ASSERT_NE(findValue(stat, "impact zones (last step)"), nullptr);
+  EXPECT_EQ(*findValue(stat, "impact zones (last step)"), std::to_string(report.impact_zones));
+  for (const auto& [name, i] : {std::pair<std::string, std::size_t>{"lower", 0}, {"upper", 2}})
+  {
+    const std::string contacts = "contacts of '" + name + "' (last step)";
+    const std::string collisions = "collisions of '" + name + "' (last step)";
+    ASSERT_NE(findValue(stat, contacts), nullptr) << contacts;
+    EXPECT_EQ(*findValue(stat, contacts), std::to_string(report.bodies[i].proximity_pairs));
+    ASSERT_NE(findValue(stat, collisions), nullptr) << collisions;
+    EXPECT_EQ(*findValue(stat, collisions), std::to_string(report.bodies[i].collisions));
+  }
+  for (const auto& pair : stat.values)
+    EXPECT_EQ(pair.key.find("'plain'"), std::string::npos) << pair.key;
+
+  // The status line: the contacts and collisions of the two cloths, in the world's order, and not
+  // the rope.
+  const std::string line = statusLine(world, 1.0, 1.0, true);
+  const std::string expected = " | contacts: 'lower' " + std::to_string(report.bodies[0].proximity_pairs) + " (" +
+                               std::to_string(report.bodies[0].collisions) + " collision";
+  const std::size_t at = line.find(expected);
+  ASSERT_NE(at, std::string::npos) << line;
+  EXPECT_NE(line.find(", 'upper' " + std::to_string(report.bodies[2].proximity_pairs) + " (" +
+                          std::to_string(report.bodies[2].collisions) + " collision",
+                      at),
+            std::string::npos)
+      << line;
+  EXPECT_EQ(line.find("'plain'"), std::string::npos) << line;
+  EXPECT_EQ(line.substr(line.size() - 9), " | paused") << line;
+
+  // A reset clears the last step's counts.
+  world.reset();
+  const SimStatus after_reset = buildSimStatus(world, ros::Time(), "sim", false, 1.0);
+  for (std::size_t i = 0; i < after_reset.bodies.size(); ++i)
+  {
+    const core::CollisionCounts counts =
+        i < world.lastCollisions().bodies.size() ? world.lastCollisions().bodies[i] : core::CollisionCounts{};
+    EXPECT_EQ(after_reset.bodies[i].proximity_pairs, counts.proximity_pairs) << i;
+    EXPECT_EQ(after_reset.bodies[i].collisions, counts.collisions) << i;
+    EXPECT_EQ(after_reset.bodies[i].impact_zone_particles, counts.impact_zone_particles) << i;
+  }
+}
+
+TEST(StatusConversions, BodiesWithoutSelfCollisionShowNoCollisionEntries)
+{
+  // Neither the fountain nor the rope collides with itself: no collision figure in the diagnostics
+  // or the status line, and zero counts in ~status.
+  core::World world = makeWorld();
+  world.step();
+  diagnostic_updater::DiagnosticStatusWrapper stat;
+  buildDiagnostics(world, runningOnTime(), 0.9, stat);
+  for (const auto& pair : stat.values)
+  {
+    EXPECT_EQ(pair.key.find("contacts"), std::string::npos) << pair.key;
+    EXPECT_EQ(pair.key.find("collision"), std::string::npos) << pair.key;
+    EXPECT_EQ(pair.key.find("impact zones"), std::string::npos) << pair.key;
+  }
+  const std::string line = statusLine(world, 1.0, 1.0, false);
+  EXPECT_EQ(line.find("contacts"), std::string::npos) << line;
+  const SimStatus status = buildSimStatus(world, ros::Time(), "sim", false, 1.0);
+  for (const BodyStatus& body : status.bodies)
+  {
+    EXPECT_EQ(body.proximity_pairs, 0) << body.name;
+    EXPECT_EQ(body.collisions, 0) << body.name;
+    EXPECT_EQ(body.impact_zone_particles, 0) << body.name;
+  }
 }
 
 TEST(StatusConversions, DiagnosticsCountTheImplicitSolvesAndThoseSolvedDirectly)

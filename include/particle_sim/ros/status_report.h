@@ -35,8 +35,8 @@ core::IntegratorType integratorThatRan(const core::SpringNetworkBody& body);
 using BodyMaterials = std::map<std::string, std::string>;
 
 /// ~status: the world's time, environment and every body's figures (mass [kg], energies [J],
-/// strain, solver, stability, material), stamped `stamp` in `frame_id`; `paused` and
-/// `real_time_factor` [-] (the target) come from the node.
+/// strain, solver, stability, material, the last step's collisions between surfaces), stamped `stamp` in `frame_id`;
+/// `paused` and `real_time_factor` [-] (the target) come from the node.
 SimStatus buildSimStatus(const core::World& world, const ros::Time& stamp, const std::string& frame_id, bool paused,
                          double real_time_factor, const BodyMaterials& materials = {});
 
@@ -55,12 +55,16 @@ struct LoopFigures
 /// /diagnostics' "simulation" status: OK "running" or "paused"; ERROR naming frozen bodies; WARN
 /// for a real-time factor below kRealTimeFactorWarnRatio of a non-zero target (while running),
 /// implicit solves short of their tolerance, stability events, and a strain above `max_strain`.
+/// When some body enables self_collision, also the last step's collision passes and impact zones,
+/// and the contacts and collisions of each such body (nothing of the kind for the others).
 void buildDiagnostics(const core::World& world, const LoopFigures& loop, double max_strain,
                       diagnostic_updater::DiagnosticStatusWrapper& stat);
 
 /// The periodic status line: sim time [s], measured real-time factor, live particles, mean step
 /// time [µs], the last implicit solves (most CG iterations, worst residual), the springs (and
-/// Baraff–Witkin triangles) torn of each body that can tear (tear_strain > 0; nothing for the others) and whether paused.
+/// Baraff–Witkin triangles) torn of each body that can tear (tear_strain > 0; nothing for the others),
+/// the last step's contacts and collisions of each body that enables self_collision (nothing for
+/// the others) and whether paused.
 std::string statusLine(const core::World& world, double real_time_factor, double step_time_us, bool paused);
 
 /// Stability events of every spring body so far.

@@ -48,15 +48,21 @@ YAML::Node indexList(const std::vector<int>& values);
 // Pins given by index (negative counts from the end) or, where `names` is given, by name.
 void readPins(MapReader& reader, std::vector<int>& indices, std::vector<std::string>* names);
 
-// A rope's, cloth's or jelly's tear_strain, checked where its builder's validate() does not look:
-// when set (not 0), core::validate() of the network `build()` gives (its range, and that only a
-// body of springs can tear), so that a refusal names the entry and its file line. A spring network
-// is validated as a whole already.
-template <typename Build>
-void checkTearStrain(const MapReader& reader, double tear_strain, int max_particles, Build build)
+// A rope's, cloth's or jelly's tear_strain and self_collision, checked where its builder's validate()
+// does not look: when either is set (tear_strain not 0, self_collision enabled), core::validate() of
+// the network `build()` gives (their ranges, and that only a body of springs can tear), so that a
+// refusal names the entry and its file line. A spring network is validated as a whole already.
+template <typename BodyDef, typename Build>
+void checkNetworkKeys(const MapReader& reader, const BodyDef& def, int max_particles, Build build)
 {
-  if (tear_strain != 0.0) check(reader, reader.field(""), core::validate(build(), max_particles));
+  if (def.tear_strain != 0.0 || def.self_collision.enabled)
+    check(reader, reader.field(""), core::validate(build(), max_particles));
 }
+
+// The self_collision key of ropes, cloth, jelly and spring networks: a mapping {enabled, thickness
+// [m]}, each optional (core::SelfCollisionDef's defaults), no other key. Written only when enabled.
+void readSelfCollision(MapReader& reader, core::SelfCollisionDef& self_collision, const std::string& source);
+void writeSelfCollision(YAML::Node node, const core::SelfCollisionDef& self_collision);
 
 // Provot's strain limit keys (max_strain, strain_iterations) of cloth and jelly.
 void readStrainLimit(MapReader& reader, core::StrainLimitDef& limit);

@@ -192,7 +192,7 @@ YAML::Node shearConstants(const ClothDef& def)
 }
 
 // The keys grid and mesh cloth share: material, or mass, stretch and bend; pins, frame pins, strain limit, integrator,
-// contact thickness and tear strain (only when set).
+// contact thickness, tear strain and self-collision (the last two only when set).
 template <typename ClothDef>
 void clothTail(YAML::Node node, const SceneDef& scene, const ClothDef& cloth, const YAML::Node& pins)
 {
@@ -212,6 +212,7 @@ void clothTail(YAML::Node node, const SceneDef& scene, const ClothDef& cloth, co
   writeIntegrator(node, cloth.integrator);
   node["contact_thickness"] = cloth.contact_thickness;
   if (cloth.tear_strain != 0.0) node["tear_strain"] = cloth.tear_strain;
+  writeSelfCollision(node, cloth.self_collision);
 }
 }  // namespace
 
@@ -286,11 +287,12 @@ BodyDef readCloth(MapReader& reader, SceneDef& scene, const std::string& source)
     readIntegrator(reader, def.integrator);
     const bool thickness_given = readContactThickness(reader, def.contact_thickness);
     reader.read("tear_strain", def.tear_strain);
+    readSelfCollision(reader, def.self_collision, source);
     reader.finish();
     check(reader, reader.field(""), core::validate(def, world.max_particles_per_body));
     if (!thickness_given)
       def.contact_thickness = core::clothContactThickness(def.vertices, def.triangles, world.spheres);
-    checkTearStrain(reader, def.tear_strain, world.max_particles_per_body, [&] { return core::buildMeshCloth(def); });
+    checkNetworkKeys(reader, def, world.max_particles_per_body, [&] { return core::buildMeshCloth(def); });
     addFramePins(
         reader, frame_pins, name, static_cast<int>(def.vertices.size()),
         [](const std::string&, std::vector<int>&) { return false; }, def.pins, scene);
@@ -317,6 +319,7 @@ BodyDef readCloth(MapReader& reader, SceneDef& scene, const std::string& source)
   readIntegrator(reader, def.integrator);
   const bool thickness_given = readContactThickness(reader, def.contact_thickness);
   reader.read("tear_strain", def.tear_strain);
+  readSelfCollision(reader, def.self_collision, source);
   reader.finish();
   check(reader, reader.field(""), core::validate(def, world.max_particles_per_body));
   if (!thickness_given)
@@ -324,7 +327,7 @@ BodyDef readCloth(MapReader& reader, SceneDef& scene, const std::string& source)
     const core::SpringNetworkDef net = core::buildClothGrid(def);
     def.contact_thickness = core::clothContactThickness(net.positions, net.triangles, world.spheres);
   }
-  checkTearStrain(reader, def.tear_strain, world.max_particles_per_body, [&] { return core::buildClothGrid(def); });
+  checkNetworkKeys(reader, def, world.max_particles_per_body, [&] { return core::buildClothGrid(def); });
   addFramePins(
       reader, frame_pins, name, def.nu * def.nv,
       [&](const std::string& pin, std::vector<int>& indices) {

@@ -163,6 +163,26 @@ void readPins(MapReader& reader, std::vector<int>& indices, std::vector<std::str
   }
 }
 
+void readSelfCollision(MapReader& reader, core::SelfCollisionDef& self_collision, const std::string& source)
+{
+  const YAML::Node node = reader.child("self_collision");
+  if (!node) return;
+  MapReader entry(node, reader.field("self_collision"), source);
+  entry.read("enabled", self_collision.enabled);
+  entry.read("thickness", self_collision.thickness);
+  entry.finish();
+}
+
+void writeSelfCollision(YAML::Node node, const core::SelfCollisionDef& self_collision)
+{
+  if (!self_collision.enabled) return;
+  YAML::Node entry;
+  entry.SetStyle(YAML::EmitterStyle::Flow);
+  entry["enabled"] = true;
+  entry["thickness"] = self_collision.thickness;
+  node["self_collision"] = entry;
+}
+
 void readStrainLimit(MapReader& reader, core::StrainLimitDef& limit)
 {
   reader.read("max_strain", limit.max_strain);

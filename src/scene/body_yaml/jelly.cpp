@@ -30,9 +30,10 @@ core::JellyDef readJelly(MapReader& reader, SceneDef& scene, const std::string& 
   readIntegrator(reader, def.integrator);
   reader.read("contact_thickness", def.contact_thickness);
   reader.read("tear_strain", def.tear_strain);
+  readSelfCollision(reader, def.self_collision, source);
   reader.finish();
   check(reader, reader.field(""), core::validate(def, scene.world.max_particles_per_body));
-  checkTearStrain(reader, def.tear_strain, scene.world.max_particles_per_body, [&] { return core::buildJelly(def); });
+  checkNetworkKeys(reader, def, scene.world.max_particles_per_body, [&] { return core::buildJelly(def); });
   return def;
 }
 
@@ -52,6 +53,7 @@ YAML::Node writeJelly(const core::JellyDef& def)
   node["pins"] = indexList(def.pins);
   node["contact_thickness"] = def.contact_thickness;
   if (def.tear_strain != 0.0) node["tear_strain"] = def.tear_strain;
+  writeSelfCollision(node, def.self_collision);
   writeStrainLimit(node, def.strain_limit);
   writeIntegrator(node, def.integrator);
   return node;

@@ -90,6 +90,7 @@ core::RopeDef readRope(MapReader& reader, const core::WorldDef& world, const std
   readIntegrator(reader, def.integrator);
   reader.read("contact_thickness", def.contact_thickness);
   reader.read("tear_strain", def.tear_strain);
+  readSelfCollision(reader, def.self_collision, source);
   if (reader.has("material"))
   {
     for (const char* key : kKeysAMaterialSets)
@@ -103,7 +104,7 @@ core::RopeDef readRope(MapReader& reader, const core::WorldDef& world, const std
   }
   reader.finish();
   check(reader, reader.field(""), core::validate(def, world.max_particles_per_body));
-  checkTearStrain(reader, def.tear_strain, world.max_particles_per_body, [&] { return core::buildRope(def); });
+  checkNetworkKeys(reader, def, world.max_particles_per_body, [&] { return core::buildRope(def); });
   return def;
 }
 
@@ -129,6 +130,7 @@ YAML::Node writeRope(const core::RopeDef& def)
   node["pins"] = indexList(def.pins);
   node["contact_thickness"] = def.contact_thickness;
   if (def.tear_strain != 0.0) node["tear_strain"] = def.tear_strain;
+  writeSelfCollision(node, def.self_collision);
   writeIntegrator(node, def.integrator);
   return node;
 }

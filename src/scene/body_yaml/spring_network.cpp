@@ -69,6 +69,7 @@ core::SpringNetworkDef readSpringNetwork(MapReader& reader, const core::WorldDef
   readIntegrator(reader, def.integrator);
   reader.read("contact_thickness", def.contact_thickness);
   reader.read("tear_strain", def.tear_strain);
+  readSelfCollision(reader, def.self_collision, source);
   reader.finish();
   check(reader, reader.field(""), core::validate(def, world.max_particles_per_body));
   return def;
@@ -102,6 +103,7 @@ YAML::Node writeSpringNetwork(const core::SpringNetworkDef& def)
   node["pins"] = indexList(def.pins);
   node["contact_thickness"] = def.contact_thickness;
   if (def.tear_strain != 0.0) node["tear_strain"] = def.tear_strain;
+  writeSelfCollision(node, def.self_collision);
   writeIntegrator(node, def.integrator);
   return node;
 }
