@@ -235,6 +235,7 @@ void World::reset()
     body->reset();
   collision_report_ = CollisionReport{};
   collision_report_.bodies.resize(bodies_.size());
+  self_collision_.forgetTopology();
 }
 
 Status World::addEmitter(const EmitterDef& def)
@@ -292,6 +293,7 @@ Status World::addBody(std::unique_ptr<Body> body)
         std::to_string(static_cast<long long>(limits::kParticlesPerWorld.min)) + ", " +
         std::to_string(static_cast<long long>(limits::kParticlesPerWorld.max)) + "]); remove a body first");
   bodies_.push_back(std::move(body));
+  self_collision_.forgetTopology();
   return Status::success();
 }
 
@@ -300,6 +302,7 @@ Status World::removeBody(const std::string& name)
   auto it = std::find_if(bodies_.begin(), bodies_.end(), [&](const auto& b) { return b->name() == name; });
   if (it == bodies_.end()) return Status::failure("name = " + quoteReceived(name) + ": no body has that name");
   bodies_.erase(it);
+  self_collision_.forgetTopology();
   return Status::success();
 }
 

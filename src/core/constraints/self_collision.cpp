@@ -177,13 +177,11 @@ void tripleProductCubic(const Eigen::Vector3d& u, const Eigen::Vector3d& du, con
   c[3] = dudw.dot(ds);
 }
 
-// A key of grid cell (ix, iy, iz), 21 bits each, and its hash bucket among `buckets` (a power of 2).
+// A key of grid cell (ix, iy, iz), each wrapped to 21 bits (cells 2^21 apart share a key: more
+// candidates, which the boxes then reject), and its hash bucket among `buckets` (a power of 2).
 std::uint64_t cellKey(int ix, int iy, int iz)
 {
-  constexpr std::int64_t kOffset = 1 << 20;
-  const auto wrap = [](int i) {
-    return static_cast<std::uint64_t>(std::clamp<std::int64_t>(std::int64_t{i} + kOffset, 0, (1 << 21) - 1));
-  };
+  const auto wrap = [](int i) { return static_cast<std::uint64_t>(static_cast<std::uint32_t>(i)) & ((1u << 21) - 1); };
   return (wrap(ix) << 42) | (wrap(iy) << 21) | wrap(iz);
 }
 
@@ -198,13 +196,13 @@ std::size_t bucketOf(std::uint64_t key, std::size_t buckets)
 
 bool SelfCollisionSolver::pathsInsideBoxes(double h) const
 {
-  // The candidates still hold while every particle's path stays inside the one its items' boxes
-  // were built from, grown by half the largest thickness (pairs whose boxes did not overlap then
-  // cannot come within a thickness now).
+  // The candidates still hold while every particle's path stays inside the box of its path when
+  // they were found, grown by half the largest thickness: pairs whose grown boxes did not overlap
+  // then cannot meet now (they may come within a thickness, which only the proximity pass at the
+  // step's start, on fresh candidates, looks at).
   const double grow = 0.5 * max_thickness_;
   for (Eigen::Index i = 0; i < x0_.cols(); ++i)
   {
-    if (vbar_.col(i) == vbar_gathered_.col(i)) continue;
     const Eigen::Vector3d end = x0_.col(i) + h * vbar_.col(i);
     if ((end.array() < path_lo_.col(i).array() - grow).any() || (end.array() > path_hi_.col(i).array() + grow).any())
       return false;
@@ -236,7 +234,7 @@ void SelfCollisionSolver::resolve(double h, const std::vector<SpringNetworkBody*
   bool clear = false;
   for (int pass = 0; pass < kImpulsePasses && !clear; ++pass)
   {
-    if (pass > 0 && !pathsInsideBoxes(h)) findCandidates(h);
+    if (!pathsInsideBoxes(h)) findCandidates(h);  // the repulsion or the last pass moved paths out
     ++report.passes;
     clear = detectCollisions(h, true, false, report) == 0;
   }
@@ -255,7 +253,8 @@ void SelfCollisionSolver::gather(double h, const std::vector<SpringNetworkBody*>
                     bodies[b]->particles().size() == topology_bodies_[b].particles &&
                     bodies[b]->tornSprings() + bodies[b]->tornTriangles() == topology_bodies_[b].torn;
   }
-  if (!same_topology) buildTopology(bodies);
+  if (!same_topology || topology_stale_) buildTopology(bodies);
+  topology_stale_ = false;
 
   // Start positions and average velocities of the step, in one numbering.
   for (std::size_t b = 0; b < bodies.size(); ++b)
@@ -269,6 +268,7 @@ void SelfCollisionSolver::gather(double h, const std::vector<SpringNetworkBody*>
       vbar_.col(first + i) = (p.position.col(i) - start.col(i)) / h;
       inverse_mass_[first + i] = p.inverse_mass[i];
       v_end_.col(first + i) = p.velocity.col(i);
+      changed_[first + i] = 0;
     }
   }
   vbar_gathered_ = vbar_;
@@ -296,6 +296,7 @@ void SelfCollisionSolver::buildTopology(const std::vector<SpringNetworkBody*>& b
   zone_.assign(n, -1);
   moved_.assign(n, 0);
   moving_.assign(n, 0);
+  changed_.assign(n, 0);
   zone_sums_.resize(n);
   triangles_.clear();
   edges_.clear();
@@ -358,7 +359,7 @@ void SelfCollisionSolver::buildTopology(const std::vector<SpringNetworkBody*>& b
   path_hi_.resize(3, n);
   box_hi_.resize(3, static_cast<Eigen::Index>(items));
   buckets_ = 1;
-  while (buckets_ < 16 * items)
+  while (buckets_ < 4 * items)
     buckets_ <<= 1;
   bucket_start_.assign(buckets_ + 1, 0);
   bucket_fill_.assign(buckets_, 0);
@@ -585,6 +586,7 @@ void SelfCollisionSolver::applyImpulse(const Stencil& s, const Eigen::Vector3d& 
     vbar_.col(i) += s.weight[k] * j * inverse_mass_[i] * n;
     v_end_.col(i) += s.weight[k] * j_end * inverse_mass_[i] * n;
     moving_[i] = 1;
+    changed_[i] = 1;
   }
 }
 
@@ -798,6 +800,7 @@ void SelfCollisionSolver::mergeImpactZones(double h, CollisionReport& report)
     if (inverse_mass_[i] == 0.0) continue;
     vbar_.col(i).setZero();
     v_end_.col(i).setZero();
+    changed_[i] = 1;
     if (zone_[i] < 0) zone_[i] = i;
   }
   countZones(report);
@@ -867,12 +870,14 @@ void SelfCollisionSolver::rigidifyZones(Eigen::Matrix3Xd& v)
     else
       v.col(i) = z.momentum / z.mass + z.omega.cross(x0_.col(i) - z.moment / z.mass);
     moving_[i] = 1;
+    changed_[i] = 1;
   }
 }
 
 void SelfCollisionSolver::scatter(double h, const std::vector<SpringNetworkBody*>& bodies)
 {
-  // Only the particles whose v̄ changed move: x1 = x0 + h v̄, with their end velocity.
+  // Only the particles an impulse, a zone or the last resort changed move: x1 = x0 + h v̄, with
+  // their end velocity.
   for (std::size_t b = 0; b < bodies.size(); ++b)
   {
     ParticlePool& p = bodies[b]->particlesForContacts();
@@ -881,7 +886,7 @@ void SelfCollisionSolver::scatter(double h, const std::vector<SpringNetworkBody*
     for (int i = 0; i < p.size(); ++i)
     {
       const int g = first + i;
-      if (inverse_mass_[g] == 0.0 || vbar_.col(g) == vbar_gathered_.col(g)) continue;
+      if (!changed_[g]) continue;
       p.position.col(i) = x0_.col(g) + h * vbar_.col(g);
       p.velocity.col(i) = v_end_.col(g);
       moved = true;

@@ -63,6 +63,9 @@ public:
   /// report.bodies[report_index[k]] (report.bodies must be large enough). Nothing runs for none.
   void resolve(double h, const std::vector<SpringNetworkBody*>& bodies, const std::vector<int>& report_index,
                CollisionReport& report);
+  /// Rebuild the surfaces at the next resolve(): the World calls it when bodies are added, removed
+  /// or reset (a new body may take a removed one's address and size).
+  void forgetTopology() { topology_stale_ = true; }
 
 private:
   struct Item
@@ -149,7 +152,7 @@ private:
   std::vector<std::uint32_t> codes_;    // kind << 30 | index, points then edges then triangles
   Eigen::Matrix3Xd box_lo_, box_hi_;    // per code
   Eigen::Matrix3Xd path_lo_, path_hi_;  // per particle: the box of its path when the candidates were found
-  std::size_t buckets_ = 1;             // of the grid's hash table, a power of 2 (16 per item)
+  std::size_t buckets_ = 1;             // of the grid's hash table, a power of 2 (4 per item)
   std::vector<std::size_t> bucket_start_, bucket_fill_;
   std::vector<Item> entries_;
   std::vector<std::uint32_t> big_;  // codes_ indices whose box spans too many cells: tested against all
@@ -158,6 +161,8 @@ private:
   std::vector<Pair> pairs_;
   bool new_candidates_ = true;
   std::vector<char> moved_, moving_;  // per particle: moved by the last pass, by this one
+  std::vector<char> changed_;         // per particle: changed in this step (scatter writes it back)
+  bool topology_stale_ = true;
   // Fail-safe.
   std::vector<int> zone_;  // union–find parent per particle (−1: in no zone)
   std::vector<ZoneSum> zone_sums_;
