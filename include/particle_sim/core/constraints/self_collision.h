@@ -40,21 +40,23 @@ struct CollisionReport
 /// 2002), on the bodies that enable it. Each body has stepped from x0 (its positions at the step's
 /// start) to x1 with whatever method it uses; the pass works on the average velocities
 /// v̄ = (x1 − x0) / h of the step and changes them by impulses between pairs:
-/// 1. proximity: a point and a triangle, or two edges, closer than their thickness at x0 are pushed
-///    apart: an inelastic impulse cancels their approach and a repulsion separates them by a tenth
-///    of the missing distance over the step;
+/// 1. proximity: a point and a triangle, or two edges, closer than their thickness at x0 get an
+///    impulse that separates them by a tenth of the missing distance over the step;
 /// 2. continuous detection: every point–triangle and edge–edge pair that becomes coplanar during the
-///    step (the cubic in t of their linear paths) and touches there gets an impulse that stops its
-///    approach, pass after pass (Gauss–Seidel), until a pass finds nothing or the passes run out;
+///    step (the cubic in t of their linear paths) and touches there, or that ends the step touching
+///    (parallel items), gets an impulse that stops its approach, pass after pass (Gauss–Seidel),
+///    until a pass finds nothing or the passes run out;
 /// 3. fail-safe (rigid impact zones, Provot 1997): the particles of the pairs still colliding are
 ///    merged into zones that move rigidly (their momentum and angular momentum kept), growing until
 ///    nothing collides; x0 had no intersection, so then no step ends with one.
-/// Then x1 = x0 + h v̄, and each particle's end velocity gets the change of the inelastic part of its
-/// v̄ (the repulsion moves positions only, and so adds no kinetic energy).
+/// Then x1 = x0 + h v̄. The end velocities get only impulses that stop an approach (inelastic) and
+/// the zones' rigid projection, so the pass never adds kinetic energy; the separation moves
+/// positions only.
 ///
-/// Broad phase: a uniform grid over the swept boxes of points, edges and triangles, kept as one
-/// array of (cell, item) sorted by cell: deterministic, and allocation-free once its arrays have
-/// grown to the scene's size. Pinned particles have infinite mass: they move as their pins say.
+/// Broad phase: a uniform grid of the edges' and triangles' swept boxes, counting-sorted into a hash
+/// table by cell; each point and edge looks in the cells of its own box. Deterministic, and
+/// allocation-free once its arrays have grown to the scene's size. Pinned particles have infinite
+/// mass: they move as their pins say.
 class SelfCollisionSolver
 {
 public:
