@@ -4,7 +4,8 @@
 // velocity, previous position, inverse mass and age, emitters' counts, pins, the step count) is
 // the one recorded in test/golden/state_hashes.txt, bit for bit. A refactoring that keeps the
 // physics keeps every hash; any change of any bit of any state shows up here, named by scene and
-// integrator.
+// integrator. The pairs run on every core at once (each an independent world), so the sweep also
+// checks that worlds stepped side by side share no state.
 //
 // The integrator is applied the way `particle_sim_run --integrator NAME` means it: to every spring
 // body of the scene (rope, network, cloth, jelly), after the scene is built, keeping the body's
@@ -29,6 +30,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -40,6 +42,7 @@
 #include <set>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "particle_sim/core/integrator.h"
@@ -225,34 +228,71 @@ TEST(GoldenHash, EveryShippedSceneAndIntegratorEndsInItsGoldenState)
   const std::vector<std::string> scenes = shippedScenes();
   ASSERT_GE(scenes.size(), 30u) << "scene files not found under " << kShippedScenesDir;
 
-  // Every pair's value: the hash, or why it is excluded.
-  std::vector<std::pair<std::string, std::string>> results;  // "scene integrator", value
-  std::vector<std::string> notes;
-  for (const std::string& scene_name : scenes)
+  // Every pair's job: its scene, its integrator, and what it found (the hash, or why it is
+  // excluded; the bodies that froze).
+  struct Job
   {
-    scene::SceneDef scene_def;
-    const core::Status loaded = scene::loadSceneFile(kShippedScenesDir + "/" + scene_name, scene_def);
-    ASSERT_TRUE(loaded.ok) << scene_name << ": " << loaded.message;
-    for (const std::string& note : tfOnlyFollowers(scene_def))
-      notes.push_back(scene_name + ": " + note + ", which only tf provides: offline it stays where the scene puts it");
+    std::size_t scene;
+    std::string integrator;
+    std::string value;
+    std::vector<std::string> frozen;
+  };
+  std::vector<scene::SceneDef> scene_defs(scenes.size());
+  std::vector<std::vector<std::string>> tf_notes(scenes.size());  // per scene
+  std::vector<Job> jobs;
+  for (std::size_t s = 0; s < scenes.size(); ++s)
+  {
+    const core::Status loaded = scene::loadSceneFile(kShippedScenesDir + "/" + scenes[s], scene_defs[s]);
+    ASSERT_TRUE(loaded.ok) << scenes[s] << ": " << loaded.message;
+    for (const std::string& note : tfOnlyFollowers(scene_defs[s]))
+      tf_notes[s].push_back(scenes[s] + ": " + note +
+                            ", which only tf provides: offline it stays where the scene puts it");
     for (const std::string& integrator : integrators)
     {
-      std::string value;
+      Job job{s, integrator, {}, {}};
       for (const Exclusion& exclusion : kExclusions)
-        if (scene_name == exclusion.scene && integrator == exclusion.integrator)
-          value = std::string("excluded: ") + exclusion.reason;
-      if (value.empty())
-      {
-        core::IntegratorType type;
-        ASSERT_TRUE(core::parseIntegratorType(integrator, type)) << integrator;
-        std::vector<std::string> frozen;
-        value = runAndHash(scene_def, type, frozen);
-        for (const std::string& why : frozen)
-          notes.push_back(scene_name + " " + integrator + ": " + why);
-        EXPECT_EQ(value.rfind("error:", 0), std::string::npos) << scene_name << " " << integrator << ": " << value;
-      }
-      results.emplace_back(scene_name + " " + integrator, value);
+        if (scenes[s] == exclusion.scene && integrator == exclusion.integrator)
+          job.value = std::string("excluded: ") + exclusion.reason;
+      jobs.push_back(std::move(job));
     }
+  }
+
+  // The pairs are independent worlds: the machine's cores take them in turn from a shared counter.
+  // Each job writes only its own slot, so the results (and the file) keep the scene order. Running
+  // two worlds at once also checks that stepping shares no state between worlds.
+  std::atomic<std::size_t> next_job{0};
+  auto work = [&]() {
+    for (std::size_t j = next_job++; j < jobs.size(); j = next_job++)
+    {
+      Job& job = jobs[j];
+      if (!job.value.empty()) continue;
+      core::IntegratorType type;
+      if (!core::parseIntegratorType(job.integrator, type))
+        job.value = "error: unknown integrator";
+      else
+        job.value = runAndHash(scene_defs[job.scene], type, job.frozen);
+    }
+  };
+  const unsigned threads = std::max(1u, std::thread::hardware_concurrency());
+  std::vector<std::thread> workers;
+  for (unsigned t = 1; t < threads; ++t)
+    workers.emplace_back(work);
+  work();
+  for (std::thread& worker : workers)
+    worker.join();
+
+  // Notes in scene order: a scene's frames that only tf provides, then its bodies that froze.
+  std::vector<std::pair<std::string, std::string>> results;  // "scene integrator", value
+  std::vector<std::string> notes;
+  for (const Job& job : jobs)
+  {
+    if (job.integrator == integrators.front())
+      notes.insert(notes.end(), tf_notes[job.scene].begin(), tf_notes[job.scene].end());
+    const std::string pair = scenes[job.scene] + " " + job.integrator;
+    EXPECT_EQ(job.value.rfind("error:", 0), std::string::npos) << pair << ": " << job.value;
+    for (const std::string& why : job.frozen)
+      notes.push_back(pair + ": " + why);
+    results.emplace_back(pair, job.value);
   }
   for (const Exclusion& exclusion : kExclusions)
   {
