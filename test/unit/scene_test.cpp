@@ -21,7 +21,9 @@
 
 using namespace particle_sim;
 using particle_sim_test::contains;
+using particle_sim_test::expectRoundTrip;
 using particle_sim_test::kShippedScenesDir;
+using particle_sim_test::occurrences;
 using particle_sim_test::parseOk;
 using particle_sim_test::refusal;
 using particle_sim_test::shippedScenes;
@@ -219,12 +221,7 @@ TEST(SceneFiles, WritesOnlyTheIntegratorKeysABodySets)
       "world: {integrator: rk4, cg_tolerance: 1.0e-5, cg_velocity_tolerance: 2.0e-4}\n"
       "bodies:\n  - {name: a, kind: rope}\n  - {name: b, kind: jelly, integrator: verlet}\n");
   const std::string written = scene::toYaml(def);
-  auto count = [&](const std::string& key) {
-    int n = 0;
-    for (std::size_t at = written.find(key + ":"); at != std::string::npos; at = written.find(key + ":", at + 1))
-      ++n;
-    return n;
-  };
+  auto count = [&](const std::string& key) { return occurrences(written, key + ":"); };
   EXPECT_EQ(count("integrator"), 2) << written;  // the world's and b's
   for (const char* key : {"verlet_damping", "cg_tolerance", "cg_velocity_tolerance", "cg_max_iterations",
                           "max_substeps", "linear_solver"})
@@ -464,14 +461,7 @@ TEST(SceneFiles, ReadsWritesAndChecksTheTearStrain)
   expectTearStrains(def);
 
   // Written back by the bodies that set it (only those), and read back the same.
-  const std::string written = scene::toYaml(def);
-  std::size_t keys = 0;
-  for (std::size_t at = written.find("tear_strain"); at != std::string::npos; at = written.find("tear_strain", at + 1))
-    ++keys;
-  EXPECT_EQ(keys, 5u) << written;
-  const scene::SceneDef again = parseOk(written);
-  expectTearStrains(again);
-  EXPECT_EQ(scene::toYaml(again), written);
+  expectRoundTrip(def, "tear_strain", 5, expectTearStrains);
 
   // The built bodies carry it.
   std::unique_ptr<core::World> world;
@@ -540,15 +530,7 @@ TEST(SceneFiles, ReadsWritesAndChecksSelfCollision)
   EXPECT_EQ(std::get<core::RopeDef>(def.bodies[5]).self_collision.thickness, 0.03);  // read, though off
 
   // Written back by the bodies that enable it (only those), and read back the same.
-  const std::string written = scene::toYaml(def);
-  std::size_t keys = 0;
-  for (std::size_t at = written.find("self_collision"); at != std::string::npos;
-       at = written.find("self_collision", at + 1))
-    ++keys;
-  EXPECT_EQ(keys, 5u) << written;
-  const scene::SceneDef again = parseOk(written);
-  expectSelfCollision(again);
-  EXPECT_EQ(scene::toYaml(again), written);
+  expectRoundTrip(def, "self_collision", 5, expectSelfCollision);
 
   // The built bodies carry it.
   std::unique_ptr<core::World> world;

@@ -223,9 +223,9 @@ void SelfCollisionSolver::resolve(double h, const std::vector<SpringNetworkBody*
   report.total = CollisionCounts{};
   std::fill(report.bodies.begin(), report.bodies.end(), CollisionCounts{});
   if (bodies.empty()) return;
-  report_index_ = &report_index;
   gather(h, bodies);
   if (triangles_.empty() && edges_.empty()) return;
+  body_counts_.assign(bodies.size(), CollisionCounts{});
 
   // 1. Pairs closer than their thickness at the step's start are pushed apart.
   findCandidates(h);
@@ -241,6 +241,8 @@ void SelfCollisionSolver::resolve(double h, const std::vector<SpringNetworkBody*
   // 3. What still collides moves in rigid impact zones.
   if (!clear) mergeImpactZones(h, report);
   scatter(h, bodies);
+  for (std::size_t b = 0; b < bodies.size(); ++b)
+    report.bodies[report_index[b]] = body_counts_[b];
 }
 
 void SelfCollisionSolver::gather(double h, const std::vector<SpringNetworkBody*>& bodies)
@@ -271,7 +273,6 @@ void SelfCollisionSolver::gather(double h, const std::vector<SpringNetworkBody*>
       changed_[first + i] = 0;
     }
   }
-  vbar_gathered_ = vbar_;
 }
 
 void SelfCollisionSolver::buildTopology(const std::vector<SpringNetworkBody*>& bodies)
@@ -287,7 +288,6 @@ void SelfCollisionSolver::buildTopology(const std::vector<SpringNetworkBody*>& b
   }
   x0_.resize(3, n);
   vbar_.resize(3, n);
-  vbar_gathered_.resize(3, n);
   v_end_.resize(3, n);
   inverse_mass_.assign(n, 0.0);
   thickness_.assign(n, 0.0);
@@ -516,13 +516,36 @@ void SelfCollisionSolver::findCandidates(double h)
         consider(kb, k);
     }
   }
+
+  // Each pair's stencil at the step's start: x0 does not change during the pass, so it serves the
+  // repulsion, the touching bound and the touching-end check of every pass.
+  pair_start_.resize(pairs_.size());
+  for (std::size_t k = 0; k < pairs_.size(); ++k)
+  {
+    PairStart& start = pair_start_[k];
+    start.valid = stencil(pairs_[k], 0.0, h, start.stencil, start.normal, start.distance);
+  }
 }
 
-bool SelfCollisionSolver::stencil(const Pair& pair, double t, Stencil& s, Eigen::Vector3d& normal,
+bool SelfCollisionSolver::contactNormal(const Eigen::Vector3d& d, double distance, const Eigen::Vector3d& plane,
+                                        Eigen::Vector3d& normal) const
+{
+  // Along the distance vector; where the items touch, the plane's normal (the face's, or the two
+  // edges' cross product); false when that too vanishes.
+  if (distance > 1e-12 * cell_size_)
+    normal = d / distance;
+  else if (plane.norm() > 0.0)
+    normal = plane.normalized();
+  else
+    return false;
+  return true;
+}
+
+bool SelfCollisionSolver::stencil(const Pair& pair, double t, double h, Stencil& s, Eigen::Vector3d& normal,
                                   double& distance) const
 {
   // Positions at time t·h of the step.
-  const auto at = [&](int i) -> Eigen::Vector3d { return x0_.col(i) + t * step_h_ * vbar_.col(i); };
+  const auto at = [&](int i) -> Eigen::Vector3d { return x0_.col(i) + t * h * vbar_.col(i); };
   if (pair.kind == 0)
   {
     const Eigen::Vector3i& tri = triangles_[pair.b];
@@ -532,14 +555,7 @@ bool SelfCollisionSolver::stencil(const Pair& pair, double t, Stencil& s, Eigen:
     s = Stencil{{static_cast<int>(pair.a), tri[0], tri[1], tri[2]}, {1.0, -w[0], -w[1], -w[2]}};
     const Eigen::Vector3d d = p - q;
     distance = d.norm();
-    const Eigen::Vector3d face = (b - a).cross(c - a);
-    if (distance > 1e-12 * cell_size_)
-      normal = d / distance;
-    else if (face.norm() > 0.0)
-      normal = face.normalized();
-    else
-      return false;
-    return true;
+    return contactNormal(d, distance, (b - a).cross(c - a), normal);
   }
   const Eigen::Vector2i &e = edges_[pair.a], &f = edges_[pair.b];
   const Eigen::Vector3d p0 = at(e[0]), p1 = at(e[1]), q0 = at(f[0]), q1 = at(f[1]);
@@ -547,14 +563,7 @@ bool SelfCollisionSolver::stencil(const Pair& pair, double t, Stencil& s, Eigen:
   s = Stencil{{e[0], e[1], f[0], f[1]}, {1.0 - st[0], st[0], -(1.0 - st[1]), -st[1]}};
   const Eigen::Vector3d d = (p0 + st[0] * (p1 - p0)) - (q0 + st[1] * (q1 - q0));
   distance = d.norm();
-  const Eigen::Vector3d cross = (p1 - p0).cross(q1 - q0);
-  if (distance > 1e-12 * cell_size_)
-    normal = d / distance;
-  else if (cross.norm() > 0.0)
-    normal = cross.normalized();
-  else
-    return false;
-  return true;
+  return contactNormal(d, distance, (p1 - p0).cross(q1 - q0), normal);
 }
 
 double SelfCollisionSolver::normalVelocity(const Stencil& s, const Eigen::Vector3d& n) const
@@ -590,23 +599,22 @@ void SelfCollisionSolver::applyImpulse(const Stencil& s, const Eigen::Vector3d& 
   }
 }
 
-void SelfCollisionSolver::count(const Stencil& s, int CollisionCounts::*field, CollisionReport& report) const
+void SelfCollisionSolver::count(const Stencil& s, int CollisionCounts::*field, CollisionReport& report)
 {
   ++(report.total.*field);
   const int body_a = body_of_[s.particle[0]], body_b = body_of_[s.particle[3]];
-  ++(report.bodies[(*report_index_)[body_a]].*field);
-  if (body_b != body_a) ++(report.bodies[(*report_index_)[body_b]].*field);
+  ++(body_counts_[body_a].*field);
+  if (body_b != body_a) ++(body_counts_[body_b].*field);
 }
 
 void SelfCollisionSolver::repelProximities(double h, CollisionReport& report)
 {
-  step_h_ = h;
-  for (const Pair& pair : pairs_)
+  for (const PairStart& start : pair_start_)
   {
-    Stencil s;
-    Eigen::Vector3d n;
-    double distance = 0.0;
-    if (!stencil(pair, 0.0, s, n, distance)) continue;
+    if (!start.valid) continue;
+    const Stencil& s = start.stencil;
+    const Eigen::Vector3d& n = start.normal;
+    const double distance = start.distance;
     const double thickness = pairThickness(s.particle[0], s.particle[3]);
     if (distance >= thickness) continue;
     count(s, &CollisionCounts::proximity_pairs, report);
@@ -619,7 +627,7 @@ void SelfCollisionSolver::repelProximities(double h, CollisionReport& report)
   }
 }
 
-bool SelfCollisionSolver::mayTouch(const Pair& pair, double h) const
+bool SelfCollisionSolver::mayTouch(const Pair& pair, const PairStart& start, double h) const
 {
   // The distance between the pair's items changes at most as fast as the largest relative
   // displacement L of a particle of one item against a particle of the other over the step, so it
@@ -656,9 +664,9 @@ bool SelfCollisionSolver::mayTouch(const Pair& pair, double h) const
   if (0.5 * (planeDistance(0.0) + planeDistance(1.0) - h * lipschitz) > touch) return false;
   Stencil s;
   Eigen::Vector3d n;
-  double d_start = 0.0, d_end = 0.0;
-  if (!stencil(pair, 0.0, s, n, d_start) || !stencil(pair, 1.0, s, n, d_end)) return true;
-  return 0.5 * (d_start + d_end - h * lipschitz) <= touch;
+  double d_end = 0.0;
+  if (!start.valid || !stencil(pair, 1.0, h, s, n, d_end)) return true;
+  return 0.5 * (start.distance + d_end - h * lipschitz) <= touch;
 }
 
 int SelfCollisionSolver::detectCollisions(double h, bool apply_impulses, bool merge_zones, CollisionReport& report)
@@ -669,10 +677,11 @@ int SelfCollisionSolver::detectCollisions(double h, bool apply_impulses, bool me
   new_candidates_ = false;
   std::swap(moved_, moving_);
   std::fill(moving_.begin(), moving_.end(), 0);
-  step_h_ = h;
   int found = 0;
-  for (const Pair& pair : pairs_)
+  for (std::size_t pair_index = 0; pair_index < pairs_.size(); ++pair_index)
   {
+    const Pair& pair = pairs_[pair_index];
+    const PairStart& start = pair_start_[pair_index];
     int ids[4];
     if (pair.kind == 0)
     {
@@ -691,7 +700,7 @@ int SelfCollisionSolver::detectCollisions(double h, bool apply_impulses, bool me
     }
     // After the first pass only pairs with a particle that an impulse moved since can have changed.
     if (!all_pairs && !moved_[ids[0]] && !moved_[ids[1]] && !moved_[ids[2]] && !moved_[ids[3]]) continue;
-    if (!mayTouch(pair, h)) continue;
+    if (!mayTouch(pair, start, h)) continue;
     // The pair's four particles move in straight lines over the step; they are coplanar where the
     // triple product of their differences vanishes, a cubic in t.
     const Eigen::Vector3d x0 = x0_.col(ids[0]), d0 = h * vbar_.col(ids[0]);
@@ -728,7 +737,7 @@ int SelfCollisionSolver::detectCollisions(double h, bool apply_impulses, bool me
       Stencil s;
       Eigen::Vector3d n;
       double distance = 0.0;
-      if (!stencil(pair, roots[k], s, n, distance)) continue;
+      if (!stencil(pair, roots[k], h, s, n, distance)) continue;
       const double thickness = pairThickness(s.particle[0], s.particle[3]);
       if (distance > kTouchShare * thickness) continue;
       // They touch at roots[k]. The normal is the plane's there (the face's, or the two edges'
@@ -750,12 +759,12 @@ int SelfCollisionSolver::detectCollisions(double h, bool apply_impulses, bool me
     // Items that move in parallel (two parallel edges, a point sliding along a face) are coplanar
     // all along or never, and the cubic does not see them meet: the end of the step is checked too,
     // with the direction they were apart in at the start.
-    Stencil s_end, s_start;
-    Eigen::Vector3d n_end, n_start;
-    double d_end = 0.0, d_start = 0.0;
-    if (!stencil(pair, 1.0, s_end, n_end, d_end) || !stencil(pair, 0.0, s_start, n_start, d_start)) continue;
+    Stencil s_end;
+    Eigen::Vector3d n_end;
+    double d_end = 0.0;
+    if (!stencil(pair, 1.0, h, s_end, n_end, d_end) || !start.valid) continue;
     const double thickness = pairThickness(s_end.particle[0], s_end.particle[3]);
-    if (d_end <= kTouchShare * thickness) respond(s_end, n_start, thickness);
+    if (d_end <= kTouchShare * thickness) respond(s_end, start.normal, thickness);
   }
   return found;
 }
@@ -814,7 +823,7 @@ void SelfCollisionSolver::countZones(CollisionReport& report)
     if (zone_[i] < 0) continue;
     if (findZone(i) == i) ++report.impact_zones;
     ++report.total.impact_zone_particles;
-    ++report.bodies[(*report_index_)[body_of_[i]]].impact_zone_particles;
+    ++body_counts_[body_of_[i]].impact_zone_particles;
   }
 }
 

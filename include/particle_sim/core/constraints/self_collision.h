@@ -87,6 +87,14 @@ private:
     int particle[4];
     double weight[4];
   };
+  // A pair's closest points at the step's start (x0), found once per candidate list.
+  struct PairStart
+  {
+    Stencil stencil;
+    Eigen::Vector3d normal;  // from the second item to the first
+    double distance;
+    bool valid;  // false: degenerate geometry
+  };
   struct TopologyKey
   {
     const SpringNetworkBody* body;
@@ -115,11 +123,15 @@ private:
   bool pathsInsideBoxes(double h) const;
   // The stencil of `pair` at time t·h of the step, its distance and the direction from the second
   // item to the first; false when the geometry is degenerate.
-  bool stencil(const Pair& pair, double t, Stencil& s, Eigen::Vector3d& normal, double& distance) const;
+  bool stencil(const Pair& pair, double t, double h, Stencil& s, Eigen::Vector3d& normal, double& distance) const;
+  // The contact normal from the distance vector d between closest points, or from `plane` where
+  // they touch; false when both vanish.
+  bool contactNormal(const Eigen::Vector3d& d, double distance, const Eigen::Vector3d& plane,
+                     Eigen::Vector3d& normal) const;
   double normalVelocity(const Stencil& s, const Eigen::Vector3d& n) const;
   // False when the pair cannot come within touching distance during the step (a bound from its
   // distances at the start and end and its relative motion).
-  bool mayTouch(const Pair& pair, double h) const;
+  bool mayTouch(const Pair& pair, const PairStart& start, double h) const;
   void repelProximities(double h, CollisionReport& report);
   // One Gauss–Seidel pass of continuous detection over the candidates: the number of pairs that
   // touch during the step while approaching. Each gets an impulse (`apply_impulses`) or has its
@@ -134,15 +146,15 @@ private:
   // Changes the relative normal velocity of `s` along `n` by `dv` [m/s] with an impulse shared by
   // inverse mass, and stops the approach of the end velocities along n.
   void applyImpulse(const Stencil& s, const Eigen::Vector3d& n, double dv);
-  void count(const Stencil& s, int CollisionCounts::*field, CollisionReport& report) const;
+  // Counts a pair in the report's total and in its bodies' counts (body_counts_).
+  void count(const Stencil& s, int CollisionCounts::*field, CollisionReport& report);
   double pairThickness(int particle_a, int particle_b) const;
 
-  const std::vector<int>* report_index_ = nullptr;
-  double step_h_ = 0.0;
+  std::vector<CollisionCounts> body_counts_;  // per participating body, copied to the report at the end
   // The participating particles, all bodies in one numbering, and their surfaces.
   std::vector<TopologyKey> topology_bodies_;
   std::vector<int> body_first_;
-  Eigen::Matrix3Xd x0_, vbar_, vbar_gathered_, v_end_;  // v_end_: the velocities the step ended with
+  Eigen::Matrix3Xd x0_, vbar_, v_end_;  // v_end_: the velocities the step ended with
   std::vector<double> inverse_mass_, thickness_;
   std::vector<int> body_of_;
   std::vector<char> is_point_;  // in some edge or triangle
@@ -161,6 +173,7 @@ private:
   std::vector<char> big_flag_;      // per code
   std::vector<long long> seen_;     // per code: the last item that found it (a pair once)
   std::vector<Pair> pairs_;
+  std::vector<PairStart> pair_start_;  // per pair
   bool new_candidates_ = true;
   std::vector<char> moved_, moving_;  // per particle: moved by the last pass, by this one
   std::vector<char> changed_;         // per particle: changed in this step (scatter writes it back)
