@@ -33,6 +33,8 @@ constexpr double kSeparationShare = 0.1;
 // An item whose box spans more grid cells than this (a particle flung far in one step) is tested
 // against every other item instead of being put in every cell.
 constexpr double kMaxCellsPerItem = 512.0;
+// Grid cells at least this many times the particles' mean travel in a step.
+constexpr double kCellsPerTravel = 1.0;
 
 // Closest point to p on triangle (a, b, c) as barycentric weights w (Ericson, Real-Time Collision
 // Detection, 5.1.5: the Voronoi region of p among the corners, edges and face).
@@ -203,7 +205,7 @@ bool SelfCollisionSolver::pathsInsideBoxes(double h) const
   const double grow = 0.5 * max_thickness_;
   for (Eigen::Index i = 0; i < x0_.cols(); ++i)
   {
-    const Eigen::Vector3d end = x0_.col(i) + h * vbar_.col(i);
+    const Eigen::Vector3d end = x0_.col(i) + h * (vbar_.col(i) - frame_velocity_);
     if ((end.array() < path_lo_.col(i).array() - grow).any() || (end.array() > path_hi_.col(i).array() + grow).any())
       return false;
   }
@@ -346,9 +348,9 @@ void SelfCollisionSolver::buildTopology(const std::vector<SpringNetworkBody*>& b
               .norm();
     }
   }
-  // Grid cells about one edge long: each item spans a few cells, each cell holds a few items.
+  // The surfaces' length scale: their mean edge (the grid's smallest cell).
   const double mean_edge = edges_.empty() ? max_thickness_ : edge_length_sum / static_cast<double>(edges_.size());
-  cell_size_ = std::max({mean_edge, max_thickness_, 1e-6});
+  length_scale_ = std::max({mean_edge, max_thickness_, 1e-6});
 
   // Room for the broad phase, so that the steps allocate nothing: an item's box spans up to 2 cells
   // along each axis at rest, more when it moves fast; pairs are a few per item.
@@ -361,10 +363,12 @@ void SelfCollisionSolver::buildTopology(const std::vector<SpringNetworkBody*>& b
   buckets_ = 1;
   while (buckets_ < 4 * items)
     buckets_ <<= 1;
-  bucket_start_.assign(buckets_ + 1, 0);
-  bucket_fill_.assign(buckets_, 0);
+  bucket_start_.assign(2 * buckets_ + 1, 0);  // the edges' table, then the triangles'
+  bucket_fill_.assign(2 * buckets_, 0);
   entries_.reserve(16 * items);
   pairs_.reserve(16 * items);
+  pair_start_.reserve(16 * items);
+  median_scratch_.resize(n);
   big_.reserve(64);
   big_flag_.reserve(items);
   seen_.reserve(items);
@@ -372,16 +376,40 @@ void SelfCollisionSolver::buildTopology(const std::vector<SpringNetworkBody*>& b
 
 void SelfCollisionSolver::findCandidates(double h)
 {
-  // Each item's box: swept from x0 to x1 = x0 + h v̄, grown by half the largest thickness, so that
-  // two boxes overlap whenever their items come within a thickness of each other during the step.
+  // Each item's box: swept from x0 to x1 = x0 + h v̄ (relative to a moving frame, below), grown by
+  // half the largest thickness, so that two boxes overlap whenever their items come within a
+  // thickness of each other during the step.
   const double grow = 0.5 * max_thickness_;
   const int n = static_cast<int>(x0_.cols());
+  // The paths are boxed in a frame moving with the particles' median velocity (per axis): two
+  // items meet in it exactly when they meet in the world, and a cloth that falls or is carried as
+  // a whole no longer sweeps every item through its neighbours' boxes, while a cloth most of which
+  // lies still (a corner lifted) keeps the world's frame.
+  frame_velocity_.setZero();
+  if (n > 0 && vbar_.allFinite())
+  {
+    for (int axis = 0; axis < 3; ++axis)
+    {
+      for (int i = 0; i < n; ++i)
+        median_scratch_[i] = vbar_(axis, i);
+      std::nth_element(median_scratch_.begin(), median_scratch_.begin() + n / 2, median_scratch_.begin() + n);
+      frame_velocity_[axis] = median_scratch_[n / 2];
+    }
+  }
+  double travel = 0.0;  // [m] summed over the particles, in that frame
   for (int i = 0; i < n; ++i)
   {
-    const Eigen::Vector3d a = x0_.col(i), b = x0_.col(i) + h * vbar_.col(i);
+    const Eigen::Vector3d a = x0_.col(i), b = x0_.col(i) + h * (vbar_.col(i) - frame_velocity_);
     path_lo_.col(i) = a.cwiseMin(b);
     path_hi_.col(i) = a.cwiseMax(b);
+    travel += (b - a).norm();
   }
+  // Grid cells about one edge long, longer when the particles travel further in the step: each
+  // item spans a few cells and each cell holds a few items (a cloth falling a cell a step would
+  // otherwise put every item in a column of cells). The cells change only how the pairs are found,
+  // not their order: each item's pairs are sorted by the other item (but for items too large for
+  // the grid, tested against all after the others).
+  cell_size_ = std::max(length_scale_, kCellsPerTravel * travel / std::max(n, 1));
   const auto itemBox = [&](std::uint32_t code, Eigen::Vector3d& lo, Eigen::Vector3d& hi) {
     const std::uint32_t kind = code >> kKindShift, index = code & kIndexMask;
     const int* ids = kind == kPoint ? nullptr : kind == kEdge ? edges_[index].data() : triangles_[index].data();
@@ -439,8 +467,12 @@ void SelfCollisionSolver::findCandidates(double h)
     big_flag_[k] = 1;
 
   // Counting sort of the (cell, item) entries of the edges and triangles by the hash bucket of the
-  // cell: within a bucket in codes_ order, so the pairs come in a fixed order.
+  // cell, in two tables (edges, then triangles: a point looks only for triangles, an edge only for
+  // edges): within a bucket in codes_ order, so the pairs come in a fixed order.
   const std::size_t buckets = buckets_;
+  const auto tableBucket = [&](std::size_t k, std::uint64_t key) {
+    return bucketOf(key, buckets) + (k >= first_triangle ? buckets : 0);
+  };
   std::fill(bucket_start_.begin(), bucket_start_.end(), 0);
   entries_.resize(entries);
   const auto forEachCell = [&](std::size_t k, auto&& visit) {
@@ -452,14 +484,14 @@ void SelfCollisionSolver::findCandidates(double h)
           visit(cellKey(ix, iy, iz));
   };
   for (std::size_t k = first_edge; k < codes_.size(); ++k)
-    if (!big_flag_[k]) forEachCell(k, [&](std::uint64_t key) { ++bucket_start_[bucketOf(key, buckets) + 1]; });
-  for (std::size_t b = 0; b < buckets; ++b)
+    if (!big_flag_[k]) forEachCell(k, [&](std::uint64_t key) { ++bucket_start_[tableBucket(k, key) + 1]; });
+  for (std::size_t b = 0; b < 2 * buckets; ++b)
     bucket_start_[b + 1] += bucket_start_[b];
   std::copy(bucket_start_.begin(), bucket_start_.end() - 1, bucket_fill_.begin());
   for (std::size_t k = first_edge; k < codes_.size(); ++k)
     if (!big_flag_[k])
       forEachCell(k, [&](std::uint64_t key) {
-        entries_[bucket_fill_[bucketOf(key, buckets)]++] = Item{key, static_cast<std::uint32_t>(k)};
+        entries_[bucket_fill_[tableBucket(k, key)]++] = Item{key, static_cast<std::uint32_t>(k)};
       });
 
   // Pairs: a point and a triangle, or two edges, whose boxes overlap and that share no particle.
@@ -493,8 +525,9 @@ void SelfCollisionSolver::findCandidates(double h)
   {
     if (big_flag_[k]) continue;
     const auto stamp = static_cast<long long>(k);
+    const std::size_t first_pair = pairs_.size();
     forEachCell(k, [&](std::uint64_t key) {
-      const std::size_t b = bucketOf(key, buckets);
+      const std::size_t b = bucketOf(key, buckets) + (k < first_edge ? buckets : 0);  // points: triangles
       for (std::size_t e = bucket_start_[b]; e < bucket_start_[b + 1]; ++e)
       {
         const std::size_t other = entries_[e].item;
@@ -503,6 +536,8 @@ void SelfCollisionSolver::findCandidates(double h)
         consider(k, other);
       }
     });
+    std::sort(pairs_.begin() + static_cast<std::ptrdiff_t>(first_pair), pairs_.end(),
+              [](const Pair& l, const Pair& r) { return l.b < r.b; });
   }
   // Big items against every item (each pair once, from the big item of the two that comes first).
   for (std::uint32_t kb : big_)
@@ -532,7 +567,7 @@ bool SelfCollisionSolver::contactNormal(const Eigen::Vector3d& d, double distanc
 {
   // Along the distance vector; where the items touch, the plane's normal (the face's, or the two
   // edges' cross product); false when that too vanishes.
-  if (distance > 1e-12 * cell_size_)
+  if (distance > 1e-12 * length_scale_)
     normal = d / distance;
   else if (plane.norm() > 0.0)
     normal = plane.normalized();

@@ -53,8 +53,11 @@ struct CollisionReport
 /// the zones' rigid projection, so the pass never adds kinetic energy; the separation moves
 /// positions only.
 ///
-/// Broad phase: a uniform grid of the edges' and triangles' swept boxes, counting-sorted into a hash
-/// table by cell; each point and edge looks in the cells of its own box. Deterministic, and
+/// Broad phase: a uniform grid of the edges' and triangles' swept boxes (swept in a frame moving with
+/// the particles' median velocity; cells one mean edge long, or the mean travel if longer),
+/// counting-sorted by cell into a hash table for edges and one for triangles; each point looks for
+/// triangles and each edge for edges in the cells of its own box, and keeps its pairs in the order
+/// of the other item, so the cells change the cost, never the result. Deterministic, and
 /// allocation-free once its arrays have grown to the scene's size. Pinned particles have infinite
 /// mass: they move as their pins say.
 class SelfCollisionSolver
@@ -116,8 +119,8 @@ private:
   void gather(double h, const std::vector<SpringNetworkBody*>& bodies);
   void buildTopology(const std::vector<SpringNetworkBody*>& bodies);
   void scatter(double h, const std::vector<SpringNetworkBody*>& bodies);
-  // Candidate pairs whose boxes (swept from x0 to x0 + h v̄, grown by half the largest thickness)
-  // overlap, found through a uniform grid.
+  // Candidate pairs whose boxes (swept from x0 to x0 + h v̄ in a frame moving with the median v̄,
+  // grown by half the largest thickness) overlap, found through a uniform grid.
   void findCandidates(double h);
   // Whether the candidates found last still cover the paths after the impulses since.
   bool pathsInsideBoxes(double h) const;
@@ -160,13 +163,16 @@ private:
   std::vector<char> is_point_;  // in some edge or triangle
   std::vector<Eigen::Vector3i> triangles_;
   std::vector<Eigen::Vector2i> edges_;
-  double cell_size_ = 0.0;
+  double length_scale_ = 0.0;  // [m] the surfaces' mean edge (at least the largest thickness)
+  double cell_size_ = 0.0;     // [m] the grid's, chosen at each candidate search
   double max_thickness_ = 0.0;
   // Broad phase.
   std::vector<std::uint32_t> codes_;    // kind << 30 | index, points then edges then triangles
   Eigen::Matrix3Xd box_lo_, box_hi_;    // per code
   Eigen::Matrix3Xd path_lo_, path_hi_;  // per particle: the box of its path when the candidates were found
-  std::size_t buckets_ = 1;             // of the grid's hash table, a power of 2 (4 per item)
+  Eigen::Vector3d frame_velocity_ = Eigen::Vector3d::Zero();  // [m/s] of the frame those paths are in
+  std::vector<double> median_scratch_;                        // per particle: for the frame's velocity
+  std::size_t buckets_ = 1;                                   // of the grid's hash table, a power of 2 (4 per item)
   std::vector<std::size_t> bucket_start_, bucket_fill_;
   std::vector<Item> entries_;
   std::vector<std::uint32_t> big_;  // codes_ indices whose box spans too many cells: tested against all
