@@ -124,6 +124,8 @@ std::vector<Case> benchCases(bool quick)
        sweep(0.3 / 16, 10), 2e-5},
       {"cloth_on_sphere", "cloth falling onto a sphere", ReferenceKind::FineRk4, 0.4, sweep(0.4 / 32, 9), 5e-6},
       {"jelly_drop", "jelly drop", ReferenceKind::FineRk4, 0.4, sweep(0.4 / 32, 9), 5e-6},
+      {"cloths_stacked_on_sphere", "two stacked cloths falling onto a sphere (self-collision)",
+       ReferenceKind::FineRk4, 0.4, sweep(0.4 / 32, 9), 2e-5},
       {"emitters",
        "emitters (analytic ballistic paths)",
        ReferenceKind::Ballistic,

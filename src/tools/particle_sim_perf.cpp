@@ -27,6 +27,7 @@
 #include "bench_rows.h"
 #include "particle_sim/core/builders/cloth_grid.h"
 #include "particle_sim/core/builders/rope.h"
+#include "particle_sim/core/constraints/self_collision.h"
 #include "particle_sim/core/emitter.h"
 #include "particle_sim/core/integrators/implicit_euler.h"
 #include "particle_sim/core/integrators/sparse_block_ldlt.h"
@@ -47,7 +48,7 @@ const char* kUsage =
     "usage: particle_sim_perf [--out FILE] [--quick] [--only CASE,...]\n"
     "  --out FILE    CSV output (default performance.csv)\n"
     "  --quick       fewer sizes, steps and repeats: a smoke run, not a report\n"
-    "  --only CASES  run only these cases: rope, cloth, hang64, stopping, springs, emitters\n";
+    "  --only CASES  run only these cases: rope, cloth, hang64, stopping, springs, emitters, selfcollision\n";
 
 core::Environment noGround()
 {
@@ -433,6 +434,134 @@ void explicitSprings(std::ostream& out, bool quick)
   }
 }
 
+// --- Self-collision (issue 15): what the collision pass costs beside the rest of the step. The
+// bodies are stepped as World::step steps them, then SelfCollisionSolver::resolve runs over them;
+// each part is timed on its own (steady_clock), so the pass's share is measured on the same
+// trajectory, in contact.
+struct CollisionScene
+{
+  std::string variant;
+  core::Environment env;
+  std::vector<core::SpringNetworkDef> bodies;
+  double dt;
+  int warmup, steps, repeats;
+};
+
+// A free 1 m square spring cloth of n × n particles (squareCloth's springs, no pins, 1 kg; implicit
+// Euler with the default stopping rule) at height z, turned by `turn` [rad] about z, colliding with itself (thickness 5 mm, under half its edge at 64²).
+core::SpringNetworkDef collidingCloth(int n, double z, double turn)
+{
+  core::ClothGridDef def = squareCloth(n, core::LinearSolverType::Auto);
+  def.named_pins.clear();
+  def.integrator = core::BodyIntegratorDef{};  // implicit Euler, the default stopping rule
+  def.integrator.type = core::kImplicitEulerIntegrator;
+  def.edge_u = Eigen::Vector3d(std::cos(turn), std::sin(turn), 0.0);
+  def.edge_v = Eigen::Vector3d(-std::sin(turn), std::cos(turn), 0.0);
+  def.origin = Eigen::Vector3d(0.0, 0.0, z) - 0.5 * (def.edge_u + def.edge_v);
+  def.contact_thickness = 0.004;
+  core::SpringNetworkDef network = core::buildClothGrid(def);
+  network.self_collision = core::SelfCollisionDef{true, 0.005};
+  return network;
+}
+
+void selfCollision(std::ostream& out, bool quick)
+{
+  std::vector<CollisionScene> scenes;
+  core::Environment falling = noGround();
+  // A 64² cloth falling freely: no pair within reach, the pass is its broad phase alone.
+  scenes.push_back(
+      {"cloth 64 falling", falling, {collidingCloth(64, 3.0, 0.0)}, 1.0 / 60.0, 3, quick ? 3 : 10, quick ? 1 : 3});
+  // The same cloth dropped onto a sphere of radius 0.25 m and draped over it onto the ground: its
+  // folds lie on each other. Timed from 1.2 s on.
+  core::Environment draped;
+  draped.ground.enabled = true;
+  draped.spheres.push_back(core::SphereColliderDef{"ball", Eigen::Vector3d(0.0, 0.0, 0.3), 0.25, {}});
+  scenes.push_back({"cloth 64 draped on a sphere",
+                    draped,
+                    {collidingCloth(64, 0.7, 0.0)},
+                    1.0 / 60.0,
+                    quick ? 10 : 72,
+                    quick ? 3 : 20,
+                    quick ? 1 : 3});
+  // As config/scenes/cloth_pile.yaml: five 17 × 17 cloths, 0.7 m, 5 cm apart and turned 9° each, on
+  // the same sphere; timed from 0.5 s on, while they land on each other.
+  std::vector<core::SpringNetworkDef> pile;
+  for (int k = 0; k < 5; ++k)
+  {
+    core::ClothGridDef def(core::ClothModel::Springs);
+    def.name = "cloth_" + std::to_string(k);
+    const double turn = k * 9.0 * M_PI / 180.0;
+    def.edge_u = 0.7 * Eigen::Vector3d(std::cos(turn), std::sin(turn), 0.0);
+    def.edge_v = 0.7 * Eigen::Vector3d(-std::sin(turn), std::cos(turn), 0.0);
+    def.origin = Eigen::Vector3d(0.0, 0.0, 0.70 + 0.05 * k) - 0.5 * (def.edge_u + def.edge_v);
+    def.nu = def.nv = 17;
+    def.mass = 0.1;
+    def.stretch = core::ClothConstants{800.0, 0.3};
+    def.shear = core::ClothConstants{200.0, 0.1};
+    def.bend = core::ClothConstants{1.0, 0.01};
+    def.contact_thickness = 0.004;
+    def.integrator.type = core::kImplicitEulerIntegrator;
+    def.integrator.linear_solver = core::LinearSolverType::ConjugateGradient;
+    core::SpringNetworkDef network = core::buildClothGrid(def);
+    network.self_collision = core::SelfCollisionDef{true, 0.008};
+    pile.push_back(network);
+  }
+  scenes.push_back({"pile of five 17 cloths", draped, pile, 0.005, quick ? 20 : 100, quick ? 10 : 40, quick ? 1 : 3});
+
+  for (const CollisionScene& scene : scenes)
+  {
+    std::vector<std::unique_ptr<core::SpringNetworkBody>> owned;
+    std::vector<core::SpringNetworkBody*> bodies;
+    std::vector<int> report_index;
+    for (const core::SpringNetworkDef& def : scene.bodies)
+    {
+      owned.push_back(std::make_unique<core::SpringNetworkBody>(def));
+      bodies.push_back(owned.back().get());
+      report_index.push_back(static_cast<int>(report_index.size()));
+    }
+    core::SelfCollisionSolver solver;
+    core::CollisionReport report;
+    report.bodies.resize(bodies.size());
+    double pass_seconds = 0.0, rest_seconds = 0.0;
+    long long timed = 0, contacts = 0, collisions = 0, passes = 0;
+    bool counting = false;
+    const auto step = [&] {
+      const auto start = Clock::now();
+      for (core::SpringNetworkBody* body : bodies)
+        body->step(scene.dt, scene.env);
+      const auto stepped = Clock::now();
+      solver.resolve(scene.dt, bodies, report_index, report);
+      if (!counting) return;
+      pass_seconds += std::chrono::duration<double>(Clock::now() - stepped).count();
+      rest_seconds += std::chrono::duration<double>(stepped - start).count();
+      contacts += report.total.proximity_pairs;
+      collisions += report.total.collisions;
+      passes += report.passes;
+      ++timed;
+    };
+    for (int i = 0; i < scene.warmup; ++i)
+      step();
+    counting = true;
+    Row row;
+    row.timing = timeSteps(step, 0, scene.steps, scene.repeats);
+    row.case_name = "selfcollision";
+    row.variant = scene.variant;
+    row.size = static_cast<double>(bodies.size());
+    for (const core::SpringNetworkBody* body : bodies)
+      row.elements += body->particles().size();
+    std::ostringstream detail;
+    detail.precision(3);
+    detail << "pass " << 1e3 * pass_seconds / timed << " ms per step, "
+           << 100.0 * pass_seconds / (pass_seconds + rest_seconds) << " % of the step, " << pass_seconds / rest_seconds
+           << "x the rest; per step " << double(contacts) / timed << " proximity pairs, " << double(collisions) / timed
+           << " collisions, " << double(passes) / timed << " passes";
+    row.detail = detail.str();
+    for (const core::SpringNetworkBody* body : bodies)
+      if (body->frozen()) row.detail += "; FROZE: " + body->frozenReason();
+    writeRow(out, row);
+  }
+}
+
 // --- Emitters: a fountain holding N live particles (rate N / lifetime), stepped at dt = 1/60.
 void emitters(std::ostream& out, bool quick)
 {
@@ -489,5 +618,6 @@ int main(int argc, char** argv)
   if (wanted("stopping")) stoppingRule(out, quick);
   if (wanted("springs")) explicitSprings(out, quick);
   if (wanted("emitters")) emitters(out, quick);
+  if (wanted("selfcollision")) selfCollision(out, quick);
   return 0;
 }
