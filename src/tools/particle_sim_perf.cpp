@@ -25,6 +25,7 @@
 #include <string>
 #include <vector>
 
+#include "../../test/unit/folded_cloth.h"  // the self-collision tests' folded cloth, timed here
 #include "bench_rows.h"
 #include "particle_sim/core/builders/cloth_grid.h"
 #include "particle_sim/core/builders/rope.h"
@@ -483,6 +484,15 @@ void selfCollision(std::ostream& out, bool quick)
                     quick ? 10 : 72,
                     quick ? 3 : 20,
                     quick ? 1 : 3});
+  // The same cloth folded in half on the ground as the self-collision tests fold theirs (its upper
+  // half 5 cm above its lower half, joined by a half-circle crease; folding keeps the springs' rest
+  // lengths), dropped on itself: timed from 0.2 s on, while its upper half lies on its lower half.
+  core::Environment ground;
+  ground.ground.enabled = true;
+  core::SpringNetworkDef folded = collidingCloth(64, 0.0);
+  folded.positions = particle_sim_test::foldedCloth("fold", 64, 1.0, 0.05, 0.0, 0.005).positions;
+  scenes.push_back(
+      {"cloth 64 folded onto itself", ground, {folded}, 1.0 / 60.0, quick ? 6 : 12, quick ? 3 : 20, quick ? 1 : 3});
   // As config/scenes/cloth_pile.yaml: five 17 × 17 cloths, 0.7 m, 5 cm apart and turned 9° each, on
   // the same sphere; timed from 0.5 s on, while they land on each other.
   std::vector<core::SpringNetworkDef> pile;
