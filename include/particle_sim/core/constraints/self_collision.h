@@ -57,7 +57,8 @@ struct CollisionReport
 /// the particles' median velocity; cells one mean edge long, or the mean travel if longer),
 /// counting-sorted by cell into a hash table for edges and one for triangles; each point looks for
 /// triangles and each edge for edges in the cells of its own box, and keeps its pairs in the order
-/// of the other item, so the cells change the cost, never the result. Deterministic, and
+/// of the other item, so the cells change the cost, never the result (but for items whose box spans
+/// too many cells, tested against all after the others). Deterministic, and
 /// allocation-free once its arrays have grown to the scene's size. Pinned particles have infinite
 /// mass: they move as their pins say.
 class SelfCollisionSolver
