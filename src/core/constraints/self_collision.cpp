@@ -33,8 +33,6 @@ constexpr double kSeparationShare = 0.1;
 // An item whose box spans more grid cells than this (a particle flung far in one step) is tested
 // against every other item instead of being put in every cell.
 constexpr double kMaxCellsPerItem = 512.0;
-// Grid cells at least this many times the particles' mean travel in a step.
-constexpr double kCellsPerTravel = 1.0;
 
 // Closest point to p on triangle (a, b, c) as barycentric weights w (Ericson, Real-Time Collision
 // Detection, 5.1.5: the Voronoi region of p among the corners, edges and face).
@@ -409,7 +407,7 @@ void SelfCollisionSolver::findCandidates(double h)
   // otherwise put every item in a column of cells). The cells change only how the pairs are found,
   // not their order: each item's pairs are sorted by the other item (but for items too large for
   // the grid, tested against all after the others).
-  cell_size_ = std::max(length_scale_, kCellsPerTravel * travel / std::max(n, 1));
+  cell_size_ = std::max(length_scale_, travel / n);
   const auto itemBox = [&](std::uint32_t code, Eigen::Vector3d& lo, Eigen::Vector3d& hi) {
     const std::uint32_t kind = code >> kKindShift, index = code & kIndexMask;
     const int* ids = kind == kPoint ? nullptr : kind == kEdge ? edges_[index].data() : triangles_[index].data();
@@ -470,8 +468,8 @@ void SelfCollisionSolver::findCandidates(double h)
   // cell, in two tables (edges, then triangles: a point looks only for triangles, an edge only for
   // edges): within a bucket in codes_ order, so the pairs come in a fixed order.
   const std::size_t buckets = buckets_;
-  const auto tableBucket = [&](std::size_t k, std::uint64_t key) {
-    return bucketOf(key, buckets) + (k >= first_triangle ? buckets : 0);
+  const auto tableBucket = [&](std::uint64_t key, bool triangles) {
+    return bucketOf(key, buckets) + (triangles ? buckets : 0);
   };
   std::fill(bucket_start_.begin(), bucket_start_.end(), 0);
   entries_.resize(entries);
@@ -484,14 +482,15 @@ void SelfCollisionSolver::findCandidates(double h)
           visit(cellKey(ix, iy, iz));
   };
   for (std::size_t k = first_edge; k < codes_.size(); ++k)
-    if (!big_flag_[k]) forEachCell(k, [&](std::uint64_t key) { ++bucket_start_[tableBucket(k, key) + 1]; });
+    if (!big_flag_[k])
+      forEachCell(k, [&](std::uint64_t key) { ++bucket_start_[tableBucket(key, k >= first_triangle) + 1]; });
   for (std::size_t b = 0; b < 2 * buckets; ++b)
     bucket_start_[b + 1] += bucket_start_[b];
   std::copy(bucket_start_.begin(), bucket_start_.end() - 1, bucket_fill_.begin());
   for (std::size_t k = first_edge; k < codes_.size(); ++k)
     if (!big_flag_[k])
       forEachCell(k, [&](std::uint64_t key) {
-        entries_[bucket_fill_[tableBucket(k, key)]++] = Item{key, static_cast<std::uint32_t>(k)};
+        entries_[bucket_fill_[tableBucket(key, k >= first_triangle)]++] = Item{key, static_cast<std::uint32_t>(k)};
       });
 
   // Pairs: a point and a triangle, or two edges, whose boxes overlap and that share no particle.
@@ -527,7 +526,7 @@ void SelfCollisionSolver::findCandidates(double h)
     const auto stamp = static_cast<long long>(k);
     const std::size_t first_pair = pairs_.size();
     forEachCell(k, [&](std::uint64_t key) {
-      const std::size_t b = bucketOf(key, buckets) + (k < first_edge ? buckets : 0);  // points: triangles
+      const std::size_t b = tableBucket(key, k < first_edge);  // a point looks for triangles
       for (std::size_t e = bucket_start_[b]; e < bucket_start_[b + 1]; ++e)
       {
         const std::size_t other = entries_[e].item;
