@@ -732,8 +732,10 @@ int SelfCollisionSolver::detectCollisions(double h, bool apply_impulses, bool me
       ids[2] = edges_[pair.b][0];
       ids[3] = edges_[pair.b][1];
     }
-    // After the first pass only pairs with a particle that an impulse moved since can have changed.
-    if (!all_pairs && !moved_[ids[0]] && !moved_[ids[1]] && !moved_[ids[2]] && !moved_[ids[3]]) continue;
+    // After the first pass only pairs with a particle that an impulse moved since their last test
+    // can have changed: in the pass before (after them), or in this one (before them).
+    const auto changed = [&](int i) { return moved_[i] || moving_[i]; };
+    if (!all_pairs && !changed(ids[0]) && !changed(ids[1]) && !changed(ids[2]) && !changed(ids[3])) continue;
     if (!mayTouch(pair, start, h)) continue;
     // The pair's four particles move in straight lines over the step; they are coplanar where the
     // triple product of their differences vanishes, a cubic in t.
