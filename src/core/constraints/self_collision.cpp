@@ -33,6 +33,11 @@ constexpr double kSeparationShare = 0.1;
 // An item whose box spans more grid cells than this (a particle flung far in one step) is tested
 // against every other item instead of being put in every cell.
 constexpr double kMaxCellsPerItem = 512.0;
+// The candidates' boxes are grown by a margin (candidate_margin_, a share of the mean edge), so that
+// they serve the next steps while no particle moves further than that against the frame. A margin
+// that served no later step is left off for this many searches (scenes whose particles move against
+// each other every step would pay for its extra pairs for nothing), then tried again.
+constexpr int kSearchesWithoutMargin = 16;
 
 // Closest point to p on triangle (a, b, c) as barycentric weights w (Ericson, Real-Time Collision
 // Detection, 5.1.5: the Voronoi region of p among the corners, edges and face).
@@ -194,18 +199,24 @@ std::size_t bucketOf(std::uint64_t key, std::size_t buckets)
 }
 }  // namespace
 
-bool SelfCollisionSolver::pathsInsideBoxes(double h) const
+bool SelfCollisionSolver::pathsInsideBoxes(double h, bool step_start) const
 {
-  // The candidates still hold while every particle's path stays inside the box of its path when
-  // they were found, grown by half the largest thickness: pairs whose grown boxes did not overlap
-  // then cannot meet now (they may come within a thickness, which only the proximity pass at the
-  // step's start, on fresh candidates, looks at).
-  const double grow = 0.5 * max_thickness_;
+  // The boxes are in the frame, whose origin is at frame_origin_ at the step's start and moves by
+  // h · frame_velocity_ over the step. At a step's start, the candidates found at an earlier step
+  // still hold while every particle's path lies inside the box recorded for it (they were grown by
+  // a margin for that): then every pair whose boxes overlap now overlapped then, and the list holds
+  // it. Within the step (after impulses), the path's end may leave its box by half the largest
+  // thickness: pairs whose grown boxes did not overlap then cannot meet now (they may come within a
+  // thickness, which only the proximity pass at the step's start, on covering candidates, looks at).
+  const double slack = step_start ? 0.0 : 0.5 * max_thickness_;
+  const auto inside = [&](const Eigen::Vector3d& y, Eigen::Index i) {
+    return (y.array() >= path_lo_.col(i).array() - slack).all() && (y.array() <= path_hi_.col(i).array() + slack).all();
+  };
   for (Eigen::Index i = 0; i < x0_.cols(); ++i)
   {
-    const Eigen::Vector3d end = x0_.col(i) + h * (vbar_.col(i) - frame_velocity_);
-    if ((end.array() < path_lo_.col(i).array() - grow).any() || (end.array() > path_hi_.col(i).array() + grow).any())
-      return false;
+    const Eigen::Vector3d start = x0_.col(i) - frame_origin_;
+    const Eigen::Vector3d end = start + h * (vbar_.col(i) - frame_velocity_);
+    if ((step_start && !inside(start, i)) || !inside(end, i)) return false;
   }
   return true;
 }
@@ -219,6 +230,7 @@ void SelfCollisionSolver::resolve(double h, const std::vector<SpringNetworkBody*
                                   const std::vector<int>& report_index, CollisionReport& report)
 {
   report.passes = 0;
+  report.searches = 0;
   report.impact_zones = 0;
   report.total = CollisionCounts{};
   std::fill(report.bodies.begin(), report.bodies.end(), CollisionCounts{});
@@ -227,20 +239,37 @@ void SelfCollisionSolver::resolve(double h, const std::vector<SpringNetworkBody*
   if (triangles_.empty() && edges_.empty()) return;
   body_counts_.assign(bodies.size(), CollisionCounts{});
 
-  // 1. Pairs closer than their thickness at the step's start are pushed apart.
-  findCandidates(h);
+  // 1. Pairs closer than their thickness at the step's start are pushed apart. The candidates of
+  // an earlier step serve while they cover every path (a cloth that falls or lies still keeps
+  // them); otherwise they are found again.
+  chooseFrame();
+  if (candidates_valid_ && pathsInsideBoxes(h, true))
+  {
+    candidates_reused_ = true;
+    findPairStarts(h);
+  }
+  else
+  {
+    if (candidates_margined_ && !candidates_reused_)
+      searches_without_margin_ = kSearchesWithoutMargin;
+    else if (searches_without_margin_ > 0)
+      --searches_without_margin_;
+    findCandidates(h, report);
+  }
+  new_candidates_ = true;
   repelProximities(h, report);
   // 2. Pairs that cross during the step are stopped, pass after pass.
   bool clear = false;
   for (int pass = 0; pass < kImpulsePasses && !clear; ++pass)
   {
-    if (!pathsInsideBoxes(h)) findCandidates(h);  // the repulsion or the last pass moved paths out
+    if (!pathsInsideBoxes(h, false)) refindCandidates(h, report);  // the repulsion or the last pass moved paths out
     ++report.passes;
     clear = detectCollisions(h, true, false, report) == 0;
   }
   // 3. What still collides moves in rigid impact zones.
   if (!clear) mergeImpactZones(h, report);
   scatter(h, bodies);
+  frame_origin_ += h * frame_velocity_;
   for (std::size_t b = 0; b < bodies.size(); ++b)
     report.bodies[report_index[b]] = body_counts_[b];
 }
@@ -298,6 +327,9 @@ void SelfCollisionSolver::buildTopology(const std::vector<SpringNetworkBody*>& b
   moving_.assign(n, 0);
   changed_.assign(n, 0);
   zone_sums_.resize(n);
+  candidates_valid_ = false;
+  searches_without_margin_ = 0;
+  frame_origin_.setZero();
   triangles_.clear();
   edges_.clear();
   max_thickness_ = 0.0;
@@ -372,36 +404,51 @@ void SelfCollisionSolver::buildTopology(const std::vector<SpringNetworkBody*>& b
   seen_.reserve(items);
 }
 
-void SelfCollisionSolver::findCandidates(double h)
+void SelfCollisionSolver::chooseFrame()
 {
-  // Each item's box: swept from x0 to x1 = x0 + h v̄ (relative to a moving frame, below), grown by
-  // half the largest thickness, so that two boxes overlap whenever their items come within a
-  // thickness of each other during the step.
-  const double grow = 0.5 * max_thickness_;
-  const int n = static_cast<int>(x0_.cols());
   // The paths are boxed in a frame moving with the particles' median velocity (per axis): two
   // items meet in it exactly when they meet in the world, and a cloth that falls or is carried as
   // a whole no longer sweeps every item through its neighbours' boxes, while a cloth most of which
   // lies still (a corner lifted) keeps the world's frame.
+  const int n = static_cast<int>(x0_.cols());
   frame_velocity_.setZero();
-  if (n > 0 && vbar_.allFinite())
+  if (n == 0 || !vbar_.allFinite()) return;
+  for (int axis = 0; axis < 3; ++axis)
   {
-    for (int axis = 0; axis < 3; ++axis)
-    {
-      for (int i = 0; i < n; ++i)
-        median_scratch_[i] = vbar_(axis, i);
-      std::nth_element(median_scratch_.begin(), median_scratch_.begin() + n / 2, median_scratch_.begin() + n);
-      frame_velocity_[axis] = median_scratch_[n / 2];
-    }
+    for (int i = 0; i < n; ++i)
+      median_scratch_[i] = vbar_(axis, i);
+    std::nth_element(median_scratch_.begin(), median_scratch_.begin() + n / 2, median_scratch_.begin() + n);
+    frame_velocity_[axis] = median_scratch_[n / 2];
   }
-  double travel = 0.0;  // [m] summed over the particles, in that frame
+}
+
+void SelfCollisionSolver::refindCandidates(double h, CollisionReport& report)
+{
+  chooseFrame();
+  findCandidates(h, report);
+}
+
+void SelfCollisionSolver::findCandidates(double h, CollisionReport& report)
+{
+  ++report.searches;
+  // Each item's box: swept from x0 to x1 = x0 + h v̄ (relative to the frame), grown by half the
+  // largest thickness, so that two boxes overlap whenever their items come within a thickness of
+  // each other during the step; and by a margin, so that the candidates serve the next steps too,
+  // while the particles stay within it.
+  const double grow = 0.5 * max_thickness_;
+  const double margin = searches_without_margin_ > 0 ? 0.0 : candidate_margin_ * length_scale_;
+  const int n = static_cast<int>(x0_.cols());
+  double travel = 0.0;  // [m] summed over the particles, in the frame
   for (int i = 0; i < n; ++i)
   {
-    const Eigen::Vector3d a = x0_.col(i), b = x0_.col(i) + h * (vbar_.col(i) - frame_velocity_);
-    path_lo_.col(i) = a.cwiseMin(b);
-    path_hi_.col(i) = a.cwiseMax(b);
+    const Eigen::Vector3d a = x0_.col(i) - frame_origin_, b = a + h * (vbar_.col(i) - frame_velocity_);
+    path_lo_.col(i) = a.cwiseMin(b).array() - margin;
+    path_hi_.col(i) = a.cwiseMax(b).array() + margin;
     travel += (b - a).norm();
   }
+  candidates_valid_ = true;
+  candidates_margined_ = margin > 0.0;
+  candidates_reused_ = false;
   // Grid cells about one edge long, longer when the particles travel further in the step: each
   // item spans a few cells and each cell holds a few items (a cloth falling a cell a step would
   // otherwise put every item in a column of cells). The cells change only how the pairs are found,
@@ -551,6 +598,11 @@ void SelfCollisionSolver::findCandidates(double h)
     }
   }
 
+  findPairStarts(h);
+}
+
+void SelfCollisionSolver::findPairStarts(double h)
+{
   // Each pair's stencil at the step's start: x0 does not change during the pass, so it serves the
   // repulsion, the touching bound and the touching-end check of every pass.
   pair_start_.resize(pairs_.size());
@@ -688,6 +740,8 @@ bool SelfCollisionSolver::mayTouch(const Pair& pair, const PairStart& start, dou
     for (int j = 0; j < n_second; ++j)
       lipschitz = std::max(lipschitz, (vbar_.col(first[i]) - vbar_.col(second[j])).norm());
   const double touch = kTouchShare * pairThickness(first[0], second[0]);
+  // Cheapest first: d(t) ≥ d(0) − t h L already keeps most candidates (items a margin apart) clear.
+  if (start.valid && start.distance - h * lipschitz > touch) return false;
   const auto planeDistance = [&](double t) {
     const auto at = [&](int i) -> Eigen::Vector3d { return x0_.col(i) + t * h * vbar_.col(i); };
     const Eigen::Vector3d normal = pair.kind == 0 ? (at(second[1]) - at(second[0])).cross(at(second[2]) - at(second[0]))
@@ -828,7 +882,7 @@ void SelfCollisionSolver::mergeImpactZones(double h, CollisionReport& report)
   std::fill(zone_.begin(), zone_.end(), -1);
   for (int round = 0; round < kZoneRounds; ++round)
   {
-    if (!pathsInsideBoxes(h)) findCandidates(h);
+    if (!pathsInsideBoxes(h, false)) refindCandidates(h, report);
     ++report.passes;
     if (detectCollisions(h, false, true, report) == 0)
     {

@@ -31,6 +31,7 @@ struct CollisionCounts
 struct CollisionReport
 {
   int passes = 0;        ///< continuous-detection passes run (those of the fail-safe included)
+  int searches = 0;      ///< broad-phase searches for candidate pairs (0: those of an earlier step served)
   int impact_zones = 0;  ///< rigid impact zones the fail-safe formed (0: the impulses sufficed)
   CollisionCounts total;
   std::vector<CollisionCounts> bodies;  ///< one per world body, in order (zero where it is off)
@@ -58,9 +59,13 @@ struct CollisionReport
 /// counting-sorted by cell into a hash table for edges and one for triangles; each point looks for
 /// triangles and each edge for edges in the cells of its own box, and keeps its pairs in the order
 /// of the other item, so the cells change the cost, never the result (but for items whose box spans
-/// too many cells, tested against all after the others). Deterministic, and
-/// allocation-free once its arrays have grown to the scene's size. Pinned particles have infinite
-/// mass: they move as their pins say.
+/// too many cells, tested against all after the others). The boxes are grown by a margin, and the
+/// candidates serve the next steps while every particle's path stays inside its box (the frame's
+/// position is kept from step to step): a cloth that falls, lies still or is carried searches
+/// rarely. Every pair that can come within its thickness is a candidate either way, and a pass
+/// tests every pair a particle of which moved since the pair's last test, so the margin and the
+/// reuse change the cost, never the result. Deterministic, and allocation-free once its arrays have
+/// grown to the scene's size. Pinned particles have infinite mass: they move as their pins say.
 class SelfCollisionSolver
 {
 public:
@@ -72,6 +77,12 @@ public:
   /// Rebuild the surfaces at the next resolve(): the World calls it when bodies are added, removed
   /// or reset (a new body may take a removed one's address and size).
   void forgetTopology() { topology_stale_ = true; }
+  /// Search the candidate pairs afresh at the next resolve(), as if none had been found. It changes
+  /// what the pass costs, never what it does (the tests compare the two).
+  void forgetCandidates() { candidates_valid_ = false; }
+  /// The margin [share of the mean edge, ≥ 0; default 0.1] the candidates' boxes are grown by, so
+  /// that they serve later steps. Like forgetCandidates(), it changes the cost, never the result.
+  void setCandidateMargin(double share) { candidate_margin_ = share; }
 
 private:
   struct Item
@@ -120,11 +131,18 @@ private:
   void gather(double h, const std::vector<SpringNetworkBody*>& bodies);
   void buildTopology(const std::vector<SpringNetworkBody*>& bodies);
   void scatter(double h, const std::vector<SpringNetworkBody*>& bodies);
-  // Candidate pairs whose boxes (swept from x0 to x0 + h v̄ in a frame moving with the median v̄,
-  // grown by half the largest thickness) overlap, found through a uniform grid.
-  void findCandidates(double h);
-  // Whether the candidates found last still cover the paths after the impulses since.
-  bool pathsInsideBoxes(double h) const;
+  // The frame's velocity for the paths: the particles' median v̄, per axis.
+  void chooseFrame();
+  // Candidate pairs whose boxes (swept from x0 to x0 + h v̄ in the frame, grown by half the largest
+  // thickness and by a margin) overlap, found through a uniform grid; then their start stencils.
+  void findCandidates(double h, CollisionReport& report);
+  void refindCandidates(double h, CollisionReport& report);  // chooseFrame(), then findCandidates()
+  // Each candidate's stencil at the step's start.
+  void findPairStarts(double h);
+  // Whether the candidates found last still cover the paths: at the step's start (`step_start`),
+  // every path inside its recorded box; within the step, after impulses, every path's end inside
+  // it give or take half the largest thickness.
+  bool pathsInsideBoxes(double h, bool step_start) const;
   // The stencil of `pair` at time t·h of the step, its distance and the direction from the second
   // item to the first; false when the geometry is degenerate.
   bool stencil(const Pair& pair, double t, double h, Stencil& s, Eigen::Vector3d& normal, double& distance) const;
@@ -172,6 +190,12 @@ private:
   Eigen::Matrix3Xd box_lo_, box_hi_;    // per code
   Eigen::Matrix3Xd path_lo_, path_hi_;  // per particle: the box of its path when the candidates were found
   Eigen::Vector3d frame_velocity_ = Eigen::Vector3d::Zero();  // [m/s] of the frame those paths are in
+  Eigen::Vector3d frame_origin_ = Eigen::Vector3d::Zero();    // [m] where that frame is at the step's start
+  bool candidates_valid_ = false;                             // false until found for this topology
+  bool candidates_margined_ = false;                          // found with a margin
+  bool candidates_reused_ = false;                            // have served a step after the one they were found in
+  int searches_without_margin_ = 0;                           // left before a margin is tried again
+  double candidate_margin_ = 0.1;                             // [share of length_scale_]
   std::vector<double> median_scratch_;                        // per particle: for the frame's velocity
   std::size_t buckets_ = 1;                                   // of the grid's hash table, a power of 2 (4 per item)
   std::vector<std::size_t> bucket_start_, bucket_fill_;
