@@ -533,7 +533,7 @@ void selfCollision(std::ostream& out, bool quick)
     core::CollisionReport report;
     report.bodies.resize(bodies.size());
     double pass_seconds = 0.0, rest_seconds = 0.0;
-    long long timed = 0, contacts = 0, collisions = 0, passes = 0;
+    long long timed = 0, contacts = 0, collisions = 0, passes = 0, searches = 0;
     bool counting = false;
     const auto step = [&] {
       const auto start = Clock::now();
@@ -547,6 +547,7 @@ void selfCollision(std::ostream& out, bool quick)
       contacts += report.total.proximity_pairs;
       collisions += report.total.collisions;
       passes += report.passes;
+      searches += report.searches;
       ++timed;
     };
     for (int i = 0; i < scene.warmup; ++i)
@@ -564,7 +565,8 @@ void selfCollision(std::ostream& out, bool quick)
     detail << "pass " << 1e3 * pass_seconds / timed << " ms per step, "
            << 100.0 * pass_seconds / (pass_seconds + rest_seconds) << " % of the step, " << pass_seconds / rest_seconds
            << "x the rest; per step " << double(contacts) / timed << " proximity pairs, " << double(collisions) / timed
-           << " collisions, " << double(passes) / timed << " passes";
+           << " collisions, " << double(passes) / timed << " passes, " << double(searches) / timed
+           << " candidate searches";
     row.detail = detail.str();
     for (const core::SpringNetworkBody* body : bodies)
       if (body->frozen()) row.detail += "; FROZE: " + body->frozenReason();
