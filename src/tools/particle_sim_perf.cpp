@@ -25,7 +25,7 @@
 #include <string>
 #include <vector>
 
-#include "../../test/unit/folded_cloth.h"  // the self-collision tests' folded cloth, timed here
+#include "../../test/unit/folded_cloth.h"  // the self-collision tests' folded cloth and pile, timed here
 #include "bench_rows.h"
 #include "particle_sim/core/builders/cloth_grid.h"
 #include "particle_sim/core/builders/rope.h"
@@ -497,25 +497,7 @@ void selfCollision(std::ostream& out, bool quick)
   // the same sphere; timed from 0.5 s on, while they land on each other.
   std::vector<core::SpringNetworkDef> pile;
   for (int k = 0; k < 5; ++k)
-  {
-    core::ClothGridDef def(core::ClothModel::Springs);
-    def.name = "cloth_" + std::to_string(k);
-    const double turn = k * 9.0 * M_PI / 180.0;
-    def.edge_u = 0.7 * Eigen::Vector3d(std::cos(turn), std::sin(turn), 0.0);
-    def.edge_v = 0.7 * Eigen::Vector3d(-std::sin(turn), std::cos(turn), 0.0);
-    def.origin = Eigen::Vector3d(0.0, 0.0, 0.70 + 0.05 * k) - 0.5 * (def.edge_u + def.edge_v);
-    def.nu = def.nv = 17;
-    def.mass = 0.1;
-    def.stretch = core::ClothConstants{800.0, 0.3};
-    def.shear = core::ClothConstants{200.0, 0.1};
-    def.bend = core::ClothConstants{1.0, 0.01};
-    def.contact_thickness = 0.004;
-    def.integrator.type = core::kImplicitEulerIntegrator;
-    def.integrator.linear_solver = core::LinearSolverType::ConjugateGradient;
-    core::SpringNetworkDef network = core::buildClothGrid(def);
-    network.self_collision = core::SelfCollisionDef{true, 0.008};
-    pile.push_back(network);
-  }
+    pile.push_back(particle_sim_test::clothPileLayer(k));
   scenes.push_back({"pile of five 17 cloths", draped, pile, 0.005, quick ? 20 : 100, quick ? 10 : 40, quick ? 1 : 3});
 
   for (const CollisionScene& scene : scenes)

@@ -382,22 +382,7 @@ TEST(SelfCollision, TheCandidateSearchChangesTheCostButNeverTheResult)
   std::vector<core::SpringNetworkBody*> reusing, searching;
   for (int k = 0; k < kCloths; ++k)
   {
-    core::ClothGridDef grid(core::ClothModel::Springs);
-    grid.name = "cloth_" + std::to_string(k);
-    grid.nu = grid.nv = 17;
-    const double angle = k * 9.0 * M_PI / 180.0;
-    grid.edge_u = 0.7 * Eigen::Vector3d(std::cos(angle), std::sin(angle), 0.0);
-    grid.edge_v = 0.7 * Eigen::Vector3d(-std::sin(angle), std::cos(angle), 0.0);
-    grid.origin = Eigen::Vector3d(0.0, 0.0, 0.7 + 0.05 * k) - 0.5 * (grid.edge_u + grid.edge_v);
-    grid.mass = 0.1;
-    grid.stretch = core::ClothConstants{800.0, 0.3};
-    grid.shear = core::ClothConstants{200.0, 0.1};
-    grid.bend = core::ClothConstants{1.0, 0.01};
-    grid.contact_thickness = 0.004;
-    grid.integrator.type = core::kImplicitEulerIntegrator;
-    grid.integrator.linear_solver = core::LinearSolverType::ConjugateGradient;
-    core::SpringNetworkDef def = core::buildClothGrid(grid);
-    def.self_collision = core::SelfCollisionDef{true, 0.008};
+    const core::SpringNetworkDef def = particle_sim_test::clothPileLayer(k);
     owned.push_back(std::make_unique<core::SpringNetworkBody>(def));
     reusing.push_back(owned.back().get());
     owned.push_back(std::make_unique<core::SpringNetworkBody>(def));
