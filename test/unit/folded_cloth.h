@@ -54,9 +54,9 @@ inline particle_sim::core::SpringNetworkDef foldedCloth(const std::string& name,
   }
   return def;
 }
-// Layer k (0 to 4) of config/scenes/cloth_pile.yaml: a 17 × 17 spring cloth, 0.7 m, 0.1 kg, 5 cm
-// above the layer below and turned 9° from it, over a sphere at the origin; implicit Euler with CG,
-// self-collision thickness 8 mm.
+// Layer k (0 to 4) of config/scenes/cloth_pile.yaml: a 17 × 17 spring cloth, 0.7 m, 0.1 kg,
+// centred above the origin at 0.7 m + 5 cm per layer and turned 9° per layer; implicit Euler with
+// CG, self-collision thickness 8 mm.
 inline particle_sim::core::SpringNetworkDef clothPileLayer(int k)
 {
   namespace core = particle_sim::core;

@@ -14,7 +14,6 @@
 #include "particle_sim/core/integrators/implicit_euler.h"
 #include "particle_sim/core/integrators/registry.h"
 #include "particle_sim/core/integrators/symplectic_euler.h"
-#include "particle_sim/core/integrators/verlet.h"
 #include "particle_sim/core/world.h"
 #include "test_helpers.h"
 
