@@ -246,6 +246,7 @@ void SelfCollisionSolver::resolve(double h, const std::vector<SpringNetworkBody*
   if (candidates_valid_ && pathsInsideBoxes(h, true))
   {
     candidates_reused_ = true;
+    new_candidates_ = true;  // new to this step: its first pass tests them all
     findPairStarts(h);
   }
   else
@@ -256,7 +257,6 @@ void SelfCollisionSolver::resolve(double h, const std::vector<SpringNetworkBody*
       --searches_without_margin_;
     findCandidates(h, report);
   }
-  new_candidates_ = true;
   repelProximities(h, report);
   // 2. Pairs that cross during the step are stopped, pass after pass.
   bool clear = false;

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
@@ -82,7 +83,8 @@ public:
   void forgetCandidates() { candidates_valid_ = false; }
   /// The margin [share of the mean edge, ≥ 0; default 0.1] the candidates' boxes are grown by, so
   /// that they serve later steps. Like forgetCandidates(), it changes the cost, never the result.
-  void setCandidateMargin(double share) { candidate_margin_ = share; }
+  /// A negative or NaN share is taken as 0 (a box smaller than its path would lose pairs).
+  void setCandidateMargin(double share) { candidate_margin_ = std::max(0.0, share); }
 
 private:
   struct Item
