@@ -57,6 +57,8 @@ RANGE_TEXT = {
     "kBendingStiffness": "rope material's bending stiffness EI (`material.bending_stiffness`)",
     "kParticlesPerWorld": "particles of all bodies together: the cap itself (`world.max_particles_per_world`, "
     "`~max_particles_per_world`)",
+    "kThreads": "threads a world's step shares its loops with, the caller's included (`world.threads`, `~threads`, "
+    "`particle_sim_run --threads`; 0 = one per core; results are the same bits at any count)",
 }
 
 

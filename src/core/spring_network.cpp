@@ -624,8 +624,10 @@ void SpringNetworkBody::restartMethods()
 void SpringNetworkBody::accelerations(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v, Eigen::Matrix3Xd& a) const
 {
   computeForces(x, v, gravity_, a);
-  for (int i = 0; i < a.cols(); ++i)
-    a.col(i) *= particles_.inverse_mass[i];  // 0 for pinned
+  shareLoop(workers_, static_cast<int>(a.cols()), kParticlesPerVectorChunk, [&](int begin, int end) {
+    for (int i = begin; i < end; ++i)
+      a.col(i) *= particles_.inverse_mass[i];  // 0 for pinned
+  });
 }
 
 void SpringNetworkBody::addJacobians(const Eigen::Matrix3Xd& x, ImplicitEulerSolver& solver) const

@@ -27,6 +27,10 @@ Status validate(const WorldDef& def)
                                static_cast<long long>(limits::kParticlesPerWorld.max));
       !s)
     return s;
+  if (Status s = checkIntRange("threads", def.threads, static_cast<long long>(limits::kThreads.min),
+                               static_cast<long long>(limits::kThreads.max));
+      !s)
+    return s;
   if (Status s = validate(def.integrator); !s) return s;
   if (Status s = validate(def.ground); !s) return s;
   if (Status s = validate(def.air); !s) return s;
@@ -56,7 +60,8 @@ Status validate(const WorldDef& def)
   return Status::success();
 }
 
-World::World(const WorldDef& def) : def_(def)
+World::World(const WorldDef& def)
+    : def_(def), workers_(std::make_unique<WorkerPool>(def.threads == 0 ? WorkerPool::coreCount() : def.threads))
 {
   env_.gravity = def.gravity;
   env_.ground = def.ground;
@@ -292,6 +297,7 @@ Status World::addBody(std::unique_ptr<Body> body)
         std::to_string(def_.max_particles_per_world) + " particles in one world (max_particles_per_world, in [" +
         std::to_string(static_cast<long long>(limits::kParticlesPerWorld.min)) + ", " +
         std::to_string(static_cast<long long>(limits::kParticlesPerWorld.max)) + "]); remove a body first");
+  body->setWorkers(workers_.get());
   bodies_.push_back(std::move(body));
   self_collision_.forgetTopology();
   return Status::success();

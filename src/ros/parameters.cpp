@@ -41,6 +41,7 @@ NodeSettings readNodeSettings(const ros::NodeHandle& private_node)
   private_node.param(names::kDragMarkersParam, s.drag_markers, s.drag_markers);
   private_node.param(names::kMaxParticlesParam, s.max_particles_per_body, s.max_particles_per_body);
   private_node.param(names::kMaxWorldParticlesParam, s.max_particles_per_world, s.max_particles_per_world);
+  private_node.param(names::kThreadsParam, s.threads, s.threads);
   private_node.param(names::kStatusPeriodParam, s.status_period, s.status_period);
   private_node.param(names::kColorByStrainParam, s.color_by_strain, s.color_by_strain);
   private_node.param(names::kStrainColorMaxParam, s.strain_color_max, s.strain_color_max);
@@ -74,6 +75,9 @@ core::Status validate(const NodeSettings& s)
       !std::all_of(s.frame_offset.begin(), s.frame_offset.end(), [](double v) { return std::isfinite(v); }))
     return Status::failure("~frame_offset must be a list of 3 finite numbers [x, y, z] in m");
 
+  if (s.threads != -1 && !(s.threads >= core::limits::kThreads.min && s.threads <= core::limits::kThreads.max))
+    return Status::failure(outOfRange("~threads", s.threads, core::limits::kThreads) +
+                           " (0 = one per core; -1 = the scene's world.threads)");
   if (!(s.strain_color_max > 0.0 && std::isfinite(s.strain_color_max)))
     return Status::failure("~strain_color_max = " + formatReceived(s.strain_color_max) + " must be > 0");
   if (!(s.diagnostic_period > 0.0 && std::isfinite(s.diagnostic_period)))

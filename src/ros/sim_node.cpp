@@ -94,6 +94,7 @@ bool SimNode::initialize()
   if (s.dt != 0.0) scene.world.dt = s.dt;
   if (s.max_particles_per_body != 0) scene.world.max_particles_per_body = s.max_particles_per_body;
   if (s.max_particles_per_world != 0) scene.world.max_particles_per_world = s.max_particles_per_world;
+  if (s.threads != -1) scene.world.threads = s.threads;
   if (core::Status status = scene::buildWorld(scene, world_); !status) return refuse("~scene: " + status.message);
   // ~status names the material of the scene's ropes and cloth built of one.
   for (const scene::BodyDef& body : scene.bodies)

@@ -50,7 +50,8 @@ const char* kUsage =
     "usage: particle_sim_perf [--out FILE] [--quick] [--only CASE,...]\n"
     "  --out FILE    CSV output (default performance.csv)\n"
     "  --quick       fewer sizes, steps and repeats: a smoke run, not a report\n"
-    "  --only CASES  run only these cases: rope, cloth, hang64, stopping, springs, emitters, selfcollision\n";
+    "  --only CASES  run only these cases: rope, cloth, hang64, stopping, springs, emitters, selfcollision,\n"
+    "                threads\n";
 
 core::Environment noGround()
 {
@@ -436,6 +437,65 @@ void explicitSprings(std::ostream& out, bool quick)
   }
 }
 
+// --- Two threads (goal 6): squareCloth at 128² and 256² stepped by one thread and by two
+// (WorkerPool), each method from rest over the same steps; the two runs must end in the same bits.
+// Verlet at dt = 1/60 with the substeps its stability needs (191 at 128²: more than the default
+// cap, so `auto` runs implicit Euler there), and symplectic Euler at half its limit (one force
+// pass a step, like the explicit springs' case).
+void threads(std::ostream& out, bool quick)
+{
+  struct Method
+  {
+    const char* name;
+    core::IntegratorType type;
+  };
+  for (const Method& method :
+       {Method{"verlet", core::kVerletIntegrator}, Method{"symplectic_euler", core::kSymplecticEulerIntegrator}})
+  {
+    for (int n : quick ? std::vector<int>{128} : std::vector<int>{128, 256})
+    {
+      const bool verlet = method.type == core::kVerletIntegrator;
+      if (verlet && n > 128 && quick) continue;
+      core::ClothGridDef def = squareCloth(n, core::LinearSolverType::Auto);
+      def.integrator.type = method.type;
+      def.integrator.max_substeps = verlet ? 100000 : 1;
+      Row rows[2];
+      Eigen::Matrix3Xd end_state[2];
+      int substeps = 1;
+      for (int threads : {1, 2})
+      {
+        core::WorkerPool pool(threads);
+        core::SpringNetworkBody body(core::buildClothGrid(def));
+        body.setWorkers(&pool);
+        const double dt = verlet ? 1.0 / 60.0 : 0.5 * 2.0 / body.frequencyBound();
+        const double per_step = verlet ? 1e3 : 1.0;  // rough cost in units of one force pass
+        const int steps = quick ? 2 : std::max(2, static_cast<int>(4e5 / (static_cast<double>(n) * n * per_step)));
+        Row& row = rows[threads - 1];
+        row = timeBody(body, dt, quick ? 1 : 2, steps, quick ? 2 : 5);
+        row.case_name = "threads";
+        row.variant = std::string(method.name) + (threads == 1 ? " 1 thread" : " 2 threads");
+        row.size = n;
+        row.elements = static_cast<double>(n) * n;
+        const int count = body.particles().size();
+        end_state[threads - 1].resize(3, 2 * count);
+        end_state[threads - 1] << body.particles().position.leftCols(count), body.particles().velocity.leftCols(count);
+        substeps = body.lastSubsteps();
+      }
+      const bool same =
+          end_state[0].size() == end_state[1].size() &&
+          std::memcmp(end_state[0].data(), end_state[1].data(), sizeof(double) * end_state[0].size()) == 0;
+      std::ostringstream detail;
+      detail.precision(3);
+      detail << rows[0].timing.min / rows[1].timing.min << "x faster than 1 thread (min against min); "
+             << (same ? "bit-identical end state" : "END STATE DIFFERS FROM 1 THREAD") << "; " << substeps
+             << " substeps a step";
+      rows[1].detail = detail.str() + (rows[1].detail.empty() ? "" : "; " + rows[1].detail);
+      writeRow(out, rows[0]);
+      writeRow(out, rows[1]);
+    }
+  }
+}
+
 // --- Self-collision (issue 15): what the collision pass costs beside the rest of the step. The
 // bodies are stepped as World::step steps them, then SelfCollisionSolver::resolve runs over them;
 // each part is timed on its own (steady_clock), so the pass's share is measured on the same
@@ -613,5 +673,6 @@ int main(int argc, char** argv)
   if (wanted("springs")) explicitSprings(out, quick);
   if (wanted("emitters")) emitters(out, quick);
   if (wanted("selfcollision")) selfCollision(out, quick);
+  if (wanted("threads")) threads(out, quick);
   return 0;
 }

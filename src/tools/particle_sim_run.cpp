@@ -1,6 +1,7 @@
 // particle_sim_run: runs a scene with no ROS master and writes particle states as CSV.
 //
-//   particle_sim_run SCENE.yaml --duration T [--dt DT] [--integrator NAME] [--output states.csv] [--every N]
+//   particle_sim_run SCENE.yaml --duration T [--dt DT] [--integrator NAME] [--threads N] [--output states.csv] [--every
+//   N]
 //                    [--pin-forces forces.csv]
 
 #include <algorithm>
@@ -13,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "particle_sim/core/limits.h"
 #include "particle_sim/scene/scene.h"
 
 namespace
@@ -20,8 +22,8 @@ namespace
 // The integrators are the core's (integratorTypeNames()): one added there is listed here.
 const std::string kUsage =
     std::string(
-        "usage: particle_sim_run SCENE.yaml --duration T [--dt DT] [--integrator NAME] [--output states.csv] "
-        "[--every N] [--pin-forces forces.csv]\n"
+        "usage: particle_sim_run SCENE.yaml --duration T [--dt DT] [--integrator NAME] [--threads N] "
+        "[--output states.csv] [--every N] [--pin-forces forces.csv]\n"
         "  SCENE.yaml       scene file (see README, 'Scene files')\n"
         "  --duration T     sim time to run [s], > 0; duration / dt must give 1 to 2^64 - 1 steps\n"
         "  --dt DT          physics step [s], overrides the scene's world.dt, in (0, 0.1]\n"
@@ -29,6 +31,8 @@ const std::string kUsage =
         "                   ") +
     particle_sim::core::integratorTypeNames() +
     "\n"
+    "  --threads N      threads of the step, overrides the scene's world.threads, in [0, 256]; 0 = one\n"
+    "                   per core (the results are the same bits at any count)\n"
     "  --output FILE    write time,body,index,x,y,z,vx,vy,vz rows for every live particle\n"
     "  --every N        write every N-th step (default 1); the initial state is always written\n"
     "  --pin-forces FILE  write time,body,pinned,fx,fy,fz,tx,ty,tz rows: per spring body with pins, the\n"
@@ -85,7 +89,7 @@ void writeStates(std::ostream& out, const particle_sim::core::World& world)
 int main(int argc, char** argv)
 {
   std::string scene_path, output_path, integrator_name, pin_forces_path;
-  double duration = -1.0, dt = 0.0, every = 1.0;
+  double duration = -1.0, dt = 0.0, every = 1.0, threads = -1.0;  // threads < 0: the scene's
   for (int i = 1; i < argc; ++i)
   {
     const std::string arg = argv[i];
@@ -119,6 +123,12 @@ int main(int argc, char** argv)
         return usageError(std::string("--integrator needs one of: ") + particle_sim::core::integratorTypeNames());
       integrator_name = argv[++i];
     }
+    else if (arg == "--threads")
+    {
+      if (!value(threads) || threads < particle_sim::core::limits::kThreads.min ||
+          threads > particle_sim::core::limits::kThreads.max || threads != std::floor(threads))
+        return usageError("--threads needs an integer in [0, 256] (0 = one per core)");
+    }
     else if (arg == "--pin-forces")
     {
       if (i + 1 >= argc) return usageError("--pin-forces needs a file name");
@@ -146,6 +156,7 @@ int main(int argc, char** argv)
     return 1;
   }
   if (dt > 0.0) scene.world.dt = dt;
+  if (threads >= 0.0) scene.world.threads = static_cast<int>(threads);
   if (!integrator_name.empty())
   {
     particle_sim::core::IntegratorType type;

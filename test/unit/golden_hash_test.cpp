@@ -99,7 +99,9 @@ std::string hex(std::uint64_t value)
 // Runs `scene_def` for kSimTime with `type` on every spring body; the hash of the final state as
 // 16 hex digits, or "error: ..." when the scene cannot be built or the integrator not applied.
 // Bodies that froze (their state is hashed where they stopped) are added to `frozen`.
-std::string runAndHash(const scene::SceneDef& scene_def, core::IntegratorType type, std::vector<std::string>& frozen)
+// `shared_loops` adds the loops the world's step shared between its threads.
+std::string runAndHash(const scene::SceneDef& scene_def, core::IntegratorType type, std::vector<std::string>& frozen,
+                       std::atomic<std::uint64_t>& shared_loops)
 {
   std::unique_ptr<core::World> world;
   if (const core::Status built = scene::buildWorld(scene_def, world); !built) return "error: " + built.message;
@@ -119,6 +121,7 @@ std::string runAndHash(const scene::SceneDef& scene_def, core::IntegratorType ty
     if (const core::SpringNetworkBody* spring_body = world->findSpringBody(body->name());
         spring_body && spring_body->frozen())
       frozen.push_back("body '" + body->name() + "' froze: " + spring_body->frozenReason());
+  shared_loops += world->workers().sharedLoops();
   return hex(worldStateHash(*world));
 }
 
@@ -222,7 +225,13 @@ TEST(GoldenHash, IntegratorNamesComeFromTheCore)
   }
 }
 
-TEST(GoldenHash, EveryShippedSceneAndIntegratorEndsInItsGoldenState)
+namespace
+{
+// Every pair with `threads_per_world` threads in each world (world.threads). One thread per world
+// runs as many worlds at once as there are cores, and may regenerate the file; more threads per
+// world run one world at a time. The loops the worlds shared between their threads are counted
+// in `shared_loops`.
+void checkGoldenStates(int threads_per_world, std::uint64_t& shared_loops)
 {
   const std::vector<std::string> integrators = coreIntegratorNames();
   const std::vector<std::string> scenes = shippedScenes();
@@ -244,6 +253,7 @@ TEST(GoldenHash, EveryShippedSceneAndIntegratorEndsInItsGoldenState)
   {
     const core::Status loaded = scene::loadSceneFile(kShippedScenesDir + "/" + scenes[s], scene_defs[s]);
     ASSERT_TRUE(loaded.ok) << scenes[s] << ": " << loaded.message;
+    scene_defs[s].world.threads = threads_per_world;
     for (const std::string& note : tfOnlyFollowers(scene_defs[s]))
       tf_notes[s].push_back(scenes[s] + ": " + note +
                             ", which only tf provides: offline it stays where the scene puts it");
@@ -261,6 +271,7 @@ TEST(GoldenHash, EveryShippedSceneAndIntegratorEndsInItsGoldenState)
   // Each job writes only its own slot, so the results (and the file) keep the scene order. Running
   // two worlds at once also checks that stepping shares no state between worlds.
   std::atomic<std::size_t> next_job{0};
+  std::atomic<std::uint64_t> loops{0};
   auto work = [&]() {
     for (std::size_t j = next_job++; j < jobs.size(); j = next_job++)
     {
@@ -270,16 +281,17 @@ TEST(GoldenHash, EveryShippedSceneAndIntegratorEndsInItsGoldenState)
       if (!core::parseIntegratorType(job.integrator, type))
         job.value = "error: unknown integrator";
       else
-        job.value = runAndHash(scene_defs[job.scene], type, job.frozen);
+        job.value = runAndHash(scene_defs[job.scene], type, job.frozen, loops);
     }
   };
-  const unsigned threads = std::max(1u, std::thread::hardware_concurrency());
+  const unsigned threads = threads_per_world == 1 ? std::max(1u, std::thread::hardware_concurrency()) : 1u;
   std::vector<std::thread> workers;
   for (unsigned t = 1; t < threads; ++t)
     workers.emplace_back(work);
   work();
   for (std::thread& worker : workers)
     worker.join();
+  shared_loops = loops;
 
   // Notes in scene order: a scene's frames that only tf provides, then its bodies that froze.
   std::vector<std::pair<std::string, std::string>> results;  // "scene integrator", value
@@ -302,7 +314,7 @@ TEST(GoldenHash, EveryShippedSceneAndIntegratorEndsInItsGoldenState)
         << "exclusion of an integrator the core does not have: " << exclusion.integrator;
   }
 
-  if (updateRequested())
+  if (updateRequested() && threads_per_world == 1)
   {
     std::filesystem::create_directories(std::filesystem::path(kGoldenFile).parent_path());
     std::ofstream out(kGoldenFile);
@@ -358,4 +370,25 @@ TEST(GoldenHash, EveryShippedSceneAndIntegratorEndsInItsGoldenState)
                                   "why:\n  PARTICLE_SIM_UPDATE_GOLDEN=1 "
                                   "$PARTICLE_SIM_BUILD/devel/lib/particle_sim/particle_sim_unit_tests "
                                   "--gtest_filter='GoldenHash*'";
+}
+}  // namespace
+
+TEST(GoldenHash, EveryShippedSceneAndIntegratorEndsInItsGoldenState)
+{
+  std::uint64_t shared_loops = 0;
+  checkGoldenStates(1, shared_loops);
+  EXPECT_EQ(shared_loops, 0u) << "one thread per world shares no loop";
+}
+
+// Two threads per world end every pair in the same golden state, bit for bit: the loops shared
+// between threads (WorkerPool) give each particle the same arithmetic in the same order. Several
+// scenes have bodies large enough to share their loops; the count shows that they did.
+TEST(GoldenHash, EveryPairEndsInTheSameStateWithTwoThreadsPerWorld)
+{
+  if (updateRequested()) GTEST_SKIP() << "the file is regenerated at one thread per world";
+  std::uint64_t shared_loops = 0;
+  checkGoldenStates(2, shared_loops);
+  EXPECT_GT(shared_loops, 0u) << "no scene shared a loop between two threads: this test would prove nothing";
+  std::printf("[golden] two threads per world: %llu loops shared between them\n",
+              static_cast<unsigned long long>(shared_loops));
 }

@@ -105,3 +105,22 @@ TEST(ParametersConversions, DefaultMaterialsMustBeEmptyOrAPreset)
   EXPECT_EQ(refusal(s),
             "~cloth_material = 'Cotton ' is not a cloth material preset; allowed: " + core::clothPresetNames());
 }
+
+TEST(ParametersConversions, ThreadsAreTheScenesByDefaultAndRefusedOutsideTheirLimits)
+{
+  NodeSettings s;
+  EXPECT_EQ(s.threads, -1);  // the scene's world.threads
+  for (int threads : {0, 1, 2, static_cast<int>(core::limits::kThreads.max)})
+  {
+    s.threads = threads;
+    EXPECT_TRUE(validate(s).ok) << threads;
+  }
+  s.threads = -2;
+  EXPECT_EQ(refusal(s),
+            "~threads = -2 is out of range: must be in [0, 256] threads (0 = one per core; -1 = the scene's "
+            "world.threads)");
+  s.threads = 257;
+  EXPECT_EQ(refusal(s),
+            "~threads = 257 is out of range: must be in [0, 256] threads (0 = one per core; -1 = the scene's "
+            "world.threads)");
+}

@@ -135,6 +135,26 @@ TEST(SceneFiles, WorldParticleCapIsReadAndBoundsTheBodiesTogether)
   EXPECT_TRUE(contains(refusal("world:\n  max_particles_per_world: 0\n"), "max_particles_per_world = 0"));
 }
 
+TEST(SceneFiles, WorldThreadsAreReadWrittenAndBounded)
+{
+  scene::SceneDef def;
+  ASSERT_TRUE(scene::parseScene("world: {threads: 2}\n", "test.yaml", def).ok);
+  EXPECT_EQ(def.world.threads, 2);
+  scene::SceneDef defaults;
+  ASSERT_TRUE(scene::parseScene("world: {}\n", "test.yaml", defaults).ok);
+  EXPECT_EQ(defaults.world.threads, 0);  // one per core
+  std::unique_ptr<core::World> world;
+  ASSERT_TRUE(scene::buildWorld(def, world).ok);
+  EXPECT_EQ(world->workers().threads(), 2);
+  ASSERT_TRUE(scene::buildWorld(defaults, world).ok);
+  EXPECT_EQ(world->workers().threads(), core::WorkerPool::coreCount());
+  scene::SceneDef again;
+  ASSERT_TRUE(scene::parseScene(scene::toYaml(def), "again.yaml", again).ok);
+  EXPECT_EQ(again.world.threads, 2);
+  EXPECT_TRUE(contains(refusal("world:\n  threads: -1\n"), "threads = -1 is out of range: must be in [0, 256]"));
+  EXPECT_TRUE(contains(refusal("world:\n  threads: 257\n"), "threads = 257 is out of range: must be in [0, 256]"));
+}
+
 TEST(SceneFiles, RefusesUnknownKindsTypesDuplicatesMissingKeysAndBadYaml)
 {
   EXPECT_TRUE(contains(refusal("bodies:\n  - {name: a, kind: blob}\n"), "kind = 'blob' is not a body kind"));

@@ -242,26 +242,34 @@ TEST(StepAllocations, CounterSeesAllocationsOfNewAndOfMalloc)
   EXPECT_EQ(grown.size(), 1000u);
 }
 
+// At one thread and at two per world (world.threads): the shared loops' threads start in the
+// warm-up, and handing them a loop allocates nothing.
 TEST(StepAllocations, NoShippedSceneAllocatesInAWarmedUpStep)
 {
   const std::vector<std::string> scenes = particle_sim_test::shippedScenes();
   ASSERT_GE(scenes.size(), 30u) << "scene files not found under " << particle_sim_test::kShippedScenesDir;
-  for (const std::string& scene_name : scenes)
-  {
-    scene::SceneDef scene_def;
-    const core::Status loaded =
-        scene::loadSceneFile(particle_sim_test::kShippedScenesDir + "/" + scene_name, scene_def);
-    ASSERT_TRUE(loaded.ok) << scene_name << ": " << loaded.message;
-    std::unique_ptr<core::World> world;
-    const core::Status built = scene::buildWorld(scene_def, world);
-    ASSERT_TRUE(built.ok) << scene_name << ": " << built.message;
-    const long long warm_up = std::max(kMinWarmUpSteps, static_cast<long long>(std::ceil(kWarmUpTime / world->dt())));
-    for (long long k = 0; k < warm_up; ++k)
-      scene::stepScene(scene_def, *world);
-    const long long allocations = allocationsOver(scene_def, *world, kStepsCounted);
-    EXPECT_EQ(allocations, 0) << scene_name << ": " << allocations << " heap allocations in " << kStepsCounted
-                              << " steps after " << warm_up << " warm-up steps (dt " << world->dt() << " s)";
-  }
+  std::uint64_t shared_loops = 0;
+  for (int threads : {1, 2})
+    for (const std::string& scene_name : scenes)
+    {
+      SCOPED_TRACE(std::to_string(threads) + " threads");
+      scene::SceneDef scene_def;
+      const core::Status loaded =
+          scene::loadSceneFile(particle_sim_test::kShippedScenesDir + "/" + scene_name, scene_def);
+      ASSERT_TRUE(loaded.ok) << scene_name << ": " << loaded.message;
+      scene_def.world.threads = threads;
+      std::unique_ptr<core::World> world;
+      const core::Status built = scene::buildWorld(scene_def, world);
+      ASSERT_TRUE(built.ok) << scene_name << ": " << built.message;
+      const long long warm_up = std::max(kMinWarmUpSteps, static_cast<long long>(std::ceil(kWarmUpTime / world->dt())));
+      for (long long k = 0; k < warm_up; ++k)
+        scene::stepScene(scene_def, *world);
+      const long long allocations = allocationsOver(scene_def, *world, kStepsCounted);
+      EXPECT_EQ(allocations, 0) << scene_name << ": " << allocations << " heap allocations in " << kStepsCounted
+                                << " steps after " << warm_up << " warm-up steps (dt " << world->dt() << " s)";
+      shared_loops += world->workers().sharedLoops();
+    }
+  EXPECT_GT(shared_loops, 0u) << "no scene shared a loop between two threads: the count at two proves nothing";
 }
 
 // A step that tears allocates nothing either, whichever method steps the body (`auto` too, which

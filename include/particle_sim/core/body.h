@@ -4,6 +4,7 @@
 
 #include "particle_sim/core/environment.h"
 #include "particle_sim/core/particle_pool.h"
+#include "particle_sim/core/worker_pool.h"
 
 namespace particle_sim
 {
@@ -33,6 +34,10 @@ public:
 
   /// Advances the body by `dt` [s] under `env`. Allocates nothing.
   virtual void step(double dt, const Environment& env) = 0;
+
+  /// Threads the body may share the loops of its step with (the world's; null: none). The results
+  /// are the same bits with any of them.
+  virtual void setWorkers(WorkerPool* /*workers*/) {}
 
   /// Puts the body back in the state it was built in.
   virtual void reset() = 0;

@@ -40,6 +40,7 @@ constexpr Range kGraspCount{1, 1e6, "particles"};      // grasp region: the N pa
 constexpr Range kBreakawayForce{0.0, 1e9, "N"};       // a grasp lets go above this force; 0 = never
 constexpr Range kParticlesPerBody{1, 1e8, "particles"};  // the cap world.max_particles_per_body itself
 constexpr Range kParticlesPerWorld{1, 1e9, "particles"};  // the cap world.max_particles_per_world itself
+constexpr Range kThreads{0, 256, "threads"};          // world.threads: threads a step may use; 0 = one per core
 constexpr Range kDampingRatio{0.0, 10.0, "-"};         // ζ, fraction of critical damping (cloth and rope materials)
 constexpr Range kArealDensity{0.001, 10.0, "kg/m^2"};  // cloth material: mass per unit area
 constexpr Range kTensileStiffness{1.0, 1e7, "N/m"};    // cloth material: Young's modulus × thickness

@@ -107,6 +107,7 @@ public:
   const SpringNetworkDef& definition() const { return def_; }
 
   void step(double dt, const Environment& env) override;
+  void setWorkers(WorkerPool* workers) override { workers_ = workers; }
   void reset() override;
 
   // Pins ---------------------------------------------------------------------------------------
@@ -255,14 +256,19 @@ private:
   double mechanicalEnergy() const override { return mechanicalEnergy(gravity_); }
   void recordEvent(std::string_view event) override { guard_.record(event); }
   // What the force elements read besides the state, with `gravity` [m/s²].
-  ForceContext forceContext(const Eigen::Vector3d& gravity) const { return {mass_, pinned_, gravity, air_, damping_}; }
+  ForceContext forceContext(const Eigen::Vector3d& gravity) const
+  {
+    return {mass_, pinned_, gravity, air_, damping_, workers_};
+  }
+  WorkerPool* workers() const override { return workers_; }
 
   SpringNetworkDef def_;
   ForceSet forces_;
   IntegratorDef built_integrator_;  // def_.integrator over the defaults it was built with (reset() restores it)
   IntegratorDef integrator_;
-  AirDef air_;            // the air of the current step
-  double damping_ = 0.0;  // [1/s] global damping of the current step (Environment::damping)
+  AirDef air_;                     // the air of the current step
+  double damping_ = 0.0;           // [1/s] global damping of the current step (Environment::damping)
+  WorkerPool* workers_ = nullptr;  // the world's threads (setWorkers), or null
   Eigen::Vector3d gravity_ = Eigen::Vector3d::Zero();  // [m/s²] gravity of the current step
   Eigen::VectorXd mass_;                               // [kg], kept for pinned particles too
   std::vector<char> pinned_;

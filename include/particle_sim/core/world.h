@@ -33,6 +33,10 @@ struct WorldDef
   /// Cap on the particles of all bodies together (each body counts its full capacity: an
   /// emitter's pool, a spring body's particles), so that spawning bodies cannot exhaust memory.
   int max_particles_per_world = 2000000;
+  /// Threads a step may share its loops with, the caller's included, in limits::kThreads; 0 = one
+  /// per core of the machine. Results are the same bits at any count (WorkerPool); a body too small
+  /// to share its loops never starts a thread.
+  int threads = 0;
   /// Integrator settings of every spring body: each field a body definition does not set
   /// (BodyIntegratorDef) is this one, applied by addRope/addClothGrid/addMeshCloth/addJelly/addSpringNetwork.
   IntegratorDef integrator;
@@ -62,6 +66,8 @@ public:
   explicit World(const WorldDef& def);
 
   const WorldDef& definition() const { return def_; }
+  /// The threads the step shares its loops with (WorldDef::threads, 0 resolved to the cores).
+  const WorkerPool& workers() const { return *workers_; }
   const Environment& environment() const { return env_; }
   double dt() const { return def_.dt; }
 
@@ -133,6 +139,7 @@ public:
 private:
   WorldDef def_;
   Environment env_;
+  std::unique_ptr<WorkerPool> workers_;  // by pointer: the bodies keep its address
   std::vector<std::unique_ptr<Body>> bodies_;
   std::uint64_t step_count_ = 0;
   SelfCollisionSolver self_collision_;

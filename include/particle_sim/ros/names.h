@@ -52,6 +52,7 @@ constexpr const char* kPointsSurfaceOnlyParam = "points_surface_only";
 constexpr const char* kDragMarkersParam = "drag_markers";
 constexpr const char* kMaxParticlesParam = "max_particles_per_body";
 constexpr const char* kMaxWorldParticlesParam = "max_particles_per_world";
+constexpr const char* kThreadsParam = "threads";
 constexpr const char* kStatusPeriodParam = "status_period";
 constexpr const char* kColorByStrainParam = "color_by_strain";
 constexpr const char* kStrainColorMaxParam = "strain_color_max";

@@ -29,6 +29,7 @@ struct NodeSettings
   bool points_surface_only = false;                    ///< ~points_surface_only: ~points without a jelly's interior
   int max_particles_per_body = 0;                      ///< ~max_particles_per_body; 0 = the scene's value
   int max_particles_per_world = 0;                     ///< ~max_particles_per_world; 0 = the scene's value
+  int threads = -1;  ///< ~threads: threads of the physics step, 0 = one per core; -1 = the scene's world.threads
   double status_period = 1.0;          ///< ~status_period [s] of wall time between status lines; 0 = none
   bool color_by_strain = false;        ///< ~color_by_strain: colour cloth and jelly by strain
   double strain_color_max = 0.1;       ///< ~strain_color_max [-]: strain drawn fully red

@@ -13,9 +13,22 @@ SpringForces::SpringForces(std::vector<Spring> springs)
   std::iota(origin_.begin(), origin_.end(), 0);
 }
 
-void SpringForces::addForces(const ForceContext& /*context*/, const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v,
+namespace
+{
+// Springs and particles per chunk of a shared loop: about 50 µs of work, so that a loop's handover
+// costs a few per cent of it.
+constexpr int kSpringsPerChunk = 2048;
+constexpr int kParticlesPerChunk = 2048;
+}  // namespace
+
+void SpringForces::addForces(const ForceContext& context, const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v,
                              Eigen::Matrix3Xd& force) const
 {
+  if (context.workers && context.workers->threads() > 1 && static_cast<int>(springs_.size()) > kSpringsPerChunk)
+  {
+    addForcesShared(*context.workers, x, v, force);
+    return;
+  }
   for (const Spring& s : springs_)
   {
     const Eigen::Vector3d f =
@@ -23,6 +36,67 @@ void SpringForces::addForces(const ForceContext& /*context*/, const Eigen::Matri
     force.col(s.i) += f;
     force.col(s.j) -= f;
   }
+}
+
+void SpringForces::addForcesShared(WorkerPool& workers, const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v,
+                                   Eigen::Matrix3Xd& force) const
+{
+  const int particles = static_cast<int>(x.cols());
+  indexEnds(particles);
+  const int springs = static_cast<int>(springs_.size());
+  workers.forEachChunk(springs, kSpringsPerChunk, [&](int begin, int end) {
+    for (int k = begin; k < end; ++k)
+    {
+      const Spring& s = springs_[k];
+      spring_force_[k] =
+          springForce(x.col(s.i), x.col(s.j), v.col(s.i), v.col(s.j), s.rest_length, s.stiffness, s.damping);
+    }
+  });
+  // Each particle adds +f at its ends i and −f at its ends j, springs ascending: the one-thread
+  // loop's additions to that particle, in its order.
+  workers.forEachChunk(particles, kParticlesPerChunk, [&](int begin, int end) {
+    for (int p = begin; p < end; ++p)
+    {
+      for (int e = end_start_[p]; e < end_start_[p + 1]; ++e)
+      {
+        const int end_code = ends_[e];
+        const Eigen::Vector3d& f = spring_force_[end_code >> 1];
+        if (end_code & 1)
+          force.col(p) -= f;
+        else
+          force.col(p) += f;
+      }
+    }
+  });
+}
+
+void SpringForces::indexEnds(int particles) const
+{
+  if (ends_valid_ && static_cast<int>(end_start_.size()) == particles + 1) return;
+  // Counting sort of the 2 S ends by particle; filled in spring order, so each particle's ends
+  // are ascending.
+  const int springs = static_cast<int>(springs_.size());
+  spring_force_.resize(springs);
+  ends_.resize(2 * static_cast<std::size_t>(springs));
+  end_start_.assign(particles + 1, 0);
+  for (const Spring& s : springs_)
+  {
+    ++end_start_[s.i + 1];
+    ++end_start_[s.j + 1];
+  }
+  for (int p = 0; p < particles; ++p)
+    end_start_[p + 1] += end_start_[p];
+  for (int k = 0; k < springs; ++k)
+  {
+    const Spring& s = springs_[k];
+    ends_[end_start_[s.i]++] = 2 * k;
+    ends_[end_start_[s.j]++] = 2 * k + 1;
+  }
+  // The fill moved each start to the next particle's: shift them back.
+  for (int p = particles; p > 0; --p)
+    end_start_[p] = end_start_[p - 1];
+  end_start_[0] = 0;
+  ends_valid_ = true;
 }
 
 void SpringForces::coupledPairs(std::vector<std::pair<int, int>>& pairs) const
@@ -109,6 +183,7 @@ void SpringForces::tear(const Eigen::Matrix3Xd& x, double tear_strain, TearRecor
     if (!blocks_.empty()) blocks_[kept] = blocks_[s];
     ++kept;
   }
+  if (kept != springs_.size()) ends_valid_ = false;
   springs_.resize(kept);
   origin_.resize(kept);
   if (!blocks_.empty()) blocks_.resize(kept);
@@ -117,6 +192,7 @@ void SpringForces::tear(const Eigen::Matrix3Xd& x, double tear_strain, TearRecor
 void SpringForces::mend()
 {
   springs_ = built_;  // with the built constants too (resetConstants() would put them back anyway)
+  ends_valid_ = false;
   blocks_ = built_blocks_;
   origin_.resize(built_.size());
   std::iota(origin_.begin(), origin_.end(), 0);

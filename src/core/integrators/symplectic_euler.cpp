@@ -9,8 +9,12 @@ SolverReport SymplecticEulerMethod::step(double h, DynamicSystem& system, const 
   Eigen::Matrix3Xd& x = system.positions();
   Eigen::Matrix3Xd& v = system.velocities();
   system.accelerations(x, v, acceleration_);
-  v += h * acceleration_;
-  x += h * v;
+  // Per particle alone, so shared between threads by chunks of particles.
+  shareLoop(system.workers(), static_cast<int>(x.cols()), kParticlesPerVectorChunk, [&](int begin, int end) {
+    const int count = end - begin;
+    v.middleCols(begin, count) += h * acceleration_.middleCols(begin, count);
+    x.middleCols(begin, count) += h * v.middleCols(begin, count);
+  });
   return SolverReport{};
 }
 

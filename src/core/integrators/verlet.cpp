@@ -14,8 +14,13 @@ SolverReport VerletMethod::step(double h, DynamicSystem& system, const Integrato
     u -= 0.5 * h * acceleration_;
     started_ = true;
   }
-  u = settings.verlet_damping * u + h * acceleration_;
-  x += h * u;
+  // Per particle alone, so shared between threads by chunks of particles.
+  const double damping = settings.verlet_damping;
+  shareLoop(system.workers(), static_cast<int>(x.cols()), kParticlesPerVectorChunk, [&](int begin, int end) {
+    const int count = end - begin;
+    u.middleCols(begin, count) = damping * u.middleCols(begin, count) + h * acceleration_.middleCols(begin, count);
+    x.middleCols(begin, count) += h * u.middleCols(begin, count);
+  });
   return SolverReport{};
 }
 

@@ -96,6 +96,7 @@ void readWorld(const YAML::Node& node, const std::string& source, SceneDef& scen
   reader.read("seed", world.seed);
   reader.read("max_particles_per_body", world.max_particles_per_body);
   reader.read("max_particles_per_world", world.max_particles_per_world);
+  reader.read("threads", world.threads);
 
   if (const YAML::Node ground = reader.child("ground"))
   {
@@ -228,6 +229,7 @@ void writeWorld(YAML::Node root, const SceneDef& scene)
   world["seed"] = w.seed;
   world["max_particles_per_body"] = w.max_particles_per_body;
   world["max_particles_per_world"] = w.max_particles_per_world;
+  world["threads"] = w.threads;
   writeIntegrator(world, w.integrator);
   YAML::Node ground;
   ground["enabled"] = w.ground.enabled;

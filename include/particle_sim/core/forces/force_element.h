@@ -8,6 +8,7 @@
 #include "particle_sim/core/environment.h"
 #include "particle_sim/core/integrators/implicit_euler_solver.h"
 #include "particle_sim/core/spring.h"
+#include "particle_sim/core/worker_pool.h"
 
 namespace particle_sim
 {
@@ -22,6 +23,7 @@ struct ForceContext
   Eigen::Vector3d gravity;          ///< [m/s²]
   AirDef air;                       ///< the air of the current step
   double damping = 0.0;             ///< [1/s] global damping of the current step (Environment::damping)
+  WorkerPool* workers = nullptr;    ///< threads to share loops with (null: the caller's alone)
 };
 
 /// What one tear removed: the particle pairs of the broken springs and the corners of the removed

@@ -41,11 +41,25 @@ public:
   double maxStrain(const Eigen::Matrix3Xd& x) const override;
 
 private:
+  /// addForces() shared between threads: every spring's force into spring_force_, then every
+  /// particle sums those of its springs in the springs' order, which is the order (and so the
+  /// bits) of the one-thread loop.
+  void addForcesShared(WorkerPool& workers, const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v,
+                       Eigen::Matrix3Xd& force) const;
+  /// Rebuilds ends_ for `particles` particles when the springs or the particle count changed.
+  void indexEnds(int particles) const;
+
   std::vector<Spring> built_;                     // as built (reset puts these constants back)
   std::vector<std::array<int, 4>> built_blocks_;  // per built spring: its blocks ii, ij, ji, jj
   std::vector<Spring> springs_;                   // the springs not torn, with their current constants
   std::vector<std::array<int, 4>> blocks_;        // per spring of springs_: its blocks
   std::vector<int> origin_;                       // per spring of springs_: its index in built_
+
+  // Scratch of addForcesShared(), sized at its first call and after a tear (never larger).
+  mutable std::vector<Eigen::Vector3d> spring_force_;  // per spring of springs_: the force on its end i
+  mutable std::vector<int> end_start_;  // per particle p: its ends are ends_[end_start_[p] … end_start_[p + 1])
+  mutable std::vector<int> ends_;       // 2 s for end i of spring s, 2 s + 1 for end j, ascending s
+  mutable bool ends_valid_ = false;
 };
 
 }  // namespace core

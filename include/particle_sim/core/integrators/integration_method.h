@@ -7,6 +7,7 @@
 
 #include "particle_sim/core/integrator.h"
 #include "particle_sim/core/integrators/implicit_euler_solver.h"
+#include "particle_sim/core/worker_pool.h"
 
 namespace particle_sim
 {
@@ -52,6 +53,9 @@ public:
       if (!contact.surface_velocity.isZero()) return false;  // a moving collider carries it
     return true;
   }
+  /// Threads to share per-particle loops with (null: none): a method may use them only where each
+  /// particle's result is computed alone (WorkerPool), so that its results do not change.
+  virtual WorkerPool* workers() const { return nullptr; }
   virtual double kineticEnergy() const = 0;     ///< [J] of the current state, free particles
   virtual double mechanicalEnergy() const = 0;  ///< [J] kinetic + potential of the current state
   /// Counts and describes a stability event (e.g. energy taken out by the implicit step).

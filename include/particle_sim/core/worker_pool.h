@@ -1,0 +1,97 @@
+#pragma once
+
+#include <atomic>
+#include <condition_variable>
+#include <cstdint>
+#include <mutex>
+#include <thread>
+#include <type_traits>
+#include <vector>
+
+namespace particle_sim
+{
+namespace core
+{
+/// Threads that share the loops of a step, deterministically. forEachChunk() cuts the items
+/// 0 … n−1 into chunks of a fixed size (set by the caller, never by the thread count) and hands
+/// the chunks to whichever thread is free. A loop may use it only when each item's result is
+/// computed alone and written to its own place (no sum across chunks): then the results are the
+/// same bits at any thread count, and one thread runs the whole range in a single call.
+///
+/// The threads start at the first loop that has more than one chunk (a scene of small bodies never
+/// starts one) and then wait for work, spinning briefly before they sleep. Nothing allocates after
+/// the start. Loops must not nest, and one thread at a time may call forEachChunk().
+class WorkerPool
+{
+public:
+  /// `threads` >= 1 counts the calling thread: 1 runs everything on the caller.
+  explicit WorkerPool(int threads);
+  ~WorkerPool();
+  WorkerPool(const WorkerPool&) = delete;
+  WorkerPool& operator=(const WorkerPool&) = delete;
+
+  int threads() const { return threads_; }
+  /// Loops that were shared between threads since construction (for tests and the bench).
+  std::uint64_t sharedLoops() const { return shared_loops_; }
+
+  /// Calls body(begin, end) on chunks that cover [0, items) once each, `chunk` items long but the
+  /// last; returns when all are done.
+  template <class Body>
+  void forEachChunk(int items, int chunk, Body&& body)
+  {
+    if (items <= 0) return;
+    if (threads_ == 1 || items <= chunk)
+    {
+      body(0, items);
+      return;
+    }
+    using Plain = std::remove_reference_t<Body>;
+    run(items, chunk, const_cast<void*>(static_cast<const void*>(&body)),
+        [](void* callable, int begin, int end) { (*static_cast<Plain*>(callable))(begin, end); });
+  }
+
+  /// The machine's core count (at least 1): what a thread count of 0 stands for.
+  static int coreCount();
+
+private:
+  using Trampoline = void (*)(void*, int, int);
+  void run(int items, int chunk, void* callable, Trampoline trampoline);
+  void start();
+  void work(int worker);
+  void takeChunks();
+
+  const int threads_;
+  std::vector<std::thread> workers_;
+  std::uint64_t shared_loops_ = 0;
+
+  // The loop being shared: set by run() before it bumps `generation_`.
+  void* callable_ = nullptr;
+  Trampoline trampoline_ = nullptr;
+  int items_ = 0;
+  int chunk_ = 0;
+  int chunks_ = 0;
+  std::atomic<int> next_chunk_{0};
+  std::atomic<int> busy_workers_{0};
+
+  std::atomic<std::uint64_t> generation_{0};  // one more for each shared loop
+  std::atomic<bool> stopping_{false};
+  std::mutex mutex_;
+  std::condition_variable wake_;
+};
+
+/// Particles per chunk of a shared per-particle vector loop (a few arithmetic operations each).
+constexpr int kParticlesPerVectorChunk = 4096;
+
+/// body(begin, end) over [0, items) in chunks of `chunk`: shared with `workers`, or in one call
+/// when there are none.
+template <class Body>
+void shareLoop(WorkerPool* workers, int items, int chunk, Body&& body)
+{
+  if (workers)
+    workers->forEachChunk(items, chunk, body);
+  else if (items > 0)
+    body(0, items);
+}
+
+}  // namespace core
+}  // namespace particle_sim

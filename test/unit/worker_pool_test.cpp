@@ -1,0 +1,160 @@
+// WorkerPool shares loops between threads without changing a bit of their results: it covers
+// every item exactly once at any thread and chunk count, and the spring forces it shares (each
+// spring's force, then each particle's sum in spring order) equal the one-thread loop's bit for
+// bit on a network in random order, also after a tear.
+
+#include "particle_sim/core/worker_pool.h"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Core>
+#include <atomic>
+#include <cstring>
+#include <random>
+#include <thread>
+#include <vector>
+
+#include "particle_sim/core/forces/springs.h"
+
+namespace core = particle_sim::core;
+
+TEST(WorkerPool, EveryItemIsVisitedExactlyOnceInChunksOfTheGivenSize)
+{
+  for (int threads : {1, 2, 3, 8})
+  {
+    core::WorkerPool pool(threads);
+    for (int items : {0, 1, 7, 64, 1000, 4097})
+    {
+      for (int chunk : {1, 5, 64, 5000})
+      {
+        std::vector<std::atomic<int>> visits(items);
+        std::atomic<int> calls{0};
+        std::atomic<bool> bad_range{false};
+        pool.forEachChunk(items, chunk, [&](int begin, int end) {
+          ++calls;
+          // Each call is one chunk: it starts on a multiple of the chunk and is a chunk long (the
+          // last one shorter), or it is the whole range on one thread.
+          const bool whole = begin == 0 && end == items;
+          if (!whole && (begin % chunk != 0 || (end - begin != chunk && end != items))) bad_range = true;
+          for (int i = begin; i < end; ++i)
+            ++visits[i];
+        });
+        for (int i = 0; i < items; ++i)
+          ASSERT_EQ(visits[i].load(), 1) << threads << " threads, " << items << " items, chunk " << chunk;
+        EXPECT_FALSE(bad_range) << threads << " threads, " << items << " items, chunk " << chunk;
+        const int chunks = (items + chunk - 1) / chunk;
+        if (threads == 1 || chunks <= 1)
+          EXPECT_EQ(calls.load(), items > 0 ? 1 : 0);
+        else
+          EXPECT_EQ(calls.load(), chunks);
+      }
+    }
+    EXPECT_EQ(pool.sharedLoops() > 0, threads > 1);
+  }
+}
+
+TEST(WorkerPool, OtherThreadsDoShareTheWork)
+{
+  // With two threads and many slow chunks, the second thread takes some: the loop is really shared.
+  core::WorkerPool pool(2);
+  const int items = 64;
+  std::vector<std::thread::id> owner(items);
+  pool.forEachChunk(items, 1, [&](int begin, int end) {
+    for (int i = begin; i < end; ++i)
+    {
+      owner[i] = std::this_thread::get_id();
+      volatile double sink = 0.0;
+      for (int k = 0; k < 200000; ++k)
+        sink = sink + 1.0;
+    }
+  });
+  int by_caller = 0;
+  for (const std::thread::id& id : owner)
+    by_caller += id == std::this_thread::get_id() ? 1 : 0;
+  EXPECT_LT(by_caller, items) << "the caller ran every chunk";
+  EXPECT_GT(by_caller, 0) << "the caller ran no chunk";
+}
+
+namespace
+{
+// A random network: `springs` springs between random pairs of `particles` particles, in random
+// order, random constants; random positions and velocities.
+struct RandomNetwork
+{
+  std::vector<core::Spring> springs;
+  Eigen::Matrix3Xd x, v;
+};
+
+RandomNetwork randomNetwork(int particles, int springs, unsigned seed)
+{
+  std::mt19937 random(seed);
+  std::uniform_int_distribution<int> pick(0, particles - 1);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  RandomNetwork network;
+  for (int k = 0; k < springs; ++k)
+  {
+    core::Spring s;
+    s.i = pick(random);
+    do
+      s.j = pick(random);
+    while (s.j == s.i);
+    s.rest_length = 0.05 + 0.2 * unit(random);
+    s.stiffness = 10.0 + 1000.0 * unit(random);
+    s.damping = 0.1 * unit(random);
+    network.springs.push_back(s);
+  }
+  network.x = Eigen::Matrix3Xd::Random(3, particles);
+  network.v = Eigen::Matrix3Xd::Random(3, particles);
+  return network;
+}
+
+bool sameBits(const Eigen::Matrix3Xd& a, const Eigen::Matrix3Xd& b)
+{
+  return a.size() == b.size() && std::memcmp(a.data(), b.data(), sizeof(double) * a.size()) == 0;
+}
+}  // namespace
+
+TEST(WorkerPool, SharedSpringForcesEqualTheOneThreadLoopBitForBit)
+{
+  const int particles = 3000;
+  const RandomNetwork network = randomNetwork(particles, 20000, 7);
+  const Eigen::VectorXd mass = Eigen::VectorXd::Ones(particles);
+  const std::vector<char> pinned(particles, 0);
+  core::WorkerPool pool(2);
+  core::ForceContext alone{mass, pinned, Eigen::Vector3d::Zero(), {}, 0.0, nullptr};
+  core::ForceContext shared = alone;
+  shared.workers = &pool;
+
+  core::SpringForces springs(network.springs);
+  // Forces already on the particles (gravity, say) come first in both sums.
+  const Eigen::Matrix3Xd before = Eigen::Matrix3Xd::Random(3, particles);
+  Eigen::Matrix3Xd expected = before, got = before;
+  springs.addForces(alone, network.x, network.v, expected);
+  springs.addForces(shared, network.x, network.v, got);
+  EXPECT_GT(pool.sharedLoops(), 0u);
+  EXPECT_TRUE(sameBits(expected, got));
+  // Equal bits are a test of the order: the same springs summed in reverse order differ.
+  std::vector<core::Spring> reversed(network.springs.rbegin(), network.springs.rend());
+  Eigen::Matrix3Xd other_order = before;
+  core::SpringForces(reversed).addForces(alone, network.x, network.v, other_order);
+  EXPECT_FALSE(sameBits(expected, other_order));
+  EXPECT_TRUE(expected.isApprox(other_order, 1e-12));
+
+  // After a tear the particles' lists of ends follow the springs that are left.
+  core::TearRecord torn;
+  springs.tear(network.x, 6.0, torn);
+  ASSERT_GT(torn.springs.size(), 100u);
+  ASSERT_GT(springs.springs().size(), 2048u);
+  expected = before;
+  got = before;
+  springs.addForces(alone, network.x, network.v, expected);
+  springs.addForces(shared, network.x, network.v, got);
+  EXPECT_TRUE(sameBits(expected, got));
+  // And after mending, all of them again.
+  springs.mend();
+  Eigen::Matrix3Xd mended = before;
+  springs.addForces(shared, network.x, network.v, mended);
+  Eigen::Matrix3Xd first = before;
+  core::SpringForces(network.springs).addForces(alone, network.x, network.v, first);
+  EXPECT_TRUE(sameBits(first, mended));
+}
