@@ -439,6 +439,7 @@ void explicitSprings(std::ostream& out, bool quick)
 
 // --- Two threads (goal 6): squareCloth at 128² and 256² stepped by one thread and by two
 // (WorkerPool), each method from rest over the same steps; the two runs must end in the same bits.
+// Implicit Euler with CG (relative tolerance 1e-6, as in "Cloth") at 128² only: seconds a step at 256².
 // Verlet at dt = 1/60 with the substeps its stability needs (191 at 128²: more than the default
 // cap, so `auto` runs implicit Euler there), and symplectic Euler at half its limit (one force
 // pass a step, like the explicit springs' case).
@@ -450,13 +451,16 @@ void threads(std::ostream& out, bool quick)
     core::IntegratorType type;
   };
   for (const Method& method :
-       {Method{"verlet", core::kVerletIntegrator}, Method{"symplectic_euler", core::kSymplecticEulerIntegrator}})
+       {Method{"verlet", core::kVerletIntegrator}, Method{"symplectic_euler", core::kSymplecticEulerIntegrator},
+        Method{"implicit_euler cg", core::kImplicitEulerIntegrator}})
   {
     for (int n : quick ? std::vector<int>{128} : std::vector<int>{128, 256})
     {
       const bool verlet = method.type == core::kVerletIntegrator;
-      if (verlet && n > 128 && quick) continue;
-      core::ClothGridDef def = squareCloth(n, core::LinearSolverType::Auto);
+      const bool implicit = method.type == core::kImplicitEulerIntegrator;
+      if (implicit && n > 128) continue;  // seconds a step
+      core::ClothGridDef def =
+          squareCloth(n, implicit ? core::LinearSolverType::ConjugateGradient : core::LinearSolverType::Auto);
       def.integrator.type = method.type;
       def.integrator.max_substeps = verlet ? 100000 : 1;
       Row rows[2];
@@ -467,8 +471,8 @@ void threads(std::ostream& out, bool quick)
         core::WorkerPool pool(threads);
         core::SpringNetworkBody body(core::buildClothGrid(def));
         body.setWorkers(&pool);
-        const double dt = verlet ? 1.0 / 60.0 : 0.5 * 2.0 / body.frequencyBound();
-        const double per_step = verlet ? 1e3 : 1.0;  // rough cost in units of one force pass
+        const double dt = verlet || implicit ? 1.0 / 60.0 : 0.5 * 2.0 / body.frequencyBound();
+        const double per_step = verlet || implicit ? 1e3 : 1.0;  // rough cost in units of one force pass
         const int steps = quick ? 2 : std::max(2, static_cast<int>(4e5 / (static_cast<double>(n) * n * per_step)));
         Row& row = rows[threads - 1];
         row = timeBody(body, dt, quick ? 1 : 2, steps, quick ? 2 : 5);

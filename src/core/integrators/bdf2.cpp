@@ -37,6 +37,7 @@ void Bdf2Method::restart()
 
 SolverReport Bdf2Method::step(double h, DynamicSystem& system, const IntegratorDef& settings)
 {
+  solver_.setWorkers(system.workers());
   if (has_history_ && h == previous_h_) restartEditedParticles(h, system);
   const SolverReport report = advance(h, system, settings);
   x_left_ = system.positions();

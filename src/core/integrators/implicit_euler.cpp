@@ -24,6 +24,7 @@ ImplicitEulerMethod::ImplicitEulerMethod(int particles, const std::vector<std::p
 
 SolverReport ImplicitEulerMethod::step(double h, DynamicSystem& system, const IntegratorDef& settings)
 {
+  solver_.setWorkers(system.workers());
   Eigen::Matrix3Xd& x = system.positions();
   Eigen::Matrix3Xd& v = system.velocities();
   const Eigen::VectorXd& mass = system.masses();

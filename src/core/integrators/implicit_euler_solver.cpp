@@ -14,6 +14,9 @@ double dot(const Eigen::Matrix3Xd& a, const Eigen::Matrix3Xd& b)
 {
   return a.cwiseProduct(b).sum();
 }
+
+// Rows per chunk of a shared product with the block matrix (about ten blocks a row).
+constexpr int kRowsPerChunk = 2048;
 }  // namespace
 
 void ImplicitEulerSolver::setPattern(int particles, const std::vector<std::pair<int, int>>& coupled_pairs)
@@ -83,7 +86,12 @@ void ImplicitEulerSolver::begin(double h, const Eigen::VectorXd& mass, const Eig
 
 void ImplicitEulerSolver::multiply(const Eigen::Matrix3Xd& p, Eigen::Matrix3Xd& out) const
 {
-  for (int i = 0; i < static_cast<int>(diagonal_block_.size()); ++i)
+  multiplyRows(p, out, 0, static_cast<int>(diagonal_block_.size()));
+}
+
+void ImplicitEulerSolver::multiplyRows(const Eigen::Matrix3Xd& p, Eigen::Matrix3Xd& out, int begin, int end) const
+{
+  for (int i = begin; i < end; ++i)
   {
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();
     for (int k = row_start_[i]; k < row_start_[i + 1]; ++k)
@@ -331,10 +339,17 @@ void ImplicitEulerSolver::conjugateGradient(const std::vector<char>& pinned, con
     filter(pinned, direction_);
   }
   double delta_new = dot(residual_, direction_);
+  // Each iteration's per-particle work (the product, the updates, the preconditioner) is shared by
+  // rows (WorkerPool): every row is computed alone, in the same operations as on one thread. The
+  // three sums over all particles stay on the calling thread.
+  const int rows = static_cast<int>(diagonal_block_.size());
   while (!within(norms) && report.iterations < settings.cg_max_iterations)
   {
-    multiply(direction_, product_);
-    filter(pinned, product_);
+    shareLoop(workers_, rows, kRowsPerChunk, [&](int begin, int end) {
+      multiplyRows(direction_, product_, begin, end);
+      for (int i = begin; i < end; ++i)
+        if (pinned[i]) product_.col(i).setZero();
+    });
     const double curvature = dot(direction_, product_);
     if (!(curvature > 0.0))
     {
@@ -342,13 +357,23 @@ void ImplicitEulerSolver::conjugateGradient(const std::vector<char>& pinned, con
       break;
     }
     const double alpha = delta_new / curvature;
-    delta_v_ += alpha * direction_;
-    residual_ -= alpha * product_;
-    precondition(residual_, preconditioned_);
+    shareLoop(workers_, rows, kParticlesPerVectorChunk, [&](int begin, int end) {
+      const int count = end - begin;
+      delta_v_.middleCols(begin, count) += alpha * direction_.middleCols(begin, count);
+      residual_.middleCols(begin, count) -= alpha * product_.middleCols(begin, count);
+      for (int i = begin; i < end; ++i)
+        preconditioned_.col(i).noalias() = inverse_diagonal_[i] * residual_.col(i);
+    });
     const double delta_old = delta_new;
     delta_new = dot(residual_, preconditioned_);
-    direction_ = preconditioned_ + (delta_new / delta_old) * direction_;
-    filter(pinned, direction_);
+    const double beta = delta_new / delta_old;
+    shareLoop(workers_, rows, kParticlesPerVectorChunk, [&](int begin, int end) {
+      const int count = end - begin;
+      direction_.middleCols(begin, count) =
+          preconditioned_.middleCols(begin, count) + beta * direction_.middleCols(begin, count);
+      for (int i = begin; i < end; ++i)
+        if (pinned[i]) direction_.col(i).setZero();
+    });
     norms = residualNorms(residual_, free_mass);
     ++report.iterations;
   }

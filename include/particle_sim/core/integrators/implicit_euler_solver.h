@@ -7,6 +7,7 @@
 #include "particle_sim/core/constraints/resting_contact.h"
 #include "particle_sim/core/integrator.h"
 #include "particle_sim/core/integrators/sparse_block_ldlt.h"
+#include "particle_sim/core/worker_pool.h"
 
 namespace particle_sim
 {
@@ -74,6 +75,10 @@ public:
   double directCostInCgIterations() const;
   /// Forgets the warm start (after a reset or a jump of the state).
   void clearWarmStart() { delta_v_.setZero(); }
+  /// Threads to share the conjugate gradient's per-particle loops with (null: none). Its products
+  /// and vector updates are shared by rows; its dot products stay on one thread, in their order, so
+  /// that the result is the same bits at any thread count.
+  void setWorkers(WorkerPool* workers) { workers_ = workers; }
 
 private:
   // CG iterations from delta_v_ until the filtered residual is within cg_tolerance |b|, or the
@@ -86,6 +91,8 @@ private:
   };
   ResidualNorms residualNorms(const Eigen::Matrix3Xd& r, double free_mass) const;
   void multiply(const Eigen::Matrix3Xd& p, Eigen::Matrix3Xd& out) const;
+  // out = A p on rows [begin, end).
+  void multiplyRows(const Eigen::Matrix3Xd& p, Eigen::Matrix3Xd& out, int begin, int end) const;
   static void filter(const std::vector<char>& pinned, Eigen::Matrix3Xd& p);
   void precondition(const Eigen::Matrix3Xd& r, Eigen::Matrix3Xd& out) const;
   // Decides which contacts are held and turns the system into one for the rest (keeping the
@@ -114,6 +121,7 @@ private:
   double h_ = 0.0;
   const Eigen::Matrix3Xd* v0_ = nullptr;
   const Eigen::VectorXd* mass_ = nullptr;
+  WorkerPool* workers_ = nullptr;
   // Held contacts: the velocity change z each is given (0 elsewhere), and the original rows A_ij of
   // their particles and b_i (for the impulse), contact after contact.
   Eigen::Matrix3Xd held_change_;
