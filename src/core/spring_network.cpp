@@ -2,6 +2,7 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 
@@ -17,6 +18,29 @@ namespace core
 {
 namespace
 {
+// to = from (same size), shared by chunks of particles (WorkerPool).
+void copyShared(WorkerPool* workers, const Eigen::Matrix3Xd& from, Eigen::Matrix3Xd& to)
+{
+  if (to.cols() != from.cols())
+  {
+    to = from;
+    return;
+  }
+  shareLoop(workers, static_cast<int>(from.cols()), kParticlesPerVectorChunk,
+            [&](int begin, int end) { to.middleCols(begin, end - begin) = from.middleCols(begin, end - begin); });
+}
+
+// Whether every entry of `m` is finite, checked by chunks of particles (the answer does not depend
+// on the order).
+bool allFiniteShared(WorkerPool* workers, const Eigen::Matrix3Xd& m)
+{
+  std::atomic<bool> finite{true};
+  shareLoop(workers, static_cast<int>(m.cols()), kParticlesPerVectorChunk, [&](int begin, int end) {
+    if (!m.middleCols(begin, end - begin).allFinite()) finite.store(false, std::memory_order_relaxed);
+  });
+  return finite.load();
+}
+
 std::string indexed(const char* field, std::size_t i)
 {
   return std::string(field) + "[" + std::to_string(i) + "]";
@@ -399,8 +423,8 @@ void SpringNetworkBody::step(double dt, const Environment& env)
   gravity_ = env.gravity;
   ParticlePool& p = particles_;
   const int n = p.size();
-  saved_position_ = p.position;
-  saved_velocity_ = p.velocity;
+  copyShared(workers_, p.position, saved_position_);
+  copyShared(workers_, p.velocity, saved_velocity_);
   step_target_ = pin_target_;
   bool switched = false;
   const IntegratorType type = guard_.resolve(integrator_.type, dt, omega_bound_, dampingBound(), implicit_step_cost_,
@@ -438,7 +462,7 @@ void SpringNetworkBody::step(double dt, const Environment& env)
     pin_target_ = step_target_;
 
     // Blow-up of an explicit method: roll back and retry with more substeps, or freeze.
-    const bool finite = p.position.allFinite() && p.velocity.allFinite();
+    const bool finite = allFiniteShared(workers_, p.position) && allFiniteShared(workers_, p.velocity);
     energy_after = explicit_method ? mechanicalEnergy(env.gravity) : 0.0;
     if (!guard_.blewUp(finite, energy_after)) break;
     p.position = saved_position_;
@@ -460,11 +484,11 @@ void SpringNetworkBody::step(double dt, const Environment& env)
   last_dt_ = dt;
   for (int i = 0; i < n; ++i)
     p.age[i] += dt;
-  p.previous_position = saved_position_;
+  copyShared(workers_, saved_position_, p.previous_position);
 
   // A non-finite state or a failed solve is never kept: go back to the last good state and stop
   // this body.
-  if (!p.position.allFinite() || !p.velocity.allFinite() || last_solve_.breakdown)
+  if (!allFiniteShared(workers_, p.position) || !allFiniteShared(workers_, p.velocity) || last_solve_.breakdown)
   {
     p.position = saved_position_;
     p.velocity = saved_velocity_;

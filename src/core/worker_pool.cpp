@@ -55,7 +55,8 @@ void WorkerPool::run(int items, int chunk, void* callable, Trampoline trampoline
   chunk_ = chunk;
   chunks_ = (items + chunk - 1) / chunk;
   next_chunk_.store(0, std::memory_order_relaxed);
-  busy_workers_.store(threads_ - 1, std::memory_order_relaxed);
+  finished_workers_.store(0, std::memory_order_relaxed);
+  open_places_.store(threads_ - 1, std::memory_order_release);  // publishes the loop to join()
   {
     // Under the lock, so that a worker between its check and its wait cannot miss the bump.
     std::lock_guard<std::mutex> lock(mutex_);
@@ -63,14 +64,27 @@ void WorkerPool::run(int items, int chunk, void* callable, Trampoline trampoline
   }
   wake_.notify_all();
   takeChunks();
-  // Wait for the workers to finish their last chunk (each counts itself out once).
-  for (int spin = 0; busy_workers_.load(std::memory_order_acquire) != 0; ++spin)
+  // Every chunk is taken: close the loop, then wait for the workers that joined it to finish
+  // theirs (each counts itself out once). A worker that wakes later skips this loop.
+  const int joined = (threads_ - 1) - open_places_.exchange(0, std::memory_order_acq_rel);
+  for (int spin = 0; finished_workers_.load(std::memory_order_acquire) != joined; ++spin)
   {
     if (spin < kSpins)
       pause();
     else
       std::this_thread::yield();
   }
+}
+
+bool WorkerPool::join()
+{
+  int places = open_places_.load(std::memory_order_acquire);
+  while (places > 0)
+  {
+    if (open_places_.compare_exchange_weak(places, places - 1, std::memory_order_acq_rel, std::memory_order_acquire))
+      return true;
+  }
+  return false;
 }
 
 void WorkerPool::takeChunks()
@@ -104,8 +118,9 @@ void WorkerPool::work(int /*worker*/)
       now = generation_.load(std::memory_order_acquire);
     }
     seen = now;
+    if (!join()) continue;
     takeChunks();
-    busy_workers_.fetch_sub(1, std::memory_order_release);
+    finished_workers_.fetch_add(1, std::memory_order_release);
   }
 }
 

@@ -58,6 +58,9 @@ private:
   void run(int items, int chunk, void* callable, Trampoline trampoline);
   void start();
   void work(int worker);
+  // Takes one of the current loop's open places; false when the loop is closed (its caller is done
+  // with every chunk, or the other workers took the places).
+  bool join();
   void takeChunks();
 
   const int threads_;
@@ -71,7 +74,10 @@ private:
   int chunk_ = 0;
   int chunks_ = 0;
   std::atomic<int> next_chunk_{0};
-  std::atomic<int> busy_workers_{0};
+  // Workers join a loop by taking one of its open places; the caller closes it when every chunk is
+  // taken and waits only for those that joined, never for a worker that has not woken yet.
+  std::atomic<int> open_places_{0};
+  std::atomic<int> finished_workers_{0};
 
   std::atomic<std::uint64_t> generation_{0};  // one more for each shared loop
   std::atomic<bool> stopping_{false};

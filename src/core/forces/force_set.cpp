@@ -20,7 +20,8 @@ void ForceSet::setEnergyOrder(std::vector<int> order)
 void ForceSet::computeForces(const ForceContext& context, const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v,
                              Eigen::Matrix3Xd& force) const
 {
-  force.setZero();
+  shareLoop(context.workers, static_cast<int>(force.cols()), kParticlesPerVectorChunk,
+            [&](int begin, int end) { force.middleCols(begin, end - begin).setZero(); });
   for (const std::unique_ptr<ForceElement>& element : elements_)
     element->addForces(context, x, v, force);
 }

@@ -7,8 +7,10 @@ namespace core
 void GravityForce::addForces(const ForceContext& context, const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& /*v*/,
                              Eigen::Matrix3Xd& force) const
 {
-  for (int i = 0; i < x.cols(); ++i)
-    force.col(i) += context.mass[i] * context.gravity;
+  shareLoop(context.workers, static_cast<int>(x.cols()), kParticlesPerVectorChunk, [&](int begin, int end) {
+    for (int i = begin; i < end; ++i)
+      force.col(i) += context.mass[i] * context.gravity;
+  });
 }
 
 void GravityForce::addEnergy(const ForceContext& context, const Eigen::Matrix3Xd& x, double& energy) const

@@ -60,6 +60,7 @@ private:
   mutable std::vector<int> end_start_;  // per particle p: its ends are ends_[end_start_[p] … end_start_[p + 1])
   mutable std::vector<int> ends_;       // 2 s for end i of spring s, 2 s + 1 for end j, ascending s
   mutable bool ends_valid_ = false;
+  mutable std::vector<double> spring_energy_;  // addEnergy() shared: per spring of springs_ its energy
 };
 
 }  // namespace core
