@@ -40,10 +40,11 @@ struct Spring
 /// The lecture's spring force on particle i (the force on j is its opposite):
 ///   f_i = ( k_e (|x_j − x_i| − L) + k_d (v_j − v_i)·d ) d,   d = (x_j − x_i) / |x_j − x_i|.
 /// Coincident particles (|x_j − x_i| = 0) have no direction and get no force.
-/// Inline: it runs once per spring in the explicit methods' innermost loop, where a call into the
-/// shared library cost as much as the arithmetic.
-inline Eigen::Vector3d springForce(const Eigen::Vector3d& xi, const Eigen::Vector3d& xj, const Eigen::Vector3d& vi,
-                                   const Eigen::Vector3d& vj, double rest_length, double stiffness, double damping)
+/// Inline, always: it runs once per spring in the explicit methods' innermost loops (one thread's
+/// and the shared one's), where a call into the shared library cost as much as the arithmetic.
+[[gnu::always_inline]] inline Eigen::Vector3d springForce(const Eigen::Vector3d& xi, const Eigen::Vector3d& xj,
+                                                          const Eigen::Vector3d& vi, const Eigen::Vector3d& vj,
+                                                          double rest_length, double stiffness, double damping)
 {
   const Eigen::Vector3d delta = xj - xi;
   const double length = delta.norm();
@@ -53,7 +54,8 @@ inline Eigen::Vector3d springForce(const Eigen::Vector3d& xi, const Eigen::Vecto
 }
 
 /// Potential energy of the elastic part [J]: k_e (|x_j − x_i| − L)^2 / 2 (inline for the same reason).
-inline double springEnergy(const Eigen::Vector3d& xi, const Eigen::Vector3d& xj, double rest_length, double stiffness)
+[[gnu::always_inline]] inline double springEnergy(const Eigen::Vector3d& xi, const Eigen::Vector3d& xj,
+                                                  double rest_length, double stiffness)
 {
   const double stretch = (xj - xi).norm() - rest_length;
   return 0.5 * stiffness * stretch * stretch;
