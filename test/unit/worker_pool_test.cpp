@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <atomic>
 #include <cstring>
 #include <random>
@@ -161,6 +162,38 @@ TEST(WorkerPool, SharedSpringForcesEqualTheOneThreadLoopBitForBit)
   Eigen::Matrix3Xd first = before;
   core::SpringForces(network.springs).addForces(alone, network.x, network.v, first);
   EXPECT_TRUE(sameBits(first, mended));
+}
+
+TEST(WorkerPool, SharedSpringForcesByChunksOfParticlesEqualTheOneThreadLoopBitForBit)
+{
+  // Springs between near indices (a strip 37 particles wide, in shuffled order): few cross the
+  // chunks of 2048 particles, so each chunk's thread computes the springs touching it and adds to
+  // its own particles; the boundary springs are computed by both chunks.
+  const int particles = 10000;
+  std::vector<core::Spring> springs;
+  for (int i = 0; i < particles; ++i)
+    for (int step : {1, 2, 37, 38})
+      if (i + step < particles)
+        springs.push_back(core::Spring{i, i + step, 0.1, 100.0 + i % 7, 0.01 * (i % 3), core::SpringClass::Stretch});
+  std::mt19937 random(3);
+  std::shuffle(springs.begin(), springs.end(), random);
+  for (core::Spring& spring : springs)
+    if (random() % 2) std::swap(spring.i, spring.j);  // either end may be the lower index
+  const Eigen::Matrix3Xd x = Eigen::Matrix3Xd::Random(3, particles);
+  const Eigen::Matrix3Xd v = Eigen::Matrix3Xd::Random(3, particles);
+  const Eigen::VectorXd mass = Eigen::VectorXd::Ones(particles);
+  const std::vector<char> pinned(particles, 0);
+  core::WorkerPool pool(2);
+  core::ForceContext alone{mass, pinned, Eigen::Vector3d::Zero(), {}, 0.0, nullptr};
+  core::ForceContext shared = alone;
+  shared.workers = &pool;
+  core::SpringForces forces(springs);
+  const Eigen::Matrix3Xd before = Eigen::Matrix3Xd::Random(3, particles);
+  Eigen::Matrix3Xd expected = before, got = before;
+  forces.addForces(alone, x, v, expected);
+  forces.addForces(shared, x, v, got);
+  EXPECT_GT(pool.sharedLoops(), 0u);
+  EXPECT_TRUE(sameBits(expected, got));
 }
 
 // Every method of the core (and `auto`) steps a 64 × 64 spring cloth (4096 particles, about 24,000

@@ -43,6 +43,34 @@ void SpringForces::addForcesShared(WorkerPool& workers, const Eigen::Matrix3Xd& 
 {
   const int particles = static_cast<int>(x.cols());
   indexEnds(particles);
+  if (by_chunks_)
+  {
+    // Raw pointers, read once: the stores into `force` would otherwise make the compiler reload
+    // every container's data pointer for each spring.
+    const double* const xs = x.data();
+    const double* const vs = v.data();
+    double* const fs = force.data();
+    const Spring* const all = springs_.data();
+    const int* const listed = chunk_springs_.data();
+    const int* const starts = chunk_start_.data();
+    workers.forEachChunk(particles, kParticlesPerChunk, [=](int begin, int end) {
+      for (int chunk = begin / kParticlesPerChunk; chunk * kParticlesPerChunk < end; ++chunk)
+      {
+        const int first = chunk * kParticlesPerChunk;
+        const int last = std::min(end, first + kParticlesPerChunk);
+        for (int e = starts[chunk]; e < starts[chunk + 1]; ++e)
+        {
+          const Spring s = all[listed[e]];
+          const Eigen::Vector3d f = springForce(Eigen::Vector3d::Map(xs + 3 * s.i), Eigen::Vector3d::Map(xs + 3 * s.j),
+                                                Eigen::Vector3d::Map(vs + 3 * s.i), Eigen::Vector3d::Map(vs + 3 * s.j),
+                                                s.rest_length, s.stiffness, s.damping);
+          if (s.i >= first && s.i < last) Eigen::Vector3d::Map(fs + 3 * s.i) += f;
+          if (s.j >= first && s.j < last) Eigen::Vector3d::Map(fs + 3 * s.j) -= f;
+        }
+      }
+    });
+    return;
+  }
   const int springs = static_cast<int>(springs_.size());
   workers.forEachChunk(springs, kSpringsPerChunk, [&](int begin, int end) {
     for (int k = begin; k < end; ++k)
@@ -72,10 +100,45 @@ void SpringForces::addForcesShared(WorkerPool& workers, const Eigen::Matrix3Xd& 
 
 void SpringForces::indexEnds(int particles) const
 {
-  if (ends_valid_ && static_cast<int>(end_start_.size()) == particles + 1) return;
+  const int chunks = (particles + kParticlesPerChunk - 1) / kParticlesPerChunk;
+  if (ends_valid_ && static_cast<int>(chunk_start_.size()) == chunks + 1 &&
+      (by_chunks_ || static_cast<int>(end_start_.size()) == particles + 1))
+    return;
+  const int springs = static_cast<int>(springs_.size());
+  auto chunk_of = [](int particle) { return particle / kParticlesPerChunk; };
+  // Counting sort of the springs by the chunks they touch (one or two), filled in spring order.
+  chunk_start_.assign(chunks + 1, 0);
+  for (const Spring& s : springs_)
+  {
+    ++chunk_start_[chunk_of(s.i) + 1];
+    if (chunk_of(s.j) != chunk_of(s.i)) ++chunk_start_[chunk_of(s.j) + 1];
+  }
+  for (int c = 0; c < chunks; ++c)
+    chunk_start_[c + 1] += chunk_start_[c];
+  if (!mode_decided_)
+  {
+    // Decided once, from the springs as first indexed (a tear only removes springs).
+    by_chunks_ = chunk_start_[chunks] - springs <= springs / 4;
+    mode_decided_ = true;
+  }
+  if (by_chunks_)
+  {
+    chunk_springs_.resize(chunk_start_[chunks]);
+    for (int k = 0; k < springs; ++k)
+    {
+      const Spring& s = springs_[k];
+      chunk_springs_[chunk_start_[chunk_of(s.i)]++] = k;
+      if (chunk_of(s.j) != chunk_of(s.i)) chunk_springs_[chunk_start_[chunk_of(s.j)]++] = k;
+    }
+    // The fill moved each start to the next chunk's: shift them back.
+    for (int c = chunks; c > 0; --c)
+      chunk_start_[c] = chunk_start_[c - 1];
+    chunk_start_[0] = 0;
+    ends_valid_ = true;
+    return;
+  }
   // Counting sort of the 2 S ends by particle; filled in spring order, so each particle's ends
   // are ascending.
-  const int springs = static_cast<int>(springs_.size());
   spring_force_.resize(springs);
   ends_.resize(2 * static_cast<std::size_t>(springs));
   end_start_.assign(particles + 1, 0);

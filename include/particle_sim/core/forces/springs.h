@@ -41,12 +41,16 @@ public:
   double maxStrain(const Eigen::Matrix3Xd& x) const override;
 
 private:
-  /// addForces() shared between threads: every spring's force into spring_force_, then every
-  /// particle sums those of its springs in the springs' order, which is the order (and so the
-  /// bits) of the one-thread loop.
+  /// addForces() shared between threads, by chunks of particles. Each chunk's thread computes
+  /// the force of every spring that touches the chunk, in spring order, and adds it to the ends
+  /// inside the chunk: each particle gets the one-thread loop's additions in its order (and so
+  /// its bits). A spring across two chunks is computed twice. When that would be more than a
+  /// quarter of the springs (a network numbered without locality), every spring's force goes
+  /// into spring_force_ once and every particle then sums its springs' in spring order.
   void addForcesShared(WorkerPool& workers, const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v,
                        Eigen::Matrix3Xd& force) const;
-  /// Rebuilds ends_ for `particles` particles when the springs or the particle count changed.
+  /// Rebuilds the chunks' spring lists (or ends_) for `particles` particles when the springs or
+  /// the particle count changed.
   void indexEnds(int particles) const;
 
   std::vector<Spring> built_;                     // as built (reset puts these constants back)
@@ -60,6 +64,10 @@ private:
   mutable std::vector<int> end_start_;  // per particle p: its ends are ends_[end_start_[p] … end_start_[p + 1])
   mutable std::vector<int> ends_;       // 2 s for end i of spring s, 2 s + 1 for end j, ascending s
   mutable bool ends_valid_ = false;
+  mutable bool by_chunks_ = false;  // chunk_springs_ in use (else the two passes); decided once
+  mutable bool mode_decided_ = false;
+  mutable std::vector<int> chunk_start_;       // per chunk c: its springs are chunk_springs_[chunk_start_[c] …)
+  mutable std::vector<int> chunk_springs_;     // per chunk, the springs touching it, ascending
   mutable std::vector<double> spring_energy_;  // addEnergy() shared: per spring of springs_ its energy
 };
 
