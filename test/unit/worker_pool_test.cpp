@@ -11,6 +11,7 @@
 #include <Eigen/Core>
 #include <algorithm>
 #include <atomic>
+#include <cstdint>
 #include <cstring>
 #include <random>
 #include <thread>
@@ -117,27 +118,44 @@ bool sameBits(const Eigen::Matrix3Xd& a, const Eigen::Matrix3Xd& b)
 {
   return a.size() == b.size() && std::memcmp(a.data(), b.data(), sizeof(double) * a.size()) == 0;
 }
+
+// Force contexts over `particles` unit masses, none pinned: one thread's, and two threads' shared.
+struct TwoContexts
+{
+  explicit TwoContexts(int particles) : mass(Eigen::VectorXd::Ones(particles)), pinned(particles, 0) {}
+  core::ForceContext alone() const { return {mass, pinned, Eigen::Vector3d::Zero(), {}, 0.0, nullptr}; }
+  core::ForceContext shared() { return {mass, pinned, Eigen::Vector3d::Zero(), {}, 0.0, &pool}; }
+
+  Eigen::VectorXd mass;
+  std::vector<char> pinned;
+  core::WorkerPool pool{2};
+};
+
+// `forces` added onto `before` (forces already there, gravity say, come first in both sums) at
+// (x, v) by one thread and by two give the same bits, and the two did share a loop.
+void expectSharedEqualsAlone(const core::SpringForces& forces, TwoContexts& contexts, const Eigen::Matrix3Xd& x,
+                             const Eigen::Matrix3Xd& v, const Eigen::Matrix3Xd& before)
+{
+  const std::uint64_t shared_before = contexts.pool.sharedLoops();
+  Eigen::Matrix3Xd expected = before, got = before;
+  forces.addForces(contexts.alone(), x, v, expected);
+  forces.addForces(contexts.shared(), x, v, got);
+  EXPECT_GT(contexts.pool.sharedLoops(), shared_before);
+  EXPECT_TRUE(sameBits(expected, got));
+}
 }  // namespace
 
 TEST(WorkerPool, SharedSpringForcesEqualTheOneThreadLoopBitForBit)
 {
   const int particles = 3000;
   const RandomNetwork network = randomNetwork(particles, 20000, 7);
-  const Eigen::VectorXd mass = Eigen::VectorXd::Ones(particles);
-  const std::vector<char> pinned(particles, 0);
-  core::WorkerPool pool(2);
-  core::ForceContext alone{mass, pinned, Eigen::Vector3d::Zero(), {}, 0.0, nullptr};
-  core::ForceContext shared = alone;
-  shared.workers = &pool;
-
+  TwoContexts contexts(particles);
+  const core::ForceContext alone = contexts.alone();
   core::SpringForces springs(network.springs);
-  // Forces already on the particles (gravity, say) come first in both sums.
   const Eigen::Matrix3Xd before = Eigen::Matrix3Xd::Random(3, particles);
-  Eigen::Matrix3Xd expected = before, got = before;
+  expectSharedEqualsAlone(springs, contexts, network.x, network.v, before);
+  Eigen::Matrix3Xd expected = before;
   springs.addForces(alone, network.x, network.v, expected);
-  springs.addForces(shared, network.x, network.v, got);
-  EXPECT_GT(pool.sharedLoops(), 0u);
-  EXPECT_TRUE(sameBits(expected, got));
   // Equal bits are a test of the order: the same springs summed in reverse order differ.
   std::vector<core::Spring> reversed(network.springs.rbegin(), network.springs.rend());
   Eigen::Matrix3Xd other_order = before;
@@ -150,15 +168,11 @@ TEST(WorkerPool, SharedSpringForcesEqualTheOneThreadLoopBitForBit)
   springs.tear(network.x, 6.0, torn);
   ASSERT_GT(torn.springs.size(), 100u);
   ASSERT_GT(springs.springs().size(), 2048u);
-  expected = before;
-  got = before;
-  springs.addForces(alone, network.x, network.v, expected);
-  springs.addForces(shared, network.x, network.v, got);
-  EXPECT_TRUE(sameBits(expected, got));
+  expectSharedEqualsAlone(springs, contexts, network.x, network.v, before);
   // And after mending, all of them again.
   springs.mend();
   Eigen::Matrix3Xd mended = before;
-  springs.addForces(shared, network.x, network.v, mended);
+  springs.addForces(contexts.shared(), network.x, network.v, mended);
   Eigen::Matrix3Xd first = before;
   core::SpringForces(network.springs).addForces(alone, network.x, network.v, first);
   EXPECT_TRUE(sameBits(first, mended));
@@ -181,19 +195,8 @@ TEST(WorkerPool, SharedSpringForcesByChunksOfParticlesEqualTheOneThreadLoopBitFo
     if (random() % 2) std::swap(spring.i, spring.j);  // either end may be the lower index
   const Eigen::Matrix3Xd x = Eigen::Matrix3Xd::Random(3, particles);
   const Eigen::Matrix3Xd v = Eigen::Matrix3Xd::Random(3, particles);
-  const Eigen::VectorXd mass = Eigen::VectorXd::Ones(particles);
-  const std::vector<char> pinned(particles, 0);
-  core::WorkerPool pool(2);
-  core::ForceContext alone{mass, pinned, Eigen::Vector3d::Zero(), {}, 0.0, nullptr};
-  core::ForceContext shared = alone;
-  shared.workers = &pool;
-  core::SpringForces forces(springs);
-  const Eigen::Matrix3Xd before = Eigen::Matrix3Xd::Random(3, particles);
-  Eigen::Matrix3Xd expected = before, got = before;
-  forces.addForces(alone, x, v, expected);
-  forces.addForces(shared, x, v, got);
-  EXPECT_GT(pool.sharedLoops(), 0u);
-  EXPECT_TRUE(sameBits(expected, got));
+  TwoContexts contexts(particles);
+  expectSharedEqualsAlone(core::SpringForces(springs), contexts, x, v, Eigen::Matrix3Xd::Random(3, particles));
 }
 
 // Every method of the core (and `auto`) steps a 64 × 64 spring cloth (4096 particles, about 24,000
