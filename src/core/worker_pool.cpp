@@ -42,7 +42,7 @@ void WorkerPool::start()
 {
   workers_.reserve(threads_ - 1);
   for (int worker = 1; worker < threads_; ++worker)
-    workers_.emplace_back([this, worker] { work(worker); });
+    workers_.emplace_back([this] { work(); });
 }
 
 void WorkerPool::run(int items, int chunk, void* callable, Trampoline trampoline)
@@ -98,7 +98,7 @@ void WorkerPool::takeChunks()
   }
 }
 
-void WorkerPool::work(int /*worker*/)
+void WorkerPool::work()
 {
   std::uint64_t seen = 0;
   for (;;)

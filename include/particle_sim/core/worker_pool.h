@@ -57,7 +57,7 @@ private:
   using Trampoline = void (*)(void*, int, int);
   void run(int items, int chunk, void* callable, Trampoline trampoline);
   void start();
-  void work(int worker);
+  void work();
   // Takes one of the current loop's open places; false when the loop is closed (its caller is done
   // with every chunk, or the other workers took the places).
   bool join();
