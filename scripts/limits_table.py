@@ -36,7 +36,7 @@ RANGE_TEXT = {
     "kGlobalDamping": "global damping (`world.global_damping`, live `global_damping`)",
     "kRealTimeFactor": "real-time factor (`~real_time_factor`, live; 0 = as fast as possible)",
     "kPublishRate": "publish rate (`~rate`, live)",
-    "kMarkerPoints": "points of one particle marker (`~max_marker_points`; more live particles are decimated evenly)",
+    "kMarkerPoints": "points of all particle markers of one tick together (`~max_marker_points`; more live particles are decimated evenly)",
     "kContactThickness": "distance a body keeps from ground and spheres (`contact_thickness`)",
     "kTearStrain": "strain past which a spring breaks (`tear_strain` of ropes, cloth, jelly and networks; 0 = never)",
     "kSelfCollisionThickness": "distance a surface keeps from itself and other colliding surfaces (`self_collision` "

@@ -21,6 +21,30 @@ int decimationStride(int count, int max_points)
   return max_points > 0 && count > max_points ? (count + max_points - 1) / max_points : 1;
 }
 
+std::vector<int> decimationStrides(const std::vector<int>& counts, int max_points)
+{
+  // Shares that are fair to the smallest: from the smallest count up, each body may have an equal
+  // part of the points still unspent; a body with fewer spends only what it draws, leaving the rest
+  // to the larger ones.
+  std::vector<int> strides(counts.size(), 1);
+  std::vector<std::size_t> order(counts.size());
+  for (std::size_t b = 0; b < order.size(); ++b)
+    order[b] = b;
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return counts[a] < counts[b]; });
+  long long unspent = max_points;
+  long long bodies_left =
+      static_cast<long long>(std::count_if(counts.begin(), counts.end(), [](int c) { return c > 0; }));
+  for (const std::size_t b : order)
+  {
+    if (counts[b] <= 0) continue;
+    const int share = static_cast<int>(std::max(1LL, unspent / bodies_left));
+    strides[b] = decimationStride(counts[b], share);
+    unspent -= (counts[b] + strides[b] - 1) / strides[b];
+    --bodies_left;
+  }
+  return strides;
+}
+
 std_msgs::ColorRGBA strainColor(double strain, double max)
 {
   // Blue -> green -> red as s goes 0 -> 1/2 -> 1.
@@ -119,7 +143,19 @@ visualization_msgs::Marker surfaceMarker(const core::SpringNetworkBody& body, co
   return surface;
 }
 
-void addSpringBody(const core::SpringNetworkBody& body, const ros::Time& stamp, const MarkerStyle& style,
+// The particles a body's particle marker would draw before decimation: an emitter's live ones, a
+// network's free ones; none for cloth and jelly, drawn by their surface.
+int drawnParticleCount(const core::Body& body)
+{
+  if (body.kind() == core::BodyKind::Emitter) return body.particles().size();
+  if (body.kind() != core::BodyKind::SpringNetwork) return 0;
+  const auto& network = static_cast<const core::SpringNetworkBody&>(body);
+  const bool has_surface = network.shape() == core::NetworkShape::Cloth || network.shape() == core::NetworkShape::Jelly;
+  return has_surface ? 0 : network.particles().size() - network.pinnedCount();
+}
+
+// `stride`: every how many free particles one is drawn (1 for cloth and jelly).
+void addSpringBody(const core::SpringNetworkBody& body, int stride, const ros::Time& stamp, const MarkerStyle& style,
                    visualization_msgs::MarkerArray& out)
 {
   const core::ParticlePool& p = body.particles();
@@ -135,8 +171,6 @@ void addSpringBody(const core::SpringNetworkBody& body, const ros::Time& stamp, 
   pins.type = visualization_msgs::Marker::SPHERE_LIST;
   pins.scale.x = pins.scale.y = pins.scale.z = 2.0 * style.particle_size;
   pins.color = rgba(1.0f, 0.25f, 0.2f);
-  // Free particles beyond style.max_points: every k-th of them.
-  const int stride = has_surface ? 1 : decimationStride(n - body.pinnedCount(), style.max_points);
   free.points.reserve(has_surface ? 0 : n / stride + 1);
   // Cloth and jelly are drawn by their surface; only their pinned particles get spheres, and, once
   // they have torn, the free particles a tear left in no surface triangle (still held by springs).
@@ -199,15 +233,14 @@ void addSpringBody(const core::SpringNetworkBody& body, const ros::Time& stamp, 
   out.markers.push_back(std::move(pins));
 }
 
-void addEmitter(const core::EmitterBody& emitter, const ros::Time& stamp, const MarkerStyle& style,
+// `stride`: every how many live particles one is drawn.
+void addEmitter(const core::EmitterBody& emitter, int stride, const ros::Time& stamp, const MarkerStyle& style,
                 visualization_msgs::MarkerArray& out)
 {
   const core::ParticlePool& p = emitter.particles();
   visualization_msgs::Marker marker = makeMarker(emitter.name(), kParticlesMarkerId, stamp, style);
   marker.type = visualization_msgs::Marker::POINTS;
   marker.scale.x = marker.scale.y = style.particle_size;
-  // Every k-th live particle when there are more than style.max_points.
-  const int stride = decimationStride(p.size(), style.max_points);
   marker.points.reserve(p.size() / stride + 1);
   marker.colors.reserve(p.size() / stride + 1);
   const double lifetime = emitter.definition().lifetime;
@@ -287,12 +320,19 @@ visualization_msgs::MarkerArray buildMarkers(const core::World& world, const ros
       collider(visualization_msgs::Marker::SPHERE, capsule.center + end * capsule.half_length * axis,
                Eigen::Quaterniond::Identity(), Eigen::Vector3d::Constant(diameter));
   }
+  // The bodies' particle markers share style.max_points between them.
+  std::vector<int> counts;
+  counts.reserve(world.bodies().size());
   for (const auto& body : world.bodies())
+    counts.push_back(drawnParticleCount(*body));
+  const std::vector<int> strides = decimationStrides(counts, style.max_points);
+  for (std::size_t b = 0; b < world.bodies().size(); ++b)
   {
-    if (body->kind() == core::BodyKind::Emitter)
-      addEmitter(static_cast<const core::EmitterBody&>(*body), stamp, style, out);
-    else if (body->kind() == core::BodyKind::SpringNetwork)
-      addSpringBody(static_cast<const core::SpringNetworkBody&>(*body), stamp, style, out);
+    const core::Body& body = *world.bodies()[b];
+    if (body.kind() == core::BodyKind::Emitter)
+      addEmitter(static_cast<const core::EmitterBody&>(body), strides[b], stamp, style, out);
+    else if (body.kind() == core::BodyKind::SpringNetwork)
+      addSpringBody(static_cast<const core::SpringNetworkBody&>(body), strides[b], stamp, style, out);
   }
   return out;
 }

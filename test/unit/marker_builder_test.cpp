@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <set>
 
@@ -229,6 +230,76 @@ TEST(MarkerBuilder, AParticleMarkerHoldsAtMostMaxPointsEveryKthParticle)
   const auto markers = ros_interface::buildMarkers(net_world, ros::Time(1.0), style, false, {}).markers;
   EXPECT_EQ(markers[ros_interface::kParticlesMarkerId].points.size(), 3u);
   EXPECT_EQ(markers[ros_interface::kPinsMarkerId].points.size(), 1u);
+}
+
+TEST(MarkerBuilder, BodiesShareMaxPointsFairlyAndASmallBodyIsDrawnWhole)
+{
+  // A fountain of about 100 live particles beside a 10-particle network with one pin (9 free), and
+  // 40 points for both: the network fits in its half and is drawn whole; the fountain gets the 31
+  // points left, every ⌈n / 31⌉-th particle.
+  core::World world{core::WorldDef{}};
+  core::EmitterDef e;
+  e.name = "f";
+  e.rate = 100.0;
+  e.lifetime = 10.0;
+  ASSERT_TRUE(world.addEmitter(e).ok);
+  core::SpringNetworkDef net;
+  net.name = "n";
+  for (int i = 0; i < 10; ++i)
+  {
+    net.positions.emplace_back(0.1 * i, 0.0, 1.0);
+    net.masses.push_back(0.1);
+  }
+  net.pins = {0};
+  ASSERT_TRUE(world.addSpringNetwork(net).ok);
+  for (int k = 0; k < 1000; ++k)
+    world.step();
+  const int live = world.findBody("f")->particles().size();
+  ASSERT_GT(live, 90);
+  ros_interface::MarkerStyle style;
+  style.max_points = 40;
+  const auto markers = ros_interface::buildMarkers(world, ros::Time(1.0), style, false, {}).markers;
+  std::size_t fountain_points = 0, network_points = 0;
+  for (const Marker& m : markers)
+  {
+    if (m.ns == "f") fountain_points += m.points.size();
+    if (m.ns == "n" && m.id == ros_interface::kParticlesMarkerId) network_points += m.points.size();
+  }
+  EXPECT_EQ(network_points, 9u);
+  const int stride = (live + 30) / 31;  // ⌈live / 31⌉
+  EXPECT_EQ(fountain_points, static_cast<std::size_t>((live + stride - 1) / stride));
+  EXPECT_LE(fountain_points + network_points, 40u);
+}
+
+TEST(MarkerBuilder, SharedStridesStayWithinTheBudgetAndDrawWholeEveryBodyUnderAnEqualShare)
+{
+  // Bodies of many sizes against many budgets, checked against what the strides promise: the
+  // points drawn add up to at most the budget (when it allows one point per body), a body no larger
+  // than an equal share is drawn whole, and no stride is larger than the one an equal share gives.
+  const std::vector<int> counts = {0, 7, 100000, 250, 3, 99999, 1, 40000, 12, 0, 600};
+  const int bodies = static_cast<int>(std::count_if(counts.begin(), counts.end(), [](int c) { return c > 0; }));
+  for (int budget : {9, 10, 37, 1000, 20000, 200000, 300000, 10000000})
+  {
+    const std::vector<int> strides = ros_interface::decimationStrides(counts, budget);
+    ASSERT_EQ(strides.size(), counts.size());
+    long long drawn = 0;
+    for (std::size_t b = 0; b < counts.size(); ++b)
+    {
+      ASSERT_GE(strides[b], 1);
+      drawn += (counts[b] + strides[b] - 1) / strides[b];
+      if (counts[b] <= budget / bodies)
+      {
+        EXPECT_EQ(strides[b], 1) << "count " << counts[b] << " budget " << budget;
+      }
+      EXPECT_LE(strides[b], ros_interface::decimationStride(counts[b], std::max(1, budget / bodies)));
+    }
+    if (budget >= bodies)
+    {
+      EXPECT_LE(drawn, budget) << "budget " << budget;
+    }
+  }
+  // One body keeps the single-marker rule.
+  EXPECT_EQ(ros_interface::decimationStrides({1000}, 30), std::vector<int>{34});
 }
 
 TEST(MarkerBuilder, RopeIsALineStripWithFreeAndPinnedParticlesApart)

@@ -20,9 +20,9 @@ struct MarkerStyle
   double line_width = 0.02;       ///< [m] rope and spring lines
   bool color_by_strain = false;   ///< colour cloth and jelly surfaces by strain instead of shading them
   double strain_color_max = 0.1;  ///< [-] strain drawn fully red (0 is blue)
-  /// Most points in one particle marker (an emitter's POINTS, a network's free particles): a body
-  /// with more live particles is drawn by every k-th of them, k = ⌈count / max_points⌉ (evenly in
-  /// index order, the same particles every tick while the count holds).
+  /// Most points of all particle markers of one array together (emitters' POINTS, networks' free
+  /// particles), shared by decimationStrides(): a body over its share is drawn by every k-th of its
+  /// particles (evenly in index order, the same particles every tick while the counts hold).
   int max_points = 200000;
 };
 
@@ -38,7 +38,8 @@ struct MarkerStyle
 ///     vertex normal (or coloured by strain when style.color_by_strain); rviz draws triangle lists
 ///     from both sides; and their pins;
 ///   - an emitter with no live particle gets a DELETE instead of an empty POINTS list;
-///   - a particle marker holds at most style.max_points points (decimated evenly);
+///   - the particle markers together hold at most style.max_points points (decimated evenly, at
+///     least one point per body that has particles);
 ///   - colliders are drawn in the namespace "_colliders": spheres, boxes (CUBE), and capsules as a
 ///     CYLINDER (ids in that order) between two SPHEREs.
 /// Every marker passes rviz's checks: unit quaternion, non-zero scale, alpha > 0, one colour per
@@ -49,6 +50,13 @@ visualization_msgs::MarkerArray buildMarkers(const core::World& world, const ros
 /// Every k-th of `count` particles keeps a drawing within `max_points`: k = ⌈count / max_points⌉
 /// (1 when they fit).
 int decimationStride(int count, int max_points);
+
+/// Strides that draw bodies of `counts` particles within `max_points` together, fairly to the
+/// smallest: from the smallest count up, each body gets an equal part of the points the smaller
+/// ones left, and is drawn whole when it fits in it (so a rope beside a million-particle fountain
+/// keeps all its particles). Each stride is decimationStride(count, share) with share ≥ 1; a body
+/// with no particles gets 1.
+std::vector<int> decimationStrides(const std::vector<int>& counts, int max_points);
 
 /// Colour of a strain (l − L)/L: blue at 0 (or compressed), through green, to red at `max`.
 std_msgs::ColorRGBA strainColor(double strain, double max);
