@@ -37,6 +37,7 @@ NodeSettings readNodeSettings(const ros::NodeHandle& private_node)
   private_node.param(names::kPublishClockParam, s.publish_clock, s.publish_clock);
   private_node.param(names::kParticleSizeParam, s.particle_size, s.particle_size);
   private_node.param(names::kMaxMarkerPointsParam, s.max_marker_points, s.max_marker_points);
+  private_node.param(names::kPublishingThreadParam, s.publishing_thread, s.publishing_thread);
   private_node.param(names::kPointsSurfaceOnlyParam, s.points_surface_only, s.points_surface_only);
   private_node.param(names::kDragMarkersParam, s.drag_markers, s.drag_markers);
   private_node.param(names::kMaxParticlesParam, s.max_particles_per_body, s.max_particles_per_body);

@@ -44,6 +44,13 @@ bool answer(Response& res, const core::Status& status)
   res.message = toMessageText(status.message);
   return true;
 }
+
+// The publishing thread's send of one message (held until sent, then let go).
+template <class Message>
+PublishingThread::Send sendOf(const ros::Publisher& publisher, boost::shared_ptr<Message> message)
+{
+  return [publisher, message = std::move(message)] { publisher.publish(message); };
+}
 }  // namespace
 
 SimNode::SimNode(ros::NodeHandle node, ros::NodeHandle private_node, const std::string& name)
@@ -229,6 +236,7 @@ void SimNode::releaseInterfaces()
   step_queue_.disable();
   step_queue_.clear();
 
+  publishing_.stop();  // sends the batch in progress, then nothing more
   drag_markers_.reset();
   reconfigure_.reset();
   diagnostics_.reset();
@@ -435,20 +443,6 @@ void SimNode::publish()
     last_tf_time_ = sim_time;
   }
 
-  // Cloth and jelly meshes, one message per body, only when someone listens.
-  if (meshes_pub_.getNumSubscribers() > 0)
-  {
-    for (const auto& body : world_->bodies())
-    {
-      if (body->kind() != core::BodyKind::SpringNetwork) continue;
-      const auto& spring_body = static_cast<const core::SpringNetworkBody&>(*body);
-      // Every body built with a surface, also one whose triangles all tore away: its empty mesh
-      // replaces the last one it had.
-      if (spring_body.definition().triangles.empty()) continue;
-      meshes_pub_.publish(boost::make_shared<ClothMesh>(buildClothMesh(spring_body, stamp, settings_.frame_id)));
-    }
-  }
-
   publishPinWrenches(stamp);
   // Each active grasp's wrench in its gripper frame, only while someone listens.
   for (const GraspState& grasp : grasps_.all())
@@ -457,11 +451,6 @@ void SimNode::publish()
     if (grasp.released || publisher == grasp_wrench_pubs_.end() || publisher->second.getNumSubscribers() == 0) continue;
     publisher->second.publish(boost::make_shared<geometry_msgs::WrenchStamped>(buildGraspWrench(grasp, stamp)));
   }
-
-  // Every body's particles as one point cloud, only when someone listens.
-  if (points_pub_.getNumSubscribers() > 0)
-    points_pub_.publish(boost::make_shared<sensor_msgs::PointCloud2>(
-        buildPointCloud(*world_, stamp, settings_.frame_id, settings_.points_surface_only)));
 
   // Status, only when someone listens. Messages are published as shared pointers and never
   // touched again, so that a nodelet in the same process gets them without a copy.
@@ -474,13 +463,60 @@ void SimNode::publish()
     status_pub_.publish(status);
   }
 
-  // Markers are only built when someone listens.
-  if (markers_pub_.getNumSubscribers() == 0) return;
-  auto markers = boost::make_shared<visualization_msgs::MarkerArray>(
-      buildMarkers(*world_, stamp, style_, delete_all_pending_, removed_bodies_));
-  markers_pub_.publish(markers);
-  delete_all_pending_ = false;
-  removed_bodies_.clear();
+  publishHeavyMessages(stamp);
+}
+
+void SimNode::publishHeavyMessages(const ros::Time& stamp)
+{
+  // Markers, meshes and point clouds are built here, each only when someone listens, and sent by
+  // the publishing thread (~publishing_thread), where roscpp serialises them and writes them to the
+  // subscribers' sockets. While it still sends the last tick's, this tick's are skipped rather than
+  // queued: the physics never waits for a subscriber.
+  const bool markers_wanted = markers_pub_.getNumSubscribers() > 0;
+  const bool meshes_wanted = meshes_pub_.getNumSubscribers() > 0;
+  const bool points_wanted = points_pub_.getNumSubscribers() > 0;
+  if (!markers_wanted && !meshes_wanted && !points_wanted) return;
+  if (settings_.publishing_thread && publishing_.busy())
+  {
+    ++diagnostics_window_.ticks_skipped;
+    return;
+  }
+  ++diagnostics_window_.ticks_sent;
+
+  // Cloth and jelly meshes, one message per body.
+  if (meshes_wanted)
+  {
+    for (const auto& body : world_->bodies())
+    {
+      if (body->kind() != core::BodyKind::SpringNetwork) continue;
+      const auto& spring_body = static_cast<const core::SpringNetworkBody&>(*body);
+      // Every body built with a surface, also one whose triangles all tore away: its empty mesh
+      // replaces the last one it had.
+      if (spring_body.definition().triangles.empty()) continue;
+      sends_.push_back(
+          sendOf(meshes_pub_, boost::make_shared<ClothMesh>(buildClothMesh(spring_body, stamp, settings_.frame_id))));
+    }
+  }
+  // Every body's particles as one point cloud.
+  if (points_wanted)
+    sends_.push_back(sendOf(points_pub_, boost::make_shared<sensor_msgs::PointCloud2>(buildPointCloud(
+                                             *world_, stamp, settings_.frame_id, settings_.points_surface_only))));
+  if (markers_wanted)
+  {
+    sends_.push_back(sendOf(markers_pub_, boost::make_shared<visualization_msgs::MarkerArray>(buildMarkers(
+                                              *world_, stamp, style_, delete_all_pending_, removed_bodies_))));
+    delete_all_pending_ = false;
+    removed_bodies_.clear();
+  }
+
+  if (settings_.publishing_thread)
+  {
+    publishing_.submit(sends_);
+    return;
+  }
+  for (const PublishingThread::Send& send : sends_)
+    send();
+  sends_.clear();
 }
 
 void SimNode::publishPinWrenches(const ros::Time& stamp)
@@ -910,6 +946,8 @@ void SimNode::produceDiagnostics(diagnostic_updater::DiagnosticStatusWrapper& st
   loop.paused = paused_;
   loop.paused_in_window = w.paused;
   loop.stability_events = events_since_diagnostics_;
+  loop.ticks_sent = w.ticks_sent;
+  loop.ticks_skipped = w.ticks_skipped;
   buildDiagnostics(*world_, loop, settings_.diagnostic_max_strain, stat);
   events_since_diagnostics_ = 0;
 }

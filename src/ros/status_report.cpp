@@ -234,6 +234,9 @@ void buildDiagnostics(const core::World& world, const LoopFigures& loop, double 
   addCollisionFigures(world, stat);
   stat.add("frozen bodies", static_cast<int>(frozen.size()));
   stat.add("stability events since last report", loop.stability_events);
+  stat.add("ticks of markers, meshes and clouds sent since last report", loop.ticks_sent);
+  stat.add("ticks of markers, meshes and clouds skipped since last report (publishing thread busy)",
+           loop.ticks_skipped);
 }
 
 std::string statusLine(const core::World& world, double real_time_factor, double step_time_us, bool paused)

@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 #include <ros/ros.h>
 
+#include <atomic>
+
 #include "node_listener.h"
 #include "particle_sim/SetSpringConstants.h"
 #include "particle_sim/SpawnRope.h"
@@ -120,6 +122,28 @@ TEST_F(DiagnosticsTest, OkWhenKeepingUpThenWarnUnderLoadThenErrorAfterAFrozenBod
   EXPECT_FALSE(probe_.body("sheet").frozen);  // the rest of the world goes on
   status = waitForDiagnostic([](const DiagnosticStatus&) { return true; });
   EXPECT_EQ(status.level, DiagnosticStatus::ERROR) << "a frozen body stays an ERROR";
+}
+
+TEST_F(DiagnosticsTest, CountTheTicksWhoseMarkersWereSentAndOnlyWhileSomeoneSubscribes)
+{
+  // Nobody subscribes to markers, meshes or clouds: no tick sends them, none skips them.
+  const auto count = [](const DiagnosticStatus& s, const char* what) {
+    const std::string text = value(s, std::string("ticks of markers, meshes and clouds ") + what);
+    return text.empty() ? -1LL : std::stoll(text);
+  };
+  DiagnosticStatus status = waitForDiagnostic([](const DiagnosticStatus&) { return true; });
+  EXPECT_EQ(count(status, "sent since last report"), 0);
+  EXPECT_EQ(count(status, "skipped since last report (publishing thread busy)"), 0);
+
+  // A marker subscriber: the ticks of a report send them (the 8 x 8 cloth is light enough for the
+  // publishing thread to keep up), and arrays arrive.
+  std::atomic<int> arrays{0};
+  ros::Subscriber markers = nh_.subscribe<visualization_msgs::MarkerArray>(
+      "/particle_sim/markers", 10, [&arrays](const visualization_msgs::MarkerArray::ConstPtr&) { ++arrays; });
+  status = waitForDiagnostic([&](const DiagnosticStatus& s) { return count(s, "sent since last report") > 0; });
+  EXPECT_GT(count(status, "sent since last report"), 0);
+  EXPECT_GE(count(status, "skipped since last report (publishing thread busy)"), 0);
+  EXPECT_TRUE(waitForWall([&] { return arrays.load() > 0; }));
 }
 
 int main(int argc, char** argv)

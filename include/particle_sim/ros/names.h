@@ -48,6 +48,7 @@ constexpr const char* kFrameOffsetParam = "frame_offset";
 constexpr const char* kPublishClockParam = "publish_clock";
 constexpr const char* kParticleSizeParam = "particle_size";
 constexpr const char* kMaxMarkerPointsParam = "max_marker_points";
+constexpr const char* kPublishingThreadParam = "publishing_thread";
 constexpr const char* kPointsSurfaceOnlyParam = "points_surface_only";
 constexpr const char* kDragMarkersParam = "drag_markers";
 constexpr const char* kMaxParticlesParam = "max_particles_per_body";

@@ -25,10 +25,11 @@ struct NodeSettings
   bool publish_clock = true;                           ///< ~publish_clock: publish /clock from sim time
   double particle_size = 0.05;                         ///< ~particle_size [m]
   int max_marker_points = 200000;                      ///< ~max_marker_points: most points of one particle marker
-  bool drag_markers = true;                            ///< ~drag_markers: drag particles in rviz (~drag)
-  bool points_surface_only = false;                    ///< ~points_surface_only: ~points without a jelly's interior
-  int max_particles_per_body = 0;                      ///< ~max_particles_per_body; 0 = the scene's value
-  int max_particles_per_world = 0;                     ///< ~max_particles_per_world; 0 = the scene's value
+  bool publishing_thread = true;     ///< ~publishing_thread: send markers, meshes and clouds from a thread of their own
+  bool drag_markers = true;          ///< ~drag_markers: drag particles in rviz (~drag)
+  bool points_surface_only = false;  ///< ~points_surface_only: ~points without a jelly's interior
+  int max_particles_per_body = 0;    ///< ~max_particles_per_body; 0 = the scene's value
+  int max_particles_per_world = 0;   ///< ~max_particles_per_world; 0 = the scene's value
   int threads = -1;  ///< ~threads: threads of the physics step, 0 = one per core; -1 = the scene's world.threads
   double status_period = 1.0;          ///< ~status_period [s] of wall time between status lines; 0 = none
   bool color_by_strain = false;        ///< ~color_by_strain: colour cloth and jelly by strain

@@ -39,6 +39,7 @@
 #include "particle_sim/ros/marker_builder.h"
 #include "particle_sim/ros/master_link.h"
 #include "particle_sim/ros/parameters.h"
+#include "particle_sim/ros/publishing_thread.h"
 #include "particle_sim/ros/reconfigure.h"
 #include "particle_sim/ros/status_report.h"
 #include "particle_sim/scene/scene.h"
@@ -113,6 +114,8 @@ private:
   // many ran.
   std::uint64_t stepPhysics(std::uint64_t steps, ServeRequests serve);
   void publish();
+  // Markers, meshes and point clouds: built here, sent by the publishing thread.
+  void publishHeavyMessages(const ros::Time& stamp);
   // ~pin_wrench/<body> of every body that has pins, each built only while subscribed.
   void publishPinWrenches(const ros::Time& stamp);
   void printStatus();
@@ -155,7 +158,9 @@ private:
     double sim_time_at_start = 0.0;
     std::uint64_t steps = 0;
     double step_seconds = 0.0;
-    bool paused = false;  // paused or stepped by ~step at some time in the window
+    bool paused = false;          // paused or stepped by ~step at some time in the window
+    long long ticks_sent = 0;     // ticks whose markers, meshes and clouds were sent
+    long long ticks_skipped = 0;  // ticks that skipped them: the publishing thread was busy
     void restart(double sim_time, bool is_paused)
     {
       start = std::chrono::steady_clock::now();
@@ -163,6 +168,7 @@ private:
       steps = 0;
       step_seconds = 0.0;
       paused = is_paused;
+      ticks_sent = ticks_skipped = 0;
     }
   };
 
@@ -187,6 +193,10 @@ private:
   std::map<std::string, std::string> pin_wrench_topic_owner_;
   ros::Publisher clock_pub_;
   ros::Publisher status_pub_;
+  // Sends markers, meshes and clouds (~publishing_thread); after the publishers, so that it stops
+  // before they go. sends_ is the batch being built, its capacity kept from tick to tick.
+  PublishingThread publishing_;
+  std::vector<PublishingThread::Send> sends_;
   core::IntegratorDef default_integrator_;  // of bodies spawned by services (dynamic_reconfigure "integrator")
   BodyMaterials body_materials_;            // ~status: the material of each body built of one
 

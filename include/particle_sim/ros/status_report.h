@@ -50,6 +50,10 @@ struct LoopFigures
   bool paused = false;                   ///< paused now
   bool paused_in_window = false;         ///< paused, or stepped by ~step, at some time in the window
   long long stability_events = 0;        ///< stability events of every body since the last report
+  /// Ticks since the last report whose markers, meshes and clouds were sent, and ticks that had a
+  /// subscriber for them but skipped them because the publishing thread was still sending.
+  long long ticks_sent = 0;
+  long long ticks_skipped = 0;
 };
 
 /// /diagnostics' "simulation" status: OK "running" or "paused"; ERROR naming frozen bodies; WARN
