@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "particle_sim/core/validation.h"
+#include "particle_sim/core/worker_pool.h"
 
 namespace particle_sim
 {
@@ -175,15 +176,15 @@ void respondMoving(const ContactDef& contact, const ColliderMotion& motion, cons
   respond(contact, n, depth, x, relative, start_vn - surface_velocity.dot(n));
   v = relative + surface_velocity;
 }
-}  // namespace
 
-void resolveCollisions(const Environment& env, ParticlePool& pool, const Eigen::Matrix3Xd* start_velocity,
-                       const Eigen::Matrix3Xd* start_position, double thickness, double h)
+// resolveCollisions for the particles [begin, end).
+void resolveCollisionsOf(int begin, int end, const Environment& env, ParticlePool& pool,
+                         const Eigen::Matrix3Xd* start_velocity, const Eigen::Matrix3Xd* start_position,
+                         double thickness, double h)
 {
   // The contact thickness grows every collider: the ground rises by it, spheres get thicker.
   const double ground_height = env.ground.height + thickness;
-  const int n = pool.size();
-  for (int i = 0; i < n; ++i)
+  for (int i = begin; i < end; ++i)
   {
     if (pool.inverse_mass[i] == 0.0) continue;  // pinned particles follow their target
     auto x = pool.position.col(i);
@@ -285,6 +286,19 @@ void resolveCollisions(const Environment& env, ParticlePool& pool, const Eigen::
       respondMoving(capsule.contact, capsule.motion, capsule.center, normal, radius - distance, x, v, start_vn(normal));
     }
   }
+}
+
+}  // namespace
+
+void resolveCollisions(const Environment& env, ParticlePool& pool, const Eigen::Matrix3Xd* start_velocity,
+                       const Eigen::Matrix3Xd* start_position, double thickness, double h, WorkerPool* workers)
+{
+  // No collider, no pass over the particles.
+  if (!env.ground.enabled && env.spheres.empty() && env.boxes.empty() && env.capsules.empty()) return;
+  // Each particle is handled alone, so the particles may be shared between threads: the same bits.
+  shareLoop(workers, pool.size(), kParticlesPerVectorChunk, [&](int begin, int end) {
+    resolveCollisionsOf(begin, end, env, pool, start_velocity, start_position, thickness, h);
+  });
 }
 
 }  // namespace core

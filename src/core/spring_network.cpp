@@ -182,6 +182,7 @@ SpringNetworkBody::SpringNetworkBody(const SpringNetworkDef& def, const Integrat
   particles_.resize(n, n);
   mass_.resize(n);
   pinned_.assign(n, 0);
+  pinned_indices_.reserve(n);
   pin_target_.setZero(3, n);
   saved_position_.setZero(3, n);
   saved_velocity_.setZero(3, n);
@@ -294,10 +295,7 @@ Status SpringNetworkBody::unpin(int index)
 
 int SpringNetworkBody::pinnedCount() const
 {
-  int count = 0;
-  for (char p : pinned_)
-    count += p;
-  return count;
+  return static_cast<int>(pinned_indices_.size());
 }
 
 int SpringNetworkBody::nearestParticle(const Eigen::Vector3d& point) const
@@ -449,9 +447,8 @@ void SpringNetworkBody::step(double dt, const Environment& env)
     for (int k = 0; k < substeps; ++k)
     {
       const double s = static_cast<double>(k + 1) / substeps;
-      for (int i = 0; i < n; ++i)
+      for (const int i : pinned_indices_)
       {
-        if (!pinned_[i]) continue;
         pin_target_.col(i) =
             k + 1 == substeps
                 ? Eigen::Vector3d(step_target_.col(i))  // exactly on target at the end
@@ -593,17 +590,14 @@ SpringNetworkBody::PinLoad SpringNetworkBody::pinLoad(const std::vector<int>& in
 void SpringNetworkBody::substep(double h, IntegratorType type, const Environment& env)
 {
   ParticlePool& p = particles_;
-  const int n = p.size();
   // Boxes and capsules (thin ones, moving ones) are swept: each particle's path over the substep.
   const bool swept = !env.boxes.empty() || !env.capsules.empty();
   if (swept) substep_start_ = p.position;  // preallocated: same size
 
   // Pinned particles travel in a straight line to their target: give them that velocity now
   // (every integrator then moves them there, as their acceleration is 0).
-  for (int i = 0; i < n; ++i)
-  {
-    if (pinned_[i]) p.velocity.col(i) = (pin_target_.col(i) - p.position.col(i)) / h;
-  }
+  for (const int i : pinned_indices_)
+    p.velocity.col(i) = (pin_target_.col(i) - p.position.col(i)) / h;
 
   // Implicit methods hold the particles resting on colliders inside their solve (stuck, or sliding
   // along the surface with Coulomb friction).
@@ -614,17 +608,15 @@ void SpringNetworkBody::substep(double h, IntegratorType type, const Environment
   last_solve_ = method(type).step(h, *this, integrator_);
 
   // Pinned particles end exactly on their target.
-  for (int i = 0; i < n; ++i)
-  {
-    if (pinned_[i]) p.position.col(i) = pin_target_.col(i);
-  }
+  for (const int i : pinned_indices_)
+    p.position.col(i) = pin_target_.col(i);
   // Restriction forces: collisions, strain limiting, and collisions again for what it moved.
   const Eigen::Matrix3Xd* path_start = swept ? &substep_start_ : nullptr;
-  resolveCollisions(env, p, &saved_velocity_, path_start, def_.contact_thickness, h);
+  resolveCollisions(env, p, &saved_velocity_, path_start, def_.contact_thickness, h, workers_);
   if (strain_limit_.enabled())
   {
     strain_limit_.apply(h, p);
-    resolveCollisions(env, p, &saved_velocity_, path_start, def_.contact_thickness, h);
+    resolveCollisions(env, p, &saved_velocity_, path_start, def_.contact_thickness, h, workers_);
   }
 }
 
@@ -672,6 +664,12 @@ void SpringNetworkBody::updateStabilityBound(bool re_explain)
   forces_.addStabilityRows(def_.positions, stiffness_rows, damping_rows);
   omega_bound_ = 0.0;
   damping_bound_ = 0.0;
+  // The pins change only through what calls this: their list, for the step's loops over them.
+  pinned_indices_.clear();  // reserved for every particle: no allocation
+  for (int i = 0; i < n; ++i)
+  {
+    if (pinned_[i]) pinned_indices_.push_back(i);
+  }
   for (int i = 0; i < n; ++i)
   {
     if (pinned_[i]) continue;

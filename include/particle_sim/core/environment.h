@@ -12,6 +12,8 @@ namespace particle_sim
 {
 namespace core
 {
+class WorkerPool;
+
 /// How a collider answers a particle that reached it.
 struct ContactDef
 {
@@ -121,8 +123,12 @@ struct Environment
 /// would tunnel through) is put back where the path first met the collider and responds there.
 /// For a moving box or capsule the path is taken relative to it (its motion over `h` [s], the
 /// step, undone at the start), and the response uses the velocity relative to its surface.
+///
+/// Each particle is handled alone: with `workers` the particles are shared between threads, with
+/// the same bits as one. With no collider at all (no ground, sphere, box or capsule), nothing runs.
 void resolveCollisions(const Environment& env, ParticlePool& pool, const Eigen::Matrix3Xd* start_velocity = nullptr,
-                       const Eigen::Matrix3Xd* start_position = nullptr, double thickness = 0.0, double h = 0.0);
+                       const Eigen::Matrix3Xd* start_position = nullptr, double thickness = 0.0, double h = 0.0,
+                       WorkerPool* workers = nullptr);
 
 }  // namespace core
 }  // namespace particle_sim

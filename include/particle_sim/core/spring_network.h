@@ -272,6 +272,7 @@ private:
   Eigen::Vector3d gravity_ = Eigen::Vector3d::Zero();  // [m/s²] gravity of the current step
   Eigen::VectorXd mass_;                               // [kg], kept for pinned particles too
   std::vector<char> pinned_;
+  std::vector<int> pinned_indices_;                   // the pinned particles in index order (updateStabilityBound())
   Eigen::Matrix3Xd pin_target_;
   IntegratorType last_integrator_ = kImplicitEulerIntegrator;
   int last_substeps_ = 1;
