@@ -89,13 +89,22 @@ double median(std::vector<double> values)
 
 int main(int argc, char** argv)
 {
+  constexpr const char* kUsage =
+      "usage: particle_sim_node_probe [--node /particle_sim] [--topics markers,meshes,points] [--warmup S] "
+      "[--duration S]\n"
+      "  measures a running particle_sim node as a subscriber sees it (scripts/node_bench.py runs it):\n"
+      "  its real-time factor from /clock against the wall clock, and each topic's rate and points\n";
+  for (int i = 1; i < argc; ++i)
+    if (std::string(argv[i]) == "--help" || std::string(argv[i]) == "-h")
+    {
+      std::printf("%s", kUsage);
+      return 0;
+    }
   ros::init(argc, argv, "particle_sim_node_probe", ros::init_options::AnonymousName);
   Options options;
   if (!parse(argc, argv, options))
   {
-    std::fprintf(stderr,
-                 "usage: particle_sim_node_probe [--node /particle_sim] [--topics markers,meshes,points] "
-                 "[--warmup S] [--duration S]\n");
+    std::fprintf(stderr, "%s", kUsage);
     return 2;
   }
   ros::NodeHandle nh;

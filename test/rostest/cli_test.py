@@ -41,7 +41,7 @@ TOPICS = {
 SERVICES = ["spawn_emitter", "spawn_rope", "spawn_cloth", "spawn_jelly", "set_wind", "set_spring_constants",
             "pin_particle", "unpin_particle", "remove_body", "step", "pause_physics", "unpause_physics", "reset",
             "set_parameters", "grasp", "release", "spawn_collider", "remove_collider"]
-EXECUTABLES = {"particle_sim_node", "particle_sim_run", "particle_sim_bench", "particle_sim_perf"}
+EXECUTABLES = {"particle_sim_node", "particle_sim_run", "particle_sim_bench", "particle_sim_perf", "particle_sim_node_probe"}
 # Bullet's peer of the performance bench is built when CMake finds Bullet's headers (libbullet-dev,
 # which scripts/common.sh installs), where this looks for them too.
 if os.path.isfile("/usr/include/bullet/btBulletDynamicsCommon.h"):
