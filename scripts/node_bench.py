@@ -17,8 +17,8 @@ Cases:
   - fountain 1e6: one fountain of 10^6 live particles (dt = 1/60), one marker subscriber (goal 4);
   - fountains 10 x 1e5: ten fountains of 10^5 each, one marker subscriber (goal 4, many bodies);
   - the same two with ~publishing_thread false, for what the publishing thread is worth;
-  - cloth 128 springs / baraff_witkin: a 128 x 128 cloth of the core's default constants hanging
-    from two corners, integrator auto at dt = 1/60, marker and mesh subscribers (goal 3).
+  - cloth 128 springs / baraff_witkin: a 128 x 128 cloth of the core's default constants, hanging
+    by two corners, integrator auto at dt = 1/60, marker and mesh subscribers (goal 3).
 """
 import argparse
 import csv
@@ -29,6 +29,7 @@ import subprocess
 import sys
 import tempfile
 import time
+import xmlrpc.client
 
 RATE = 60.0
 DT = '0.0166666666666666667'
@@ -77,7 +78,6 @@ def free_port():
 
 
 def wait_for_master(uri, seconds=30.0):
-    import xmlrpc.client
     master = xmlrpc.client.ServerProxy(uri)
     end = time.time() + seconds
     while time.time() < end:

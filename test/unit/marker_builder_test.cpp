@@ -71,6 +71,30 @@ core::World makeWorld()
     world.step();
   return world;
 }
+
+// An emitter "f" of 100 particles/s living `lifetime` seconds.
+core::EmitterDef fountainF(double lifetime)
+{
+  core::EmitterDef e;
+  e.name = "f";
+  e.rate = 100.0;
+  e.lifetime = lifetime;
+  return e;
+}
+
+// A network "n" of 10 particles in a row, the first pinned: 9 free particles.
+core::SpringNetworkDef rowOfTen()
+{
+  core::SpringNetworkDef net;
+  net.name = "n";
+  for (int i = 0; i < 10; ++i)
+  {
+    net.positions.emplace_back(0.1 * i, 0.0, 1.0);
+    net.masses.push_back(0.1);
+  }
+  net.pins = {0};
+  return net;
+}
 }  // namespace
 
 TEST(MarkerBuilder, EveryMarkerPassesRvizChecksWithOneNamespacePerBody)
@@ -165,11 +189,7 @@ TEST(MarkerBuilder, DeleteAllComesFirstOnlyWhenAskedAndRemovedBodiesGetDelete)
 TEST(MarkerBuilder, ParticlesAreColouredByAge)
 {
   core::World world{core::WorldDef{}};
-  core::EmitterDef e;
-  e.name = "f";
-  e.rate = 100.0;
-  e.lifetime = 1.0;
-  ASSERT_TRUE(world.addEmitter(e).ok);
+  ASSERT_TRUE(world.addEmitter(fountainF(1.0)).ok);
   for (int k = 0; k < 900; ++k)
     world.step();
   const auto array = ros_interface::buildMarkers(world, ros::Time(1.0), {}, false, {});
@@ -190,11 +210,7 @@ TEST(MarkerBuilder, AParticleMarkerHoldsAtMostMaxPointsEveryKthParticle)
   // An emitter with about 100 live particles, markers capped at 30 points: every ⌈n/30⌉ = 4th
   // particle, 25 points, each where its particle is; a cap at the count draws them all.
   core::World world{core::WorldDef{}};
-  core::EmitterDef e;
-  e.name = "f";
-  e.rate = 100.0;
-  e.lifetime = 10.0;
-  ASSERT_TRUE(world.addEmitter(e).ok);
+  ASSERT_TRUE(world.addEmitter(fountainF(10.0)).ok);
   for (int k = 0; k < 1000; ++k)
     world.step();
   const auto& p = world.findBody("f")->particles();
@@ -217,15 +233,7 @@ TEST(MarkerBuilder, AParticleMarkerHoldsAtMostMaxPointsEveryKthParticle)
 
   // A network's free particles alike (its pinned ones always all drawn).
   core::World net_world{core::WorldDef{}};
-  core::SpringNetworkDef net;
-  net.name = "n";
-  for (int i = 0; i < 10; ++i)
-  {
-    net.positions.emplace_back(0.1 * i, 0.0, 1.0);
-    net.masses.push_back(0.1);
-  }
-  net.pins = {0};
-  ASSERT_TRUE(net_world.addSpringNetwork(net).ok);
+  ASSERT_TRUE(net_world.addSpringNetwork(rowOfTen()).ok);
   style.max_points = 4;  // 9 free particles: every 3rd, 3 points
   const auto markers = ros_interface::buildMarkers(net_world, ros::Time(1.0), style, false, {}).markers;
   EXPECT_EQ(markers[ros_interface::kParticlesMarkerId].points.size(), 3u);
@@ -238,20 +246,8 @@ TEST(MarkerBuilder, BodiesShareMaxPointsFairlyAndASmallBodyIsDrawnWhole)
   // 40 points for both: the network fits in its half and is drawn whole; the fountain gets the 31
   // points left, every ⌈n / 31⌉-th particle.
   core::World world{core::WorldDef{}};
-  core::EmitterDef e;
-  e.name = "f";
-  e.rate = 100.0;
-  e.lifetime = 10.0;
-  ASSERT_TRUE(world.addEmitter(e).ok);
-  core::SpringNetworkDef net;
-  net.name = "n";
-  for (int i = 0; i < 10; ++i)
-  {
-    net.positions.emplace_back(0.1 * i, 0.0, 1.0);
-    net.masses.push_back(0.1);
-  }
-  net.pins = {0};
-  ASSERT_TRUE(world.addSpringNetwork(net).ok);
+  ASSERT_TRUE(world.addEmitter(fountainF(10.0)).ok);
+  ASSERT_TRUE(world.addSpringNetwork(rowOfTen()).ok);
   for (int k = 0; k < 1000; ++k)
     world.step();
   const int live = world.findBody("f")->particles().size();
