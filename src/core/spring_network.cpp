@@ -664,15 +664,15 @@ void SpringNetworkBody::updateStabilityBound(bool re_explain)
   forces_.addStabilityRows(def_.positions, stiffness_rows, damping_rows);
   omega_bound_ = 0.0;
   damping_bound_ = 0.0;
-  // The pins change only through what calls this: their list, for the step's loops over them.
+  // The pins change only through what calls this: their list too, for the step's loops over them.
   pinned_indices_.clear();  // reserved for every particle: no allocation
   for (int i = 0; i < n; ++i)
   {
-    if (pinned_[i]) pinned_indices_.push_back(i);
-  }
-  for (int i = 0; i < n; ++i)
-  {
-    if (pinned_[i]) continue;
+    if (pinned_[i])
+    {
+      pinned_indices_.push_back(i);
+      continue;
+    }
     omega_bound_ = std::max(omega_bound_, std::sqrt(stiffness_rows[i] / mass_[i]));
     damping_bound_ = std::max(damping_bound_, damping_rows[i] / mass_[i]);
   }

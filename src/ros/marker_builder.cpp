@@ -143,15 +143,20 @@ visualization_msgs::Marker surfaceMarker(const core::SpringNetworkBody& body, co
   return surface;
 }
 
+// Cloth and jelly are drawn by their surface, other networks by their particles and springs.
+bool drawnBySurface(const core::SpringNetworkBody& body)
+{
+  return body.shape() == core::NetworkShape::Cloth || body.shape() == core::NetworkShape::Jelly;
+}
+
 // The particles a body's particle marker would draw before decimation: an emitter's live ones, a
-// network's free ones; none for cloth and jelly, drawn by their surface.
+// network's free ones; none for cloth and jelly.
 int drawnParticleCount(const core::Body& body)
 {
   if (body.kind() == core::BodyKind::Emitter) return body.particles().size();
   if (body.kind() != core::BodyKind::SpringNetwork) return 0;
   const auto& network = static_cast<const core::SpringNetworkBody&>(body);
-  const bool has_surface = network.shape() == core::NetworkShape::Cloth || network.shape() == core::NetworkShape::Jelly;
-  return has_surface ? 0 : network.particles().size() - network.pinnedCount();
+  return drawnBySurface(network) ? 0 : network.particles().size() - network.pinnedCount();
 }
 
 // `stride`: every how many free particles one is drawn (1 for cloth and jelly).
@@ -160,7 +165,7 @@ void addSpringBody(const core::SpringNetworkBody& body, int stride, const ros::T
 {
   const core::ParticlePool& p = body.particles();
   const int n = p.size();
-  const bool has_surface = body.shape() == core::NetworkShape::Cloth || body.shape() == core::NetworkShape::Jelly;
+  const bool has_surface = drawnBySurface(body);
 
   // Free particles and pinned ones, each a SPHERE_LIST; pinned ones larger and red.
   visualization_msgs::Marker free = makeMarker(body.name(), kParticlesMarkerId, stamp, style);

@@ -60,7 +60,6 @@ void PublishingThread::sendBatches()
     batch.clear();
     lock.lock();
     batch_.swap(batch);  // keeps the capacity for the next batch
-    batch_.clear();
     sending_ = false;
   }
 }

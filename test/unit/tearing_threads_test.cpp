@@ -9,7 +9,6 @@
 
 #include <cmath>
 #include <cstdint>
-#include <cstring>
 #include <memory>
 #include <string>
 #include <utility>
@@ -18,9 +17,12 @@
 #include "particle_sim/core/world.h"
 #include "particle_sim/scene/scene.h"
 #include "shipped_scenes.h"
+#include "test_helpers.h"
 
 namespace core = particle_sim::core;
 namespace scene = particle_sim::scene;
+
+using particle_sim_test::sameBits;
 
 namespace
 {
@@ -52,16 +54,9 @@ TearRun pullApart(int threads)
       run.torn.emplace_back(k, spring);
   }
   run.surface = cloth.surfaceTriangles();
-  const int n = cloth.particles().size();
-  run.state.resize(3, 2 * n);
-  run.state << cloth.particles().position.leftCols(n), cloth.particles().velocity.leftCols(n);
+  run.state = particle_sim_test::positionsAndVelocities(cloth.particles());
   run.shared_loops = world->workers().sharedLoops();
   return run;
-}
-
-bool sameBits(const Eigen::Matrix3Xd& a, const Eigen::Matrix3Xd& b)
-{
-  return a.size() == b.size() && std::memcmp(a.data(), b.data(), sizeof(double) * a.size()) == 0;
 }
 }  // namespace
 

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 #include <string>
 #include <type_traits>
@@ -25,6 +26,21 @@ inline particle_sim::core::Environment noGravity()
   env.gravity.setZero();
   env.ground.enabled = false;
   return env;
+}
+
+// A pool's positions, then its velocities, side by side (3 × 2n): one run's end state.
+inline Eigen::Matrix3Xd positionsAndVelocities(const particle_sim::core::ParticlePool& pool)
+{
+  const int n = pool.size();
+  Eigen::Matrix3Xd state(3, 2 * n);
+  state << pool.position.leftCols(n), pool.velocity.leftCols(n);
+  return state;
+}
+
+// The same numbers to the bit (== would call -0 and 0 equal, and no NaN equal to itself).
+inline bool sameBits(const Eigen::Matrix3Xd& a, const Eigen::Matrix3Xd& b)
+{
+  return a.size() == b.size() && std::memcmp(a.data(), b.data(), sizeof(double) * a.size()) == 0;
 }
 
 // Whether a refusal's message names `field`.

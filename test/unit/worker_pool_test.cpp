@@ -12,7 +12,6 @@
 #include <algorithm>
 #include <atomic>
 #include <cstdint>
-#include <cstring>
 #include <random>
 #include <thread>
 #include <vector>
@@ -22,8 +21,11 @@
 #include "particle_sim/core/integrators/registry.h"
 #include "particle_sim/core/integrators/symplectic_euler.h"
 #include "particle_sim/core/spring_network.h"
+#include "test_helpers.h"
 
 namespace core = particle_sim::core;
+using particle_sim_test::positionsAndVelocities;
+using particle_sim_test::sameBits;
 
 TEST(WorkerPool, EveryItemIsVisitedExactlyOnceInChunksOfTheGivenSize)
 {
@@ -113,11 +115,6 @@ RandomNetwork randomNetwork(int particles, int springs, unsigned seed)
   network.x = Eigen::Matrix3Xd::Random(3, particles);
   network.v = Eigen::Matrix3Xd::Random(3, particles);
   return network;
-}
-
-bool sameBits(const Eigen::Matrix3Xd& a, const Eigen::Matrix3Xd& b)
-{
-  return a.size() == b.size() && std::memcmp(a.data(), b.data(), sizeof(double) * a.size()) == 0;
 }
 
 // Force contexts over `particles` unit masses, none pinned: one thread's, and two threads' shared.
@@ -232,9 +229,7 @@ TEST(WorkerPool, EveryMethodStepsAClothToTheSameBitsAtTwoThreads)
       for (int k = 0; k < 5; ++k)
         body.step(1.0 / 240.0, env);
       ASSERT_FALSE(body.frozen()) << core::toString(type) << ": " << body.frozenReason();
-      const int n = body.particles().size();
-      end[threads - 1].resize(3, 2 * n);
-      end[threads - 1] << body.particles().position.leftCols(n), body.particles().velocity.leftCols(n);
+      end[threads - 1] = positionsAndVelocities(body.particles());
       shared = pool.sharedLoops();
     }
     EXPECT_GT(shared, 5u) << core::toString(type);
@@ -283,9 +278,7 @@ TEST(WorkerPool, CollisionsWithEveryKindOfColliderGiveTheSameBitsAtTwoThreads)
     for (int k = 0; k < 3; ++k)
       body.step(1.0 / 240.0, env);
     ASSERT_FALSE(body.frozen()) << body.frozenReason();
-    const int n = body.particles().size();
-    end[threads - 1].resize(3, 2 * n);
-    end[threads - 1] << body.particles().position.leftCols(n), body.particles().velocity.leftCols(n);
+    end[threads - 1] = positionsAndVelocities(body.particles());
     EXPECT_GE(body.particles().position.row(2).minCoeff(), env.ground.height - 1e-9) << threads << " threads";
     if (threads == 2)
     {
