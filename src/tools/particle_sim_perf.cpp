@@ -321,7 +321,8 @@ void hang(std::ostream& out, bool quick)
 // --- The stopping rule (goal 9): every CG scene of the bench, from rest, with the default rule
 // (IntegratorDef's cg_velocity_tolerance and cg_tolerance) and no cap in practice: the iterations
 // the rule needs each step, how many steps it would leave at the default cap, the worst velocity
-// error, and any step that did not meet it.
+// error, and any step that did not meet it; then the same steps at every default (linear solver
+// `auto`, the cap): how many ended unconverged and how many were solved directly.
 void stoppingRule(std::ostream& out, bool quick)
 {
   const core::IntegratorDef defaults;
@@ -378,6 +379,22 @@ void stoppingRule(std::ostream& out, bool quick)
            << " unconverged; worst velocity error " << worst_velocity_error << " m/s (tolerance "
            << defaults.cg_velocity_tolerance << " m/s)";
     if (body.frozen()) detail << "; FROZE: " << body.frozenReason();
+    // The same steps at the defaults (the linear solver `auto`, the cap of 500): a solve that the
+    // cap stops short is done again directly, so no step should end unconverged.
+    scene.def.integrator = core::BodyIntegratorDef{};
+    scene.def.integrator.type = core::kImplicitEulerIntegrator;
+    core::SpringNetworkBody at_defaults(scene.def);
+    int unconverged_at_defaults = 0, direct_steps = 0;
+    for (int i = 0; i < scene.steps && !at_defaults.frozen(); ++i)
+    {
+      at_defaults.step(scene.dt, env);
+      unconverged_at_defaults += at_defaults.lastSolve().converged ? 0 : 1;
+      direct_steps += at_defaults.lastSolve().direct ? 1 : 0;
+    }
+    detail << "; at the defaults (linear_solver auto, cap " << defaults.cg_max_iterations
+           << "): " << unconverged_at_defaults << " steps unconverged, " << direct_steps << " of " << scene.steps
+           << " direct";
+    if (at_defaults.frozen()) detail << "; FROZE at the defaults: " << at_defaults.frozenReason();
     row.detail = detail.str();
     writeRow(out, row);
   }

@@ -306,7 +306,23 @@ SolverReport ImplicitEulerSolver::solveLinear(const std::vector<char>& pinned, c
   // direct solver takes over from the next solve on (for good: no switching back and forth).
   if (settings.linear_solver == LinearSolverType::Auto && !report.direct &&
       (report.iterations > direct_in_cg_iterations_ || !report.converged))
+  {
     auto_choice_ = DirectChoice::Cheaper;
+    // A capped solve is not kept: this solve is done again directly, from the same system (CG
+    // only read it), so that `auto` never ends a step short of the tolerance it could meet.
+    if (!report.converged && !report.breakdown && usesDirect(settings.linear_solver) &&
+        direct_.factorize(blocks_, pinned))
+    {
+      const int capped_iterations = report.iterations;
+      report = SolverReport{};
+      residual_ = rhs_;
+      filter(pinned, residual_);
+      direct_.solve(residual_, delta_v_);
+      report.direct = true;
+      conjugateGradient(pinned, settings, report);
+      report.iterations += capped_iterations;  // the work done, the capped CG's included
+    }
+  }
   return report;
 }
 
