@@ -5,6 +5,7 @@
 #include <atomic>
 #include <cmath>
 #include <limits>
+#include <numeric>
 
 #include "particle_sim/core/forces/spring_body_forces.h"
 #include "particle_sim/core/forces/springs.h"
@@ -195,19 +196,22 @@ SpringNetworkBody::SpringNetworkBody(const SpringNetworkDef& def, const Integrat
     torn_.triangles.reserve(def_.baraff_witkin.triangles.size());
     joined_pairs_.reserve(def_.springs.size());
     cut_pairs_.reserve(def_.springs.size());
+    for (const Spring& spring : def_.springs)
+      built_pairs_.emplace_back(std::min(spring.i, spring.j), std::max(spring.i, spring.j));
+    std::sort(built_pairs_.begin(), built_pairs_.end());
+    // A vertex split's lists: every end of a spring and corner of a triangle as candidates, and a
+    // fan as large as the most triangles at one particle (a split never adds triangles to a fan).
+    split_candidates_.reserve(2 * def_.springs.size() + 3 * def_.triangles.size());
+    std::vector<int> fan_size(n, 0);
+    for (const Eigen::Vector3i& t : def_.triangles)
+      for (int c = 0; c < 3; ++c)
+        ++fan_size[t[c]];
+    const int largest_fan = n > 0 ? *std::max_element(fan_size.begin(), fan_size.end()) : 0;
+    split_fan_.reserve(largest_fan);
+    split_group_.reserve(largest_fan);
+    split_roots_.reserve(largest_fan);
   }
-  // The implicit system's pattern: the particle pairs every force element couples. The elements
-  // look up their block indices once; they depend only on the pattern, which every implicit
-  // method's solver is given.
-  std::vector<std::pair<int, int>> pairs;
-  forces_.coupledPairs(pairs);
-  ImplicitEulerSolver pattern;
-  pattern.setPattern(n, pairs);
-  forces_.bindPattern(pattern);
-  // What an implicit step costs this body, in explicit substeps: `auto` weighs it against Verlet's.
-  implicit_step_cost_ = StabilityGuard::implicitStepCost(pattern.directCostInCgIterations());
-  for (const IntegratorInfo& info : integratorRegistry())
-    methods_.emplace_back(info.type, info.make(n, pairs));
+  rebuildPattern();
   step_target_.setZero(3, n);
 
   // The size of the body's energy, for the blow-up check: total mass · extent.
@@ -223,10 +227,45 @@ SpringNetworkBody::SpringNetworkBody(const SpringNetworkDef& def, const Integrat
   reset();
 }
 
+void SpringNetworkBody::rebuildPattern()
+{
+  // The implicit system's pattern: the particle pairs every force element couples. The elements
+  // look up their block indices once; they depend only on the pattern, which every implicit
+  // method's solver is given.
+  const int n = particles_.size();
+  std::vector<std::pair<int, int>> pairs;
+  forces_.coupledPairs(pairs);
+  ImplicitEulerSolver pattern;
+  pattern.setPattern(n, pairs);
+  forces_.bindPattern(pattern);
+  // What an implicit step costs this body, in explicit substeps: `auto` weighs it against Verlet's.
+  implicit_step_cost_ = StabilityGuard::implicitStepCost(pattern.directCostInCgIterations());
+  methods_.clear();
+  for (const IntegratorInfo& info : integratorRegistry())
+    methods_.emplace_back(info.type, info.make(n, pairs));
+}
+
 void SpringNetworkBody::reset()
 {
   const int n = static_cast<int>(def_.positions.size());
   ParticlePool& p = particles_;
+  if (p.size() != n)
+  {
+    // Drop the particles vertex splits added (the loop below sets every built one).
+    p.resize(n, n);
+    strain_limit_.resize(n);
+    mass_.resize(n);
+    pinned_.assign(n, 0);
+    pin_target_.setZero(3, n);
+    saved_position_.setZero(3, n);
+    saved_velocity_.setZero(3, n);
+    substep_start_.setZero(3, n);
+    step_target_.setZero(3, n);
+  }
+  rest_positions_ = def_.positions;
+  origin_of_.resize(n);
+  std::iota(origin_of_.begin(), origin_of_.end(), 0);
+  split_particles_ = 0;
   for (int i = 0; i < n; ++i)
   {
     p.position.col(i) = def_.positions[i];
@@ -244,6 +283,11 @@ void SpringNetworkBody::reset()
     pin_target_.col(index) = def_.positions[index];
   }
   forces_.mend();
+  if (pattern_rebuilt_)
+  {
+    rebuildPattern();  // the built pattern again, for the mended elements
+    pattern_rebuilt_ = false;
+  }
   forces_.resetConstants();
   surface_ = def_.triangles;
   strain_limit_.setSprings(def_.springs);
@@ -525,21 +569,218 @@ void SpringNetworkBody::tearOverstretched()
     if (!std::binary_search(joined.begin(), joined.end(), edge)) cut.push_back(edge);
   }
   std::sort(cut.begin(), cut.end());
-  auto is_cut = [&](int a, int b) { return std::binary_search(cut.begin(), cut.end(), ordered(a, b)); };
-  auto is_torn = [&](const Eigen::Vector3i& t) {
-    return std::find(torn_.triangles.begin(), torn_.triangles.end(), t) != torn_.triangles.end();
-  };
-  const std::size_t before = surface_.size();
-  surface_.erase(std::remove_if(surface_.begin(), surface_.end(),
-                                [&](const Eigen::Vector3i& t) {
-                                  return is_cut(t[0], t[1]) || is_cut(t[1], t[2]) || is_cut(t[2], t[0]) || is_torn(t);
-                                }),
-                 surface_.end());
-  if (surface_.size() != before) forces_.setSurface(surface_);
+  if (def_.shape == NetworkShape::Cloth)
+  {
+    splitAlongTears(cut);
+  }
+  else
+  {
+    auto is_cut = [&](int a, int b) { return std::binary_search(cut.begin(), cut.end(), ordered(a, b)); };
+    auto is_torn = [&](const Eigen::Vector3i& t) {
+      return std::find(torn_.triangles.begin(), torn_.triangles.end(), t) != torn_.triangles.end();
+    };
+    const std::size_t before = surface_.size();
+    surface_.erase(std::remove_if(surface_.begin(), surface_.end(),
+                                  [&](const Eigen::Vector3i& t) {
+                                    return is_cut(t[0], t[1]) || is_cut(t[1], t[2]) || is_cut(t[2], t[0]) || is_torn(t);
+                                  }),
+                   surface_.end());
+    if (surface_.size() != before) forces_.setSurface(surface_);
+  }
   strain_limit_.setSprings(springs());
   // `auto` re-decides from the new bound at the next step anyway; its explanation is kept (rebuilt
   // when its choice changes), as writing it anew would allocate in the step.
   updateStabilityBound(false);
+}
+
+void SpringNetworkBody::splitAlongTears(const std::vector<std::pair<int, int>>& cut)
+{
+  // An edge is cut when its particles had a spring as built (between the particles they come from)
+  // and have none now: this step's tear or an earlier one.
+  auto ordered = [](int a, int b) { return a < b ? std::make_pair(a, b) : std::make_pair(b, a); };
+  std::vector<std::pair<int, int>>& joined = joined_pairs_;  // sorted by tearOverstretched()
+  auto is_cut = [&](int a, int b) {
+    return !std::binary_search(joined.begin(), joined.end(), ordered(a, b)) &&
+           std::binary_search(built_pairs_.begin(), built_pairs_.end(), ordered(origin_of_[a], origin_of_[b]));
+  };
+  auto is_torn = [&](const Eigen::Vector3i& t) {
+    return std::find(torn_.triangles.begin(), torn_.triangles.end(), t) != torn_.triangles.end();
+  };
+
+  // 1. A triangle goes when it tore (Baraff–Witkin) or two of its edges were cut: it would hang by
+  //    one edge or none. The corners of what went, and the ends of the cut edges, may split.
+  // The work lists are members reserved at build: a tear that splits nothing allocates nothing.
+  std::vector<int>& candidates = split_candidates_;
+  candidates.clear();
+  for (const std::pair<int, int>& edge : cut)
+  {
+    candidates.push_back(edge.first);
+    candidates.push_back(edge.second);
+  }
+  const std::size_t before = surface_.size();
+  surface_.erase(std::remove_if(surface_.begin(), surface_.end(),
+                                [&](const Eigen::Vector3i& t) {
+                                  const int cuts = is_cut(t[0], t[1]) + is_cut(t[1], t[2]) + is_cut(t[2], t[0]);
+                                  if (cuts < 2 && !is_torn(t)) return false;
+                                  candidates.insert(candidates.end(), {t[0], t[1], t[2]});
+                                  return true;
+                                }),
+                 surface_.end());
+  std::sort(candidates.begin(), candidates.end());
+  candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
+
+  // 2. Each candidate's triangles, grouped through the edges at it that still have a spring (or,
+  //    without springs, are shared by two triangles). Every group but the first (by triangle order)
+  //    gets a copy of the particle, which takes that group's triangles and the springs to their
+  //    corners. A pinned particle is not split: what holds it holds every side.
+  struct Split
+  {
+    int original, copy;
+    std::vector<int> neighbours;
+    std::vector<Eigen::Vector3i> triangles;
+    double area;  // [m²] at rest, of the group's triangles
+  };
+  std::vector<Split> splits;
+  std::vector<double> kept_area;  // per split original, the first group's rest area
+  const auto rest_area = [&](const Eigen::Vector3i& t) {
+    return 0.5 *
+           (rest_positions_[t[1]] - rest_positions_[t[0]]).cross(rest_positions_[t[2]] - rest_positions_[t[0]]).norm();
+  };
+  int next_copy = particles_.size();
+  std::vector<int>& fan = split_fan_;
+  std::vector<int>& group = split_group_;
+  std::vector<int>& roots = split_roots_;
+  for (int v : candidates)
+  {
+    if (pinned_[v]) continue;
+    fan.clear();
+    for (int t = 0; t < static_cast<int>(surface_.size()); ++t)
+      if (surface_[t][0] == v || surface_[t][1] == v || surface_[t][2] == v) fan.push_back(t);
+    if (fan.size() < 2) continue;
+    // Union–find over the fan (a handful of triangles): joined through a shared, uncut edge at v.
+    group.resize(fan.size());
+    std::iota(group.begin(), group.end(), 0);
+    const auto root = [&](int a) {
+      while (group[a] != a)
+        a = group[a];
+      return a;
+    };
+    for (std::size_t a = 0; a < fan.size(); ++a)
+      for (std::size_t b = a + 1; b < fan.size(); ++b)
+        for (int k = 0; k < 3; ++k)
+        {
+          const int w = surface_[fan[a]][k];
+          const bool shared =
+              w != v && (surface_[fan[b]][0] == w || surface_[fan[b]][1] == w || surface_[fan[b]][2] == w);
+          if (shared && !is_cut(v, w)) group[root(static_cast<int>(b))] = root(static_cast<int>(a));
+        }
+    // The groups in order of their first triangle; the first keeps v.
+    roots.clear();
+    for (std::size_t a = 0; a < fan.size(); ++a)
+      if (std::find(roots.begin(), roots.end(), root(static_cast<int>(a))) == roots.end())
+        roots.push_back(root(static_cast<int>(a)));
+    if (roots.size() < 2) continue;
+    double first_area = 0.0;
+    for (std::size_t a = 0; a < fan.size(); ++a)
+      if (root(static_cast<int>(a)) == roots[0]) first_area += rest_area(surface_[fan[a]]);
+    kept_area.push_back(first_area);
+    for (std::size_t g = 1; g < roots.size(); ++g)
+    {
+      Split split{v, next_copy++, {}, {}, 0.0};
+      // The copy's rest position and origin now: the next candidates' triangles may hold it.
+      rest_positions_.push_back(rest_positions_[v]);
+      origin_of_.push_back(origin_of_[v]);
+      for (std::size_t a = 0; a < fan.size(); ++a)
+      {
+        if (root(static_cast<int>(a)) != roots[g]) continue;
+        Eigen::Vector3i& t = surface_[fan[a]];
+        split.triangles.push_back(t);
+        split.area += rest_area(t);
+        for (int k = 0; k < 3; ++k)
+          if (t[k] != v) split.neighbours.push_back(t[k]);
+        for (int k = 0; k < 3; ++k)
+          if (t[k] == v) t[k] = split.copy;
+      }
+      std::sort(split.neighbours.begin(), split.neighbours.end());
+      split.neighbours.erase(std::unique(split.neighbours.begin(), split.neighbours.end()), split.neighbours.end());
+      // The springs follow at once, so that the next candidates see the edges as they now are.
+      forces_.splitParticle(v, split.copy, split.neighbours, split.triangles);
+      splits.push_back(std::move(split));
+    }
+    joined.clear();
+    for (const Spring& spring : springs())
+      joined.push_back(ordered(spring.i, spring.j));
+    std::sort(joined.begin(), joined.end());
+  }
+
+  // 3. The copies: the original's state, and a share of its mass by the groups' rest areas (the
+  //    mass and the momentum are kept).
+  if (!splits.empty())
+  {
+    std::vector<int> sources;
+    for (const Split& split : splits)
+      sources.push_back(split.original);
+    appendCopies(sources);
+    std::size_t first = 0, original_index = 0;
+    while (first < splits.size())
+    {
+      const int v = splits[first].original;
+      std::size_t last = first;
+      double total_area = kept_area[original_index];
+      while (last < splits.size() && splits[last].original == v)
+        total_area += splits[last++].area;
+      const double mass = mass_[v];
+      double given = 0.0;
+      for (std::size_t k = first; k < last; ++k)
+      {
+        const double share = total_area > 0.0 ? mass * splits[k].area / total_area : mass / (last - first + 1);
+        mass_[splits[k].copy] = share;
+        particles_.inverse_mass[splits[k].copy] = 1.0 / share;
+        given += share;
+      }
+      mass_[v] = mass - given;
+      particles_.inverse_mass[v] = 1.0 / mass_[v];
+      first = last;
+      ++original_index;
+    }
+    split_particles_ += static_cast<long long>(splits.size());
+    rebuildPattern();
+    pattern_rebuilt_ = true;
+  }
+  if (surface_.size() != before || !splits.empty()) forces_.setSurface(surface_);
+}
+
+void SpringNetworkBody::appendCopies(const std::vector<int>& sources)
+{
+  const int old_n = particles_.size();
+  const int n = old_n + static_cast<int>(sources.size());
+  auto grow = [&](Eigen::Matrix3Xd& m) {
+    m.conservativeResize(3, n);
+    for (std::size_t k = 0; k < sources.size(); ++k)
+      m.col(old_n + static_cast<int>(k)) = m.col(sources[k]);
+  };
+  auto grow_scalars = [&](Eigen::VectorXd& m) {
+    m.conservativeResize(n);
+    for (std::size_t k = 0; k < sources.size(); ++k)
+      m[old_n + static_cast<int>(k)] = m[sources[k]];
+  };
+  ParticlePool& p = particles_;
+  grow(p.position);
+  grow(p.velocity);
+  grow(p.previous_position);
+  grow_scalars(p.inverse_mass);
+  grow_scalars(p.age);
+  p.live_count = n;
+  grow_scalars(mass_);
+  grow(pin_target_);
+  grow(saved_position_);
+  grow(saved_velocity_);
+  grow(substep_start_);
+  grow(step_target_);
+  pinned_.resize(n, 0);
+  pinned_indices_.reserve(n);
+  resting_contacts_.reserve(n);
+  strain_limit_.resize(n);
 }
 
 void SpringNetworkBody::pinReactions(Eigen::Matrix3Xd& reactions) const
@@ -661,7 +902,7 @@ void SpringNetworkBody::updateStabilityBound(bool re_explain)
   std::vector<double>& damping_rows = damping_rows_;
   stiffness_rows.assign(n, 0.0);  // sized once: a tear recomputes the bound without allocating
   damping_rows.assign(n, 0.0);
-  forces_.addStabilityRows(def_.positions, stiffness_rows, damping_rows);
+  forces_.addStabilityRows(rest_positions_, stiffness_rows, damping_rows);
   omega_bound_ = 0.0;
   damping_bound_ = 0.0;
   // The pins change only through what calls this: their list too, for the step's loops over them.

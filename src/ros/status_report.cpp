@@ -78,6 +78,7 @@ SimStatus buildSimStatus(const core::World& world, const ros::Time& stamp, const
       b.max_strain = spring_body.maxStrain();
       b.torn_springs = static_cast<std::uint64_t>(spring_body.tornSprings());
       b.torn_triangles = static_cast<std::uint64_t>(spring_body.tornTriangles());
+      b.split_particles = static_cast<std::uint64_t>(spring_body.splitParticles());
       b.pinned_count = static_cast<std::uint32_t>(spring_body.pinnedCount());
       if (b.pinned_count > 0)
       {
@@ -149,7 +150,7 @@ void buildDiagnostics(const core::World& world, const LoopFigures& loop, double 
   // worst residual), strain, springs and triangles torn and frozen bodies.
   int iterations = 0, not_converged = 0, implicit_solves = 0, direct_solves = 0;
   double residual = 0.0, velocity_error = 0.0, max_strain = 0.0;
-  long long torn_springs = 0, torn_triangles = 0;
+  long long torn_springs = 0, torn_triangles = 0, split_particles = 0;
   std::string strained_body;
   std::vector<std::string> frozen;
   for (const auto& body : world.bodies())
@@ -158,6 +159,7 @@ void buildDiagnostics(const core::World& world, const LoopFigures& loop, double 
     const auto& spring_body = static_cast<const core::SpringNetworkBody&>(*body);
     torn_springs += spring_body.tornSprings();
     torn_triangles += spring_body.tornTriangles();
+    split_particles += spring_body.splitParticles();
     if (spring_body.frozen())
     {
       frozen.push_back(toMessageText(body->name(), kMaxQuotedBytes) + " (" +
@@ -231,6 +233,7 @@ void buildDiagnostics(const core::World& world, const LoopFigures& loop, double 
   stat.add("max strain", max_strain);
   stat.add("torn springs", torn_springs);
   stat.add("torn triangles", torn_triangles);
+  stat.add("split particles", split_particles);
   addCollisionFigures(world, stat);
   stat.add("frozen bodies", static_cast<int>(frozen.size()));
   stat.add("stability events since last report", loop.stability_events);

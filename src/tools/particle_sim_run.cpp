@@ -329,6 +329,8 @@ int main(int argc, char** argv)
       std::printf("body '%s': %lld springs torn (tear_strain %g)", body->name().c_str(), spring_body->tornSprings(),
                   def.tear_strain);
       if (spring_body->baraffWitkin()) std::printf(", %lld triangles torn", spring_body->tornTriangles());
+      if (def.shape == particle_sim::core::NetworkShape::Cloth)
+        std::printf(", %lld particles split off", spring_body->splitParticles());
       if (!def.triangles.empty())
         std::printf(", %zu of %zu surface triangles left", spring_body->surfaceTriangles().size(),
                     def.triangles.size());

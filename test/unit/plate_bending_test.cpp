@@ -74,7 +74,8 @@ Eigen::Matrix3Xd rolled(const DiscMesh& mesh, double rho, double angle)
   for (std::size_t i = 0; i < mesh.vertices.size(); ++i)
   {
     const double s = mesh.vertices[i].dot(across), w = mesh.vertices[i].dot(along);
-    x.col(i) = rho * std::sin(s / rho) * across + w * along + rho * (1.0 - std::cos(s / rho)) * Eigen::Vector3d::UnitZ();
+    x.col(i) =
+        rho * std::sin(s / rho) * across + w * along + rho * (1.0 - std::cos(s / rho)) * Eigen::Vector3d::UnitZ();
   }
   return x;
 }

@@ -285,7 +285,7 @@ TEST(RestingContact, AClothPeeledOffTheFloorByItsCornerIsNeverGluedToIt)
     highest = std::max(highest, body.pinLoad(corner, start).force.z());
   }
   const double a_max = 10.0 / std::sqrt(3.0) * lift / (duration * duration);  // s'' peaks at 10/√3
-  const double v_max = 15.0 / 8.0 * lift / duration;                         // s' peaks at 15/8
+  const double v_max = 15.0 / 8.0 * lift / duration;                          // s' peaks at 15/8
   const double lambda = def.mass / (0.5 * 0.5) * 0.5 * std::sqrt(2.0);        // [kg/m]
   const double bound = def.mass * (kG + a_max) + lambda * v_max * v_max;
   EXPECT_LT(highest, bound) << "the floor held the towel back: the corner's force peaked at " << highest << " N";

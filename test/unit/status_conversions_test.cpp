@@ -221,7 +221,7 @@ TEST(StatusConversions, DiagnosticsAreOkWhenRunningOnTimeAndListEveryFigure)
        {"sim time [s]", "real-time factor", "target real-time factor", "step time [us]", "implicit solves (last step)",
         "direct solves (last step)", "solver iterations (max, last step)", "solver residual (max, last step)",
         "solver velocity error [m/s] (max, last step)", "max strain", "torn springs", "torn triangles",
-        "stability events since last report"})
+        "split particles", "stability events since last report"})
     EXPECT_NE(findValue(stat, key), nullptr) << key;
   EXPECT_EQ(*findValue(stat, "torn springs"), "0");  // the rope cannot tear
 }
@@ -245,6 +245,8 @@ TEST(StatusConversions, TornSpringsShowInStatusDiagnosticsAndTheStatusLineOfBodi
   EXPECT_NE(line.find(" | torn: 'n' 1 spring | paused"), std::string::npos) << line;
   ASSERT_NE(findValue(stat, "torn triangles"), nullptr);
   EXPECT_EQ(*findValue(stat, "torn triangles"), "0");  // springs only
+  ASSERT_NE(findValue(stat, "split particles"), nullptr);
+  EXPECT_EQ(*findValue(stat, "split particles"), "0");  // a network splits no vertex
   EXPECT_EQ(buildSimStatus(world, ros::Time(), "sim", false, 1.0).bodies[0].torn_triangles, 0u);
   // It stays counted in later steps, and a reset mends it.
   world.step();

@@ -243,7 +243,8 @@ TEST(StepAllocations, CounterSeesAllocationsOfNewAndOfMalloc)
 }
 
 // At one thread and at two per world (world.threads): the shared loops' threads start in the
-// warm-up, and handing them a loop allocates nothing.
+// warm-up, and handing them a loop allocates nothing. cloth_tear's steps that split a vertex grow
+// its cloth: TearAllocations counts that scene's other steps.
 TEST(StepAllocations, NoShippedSceneAllocatesInAWarmedUpStep)
 {
   const std::vector<std::string> scenes = particle_sim_test::shippedScenes();
@@ -252,6 +253,7 @@ TEST(StepAllocations, NoShippedSceneAllocatesInAWarmedUpStep)
   for (int threads : {1, 2})
     for (const std::string& scene_name : scenes)
     {
+      if (scene_name == "cloth_tear.yaml") continue;
       SCOPED_TRACE(std::to_string(threads) + " threads");
       scene::SceneDef scene_def;
       const core::Status loaded =
@@ -273,11 +275,13 @@ TEST(StepAllocations, NoShippedSceneAllocatesInAWarmedUpStep)
 }
 
 // A step that tears allocates nothing either, whichever method steps the body (`auto` too, which
-// re-decides from the stability bound a tear lowers). cloth_tear's grippers stand still for 1 s and
-// move apart from 1 s to 4 s; the cloth tears from about 1.3 s to 3.3 s. So the steps up to 1 s warm
-// up and those from 1 s to 4 s are counted, in every build. It is a suite of its own, not
-// StepAllocations, because six methods stepped through the tear take minutes under the sanitizers:
-// CI runs it in the normal build only, with the other unit tests of 2 s or more.
+// re-decides from the stability bound a tear lowers), unless it splits a vertex: the body then grows
+// by the copies and its implicit pattern is rebuilt (rare steps, counted apart; every other step
+// of the tear, with springs breaking and triangles going, allocates nothing). cloth_tear's grippers stand still for 1 s
+// and move apart from 1 s to 4 s; the cloth tears from about 1.3 s to 3.3 s. So the steps up to 1 s warm up and those
+// from 1 s to 4 s are counted, in every build. It is a suite of its own, not StepAllocations, because six methods
+// stepped through the tear take minutes under the sanitizers: CI runs it in the normal build only, with the other unit
+// tests of 2 s or more.
 TEST(TearAllocations, TearingAllocatesNothingUnderAnyMethod)
 {
   const double grippers_start = 1.0;  // [s]
@@ -300,9 +304,21 @@ TEST(TearAllocations, TearingAllocatesNothingUnderAnyMethod)
       scene::stepScene(scene_def, *world);
     const auto& cloth = static_cast<const core::SpringNetworkBody&>(*world->bodies()[0]);
     EXPECT_EQ(cloth.tornSprings(), 0) << core::toString(type) << ": torn before the steps counted";
-    const long long allocations = allocationsOver(scene_def, *world, counted);
+    long long allocations = 0, splitting_steps = 0;
+    for (long long k = 0; k < counted; ++k)
+    {
+      const long long splits_before = cloth.splitParticles();
+      const long long in_step = allocationsOver(scene_def, *world, 1);
+      if (cloth.splitParticles() != splits_before)
+        ++splitting_steps;
+      else
+        allocations += in_step;
+    }
     EXPECT_GT(cloth.tornSprings(), 0) << core::toString(type);
-    EXPECT_EQ(allocations, 0) << core::toString(type) << ": " << allocations << " heap allocations in " << counted
-                              << " steps that tore " << cloth.tornSprings() << " springs";
+    EXPECT_GT(splitting_steps, 0) << core::toString(type) << ": no vertex split, so no tear opened";
+    EXPECT_LT(splitting_steps, counted / 10) << core::toString(type);
+    EXPECT_EQ(allocations, 0) << core::toString(type) << ": " << allocations << " heap allocations in "
+                              << counted - splitting_steps << " steps that split no vertex (of " << counted
+                              << ", which tore " << cloth.tornSprings() << " springs)";
   }
 }

@@ -184,9 +184,18 @@ public:
   const std::string& lastStabilityEvent() const { return guard_.lastEvent(); }
 
   // Tearing ------------------------------------------------------------------------------------
-  /// The surface triangles left: the definition's, less every triangle one of whose edges lost its
-  /// last spring to a tear and every torn Baraff–Witkin triangle (drawn, published and under the air).
+  /// The surface triangles left (drawn, published and under the air). A cloth splits along its
+  /// tears: a triangle goes when two of its edges lost their last spring or it is a torn
+  /// Baraff–Witkin triangle, and a vertex whose remaining triangles fall apart into several groups
+  /// (joined only through edges that still have a spring) becomes one particle per group, so the
+  /// hole opens. A jelly or network drops every triangle with such an edge instead.
   const std::vector<Eigen::Vector3i>& surfaceTriangles() const { return surface_; }
+  /// [kg] per particle (pinned ones too); a vertex split shares its particle's mass among the copies.
+  const Eigen::VectorXd& particleMasses() const { return mass_; }
+  /// The particle as built that particle `i` comes from: itself, or the one a tear split it off.
+  int particleOrigin(int i) const { return origin_of_[i]; }
+  /// Particles added by splitting vertices along tears since build or reset (a cloth only).
+  long long splitParticles() const { return split_particles_; }
   /// Springs broken since build or reset, and in the last step.
   long long tornSprings() const { return torn_springs_; }
   int lastTornSprings() const { return static_cast<int>(torn_.springs.size()); }
@@ -262,6 +271,16 @@ private:
   }
   WorkerPool* workers() const override { return workers_; }
 
+  // The implicit pattern from the force elements' pairs as they are now, bound to every element,
+  // and every integration method made anew for it (their histories start again). Allocates.
+  void rebuildPattern();
+  // Drops the surface triangles the tear just cut off and splits the vertices it left in several
+  // groups of triangles (a cloth); `cut` holds the sorted particle pairs that lost their last spring.
+  void splitAlongTears(const std::vector<std::pair<int, int>>& cut);
+  // Appends one particle per entry of `sources`, each a copy of that particle's state, free; the
+  // caller sets masses, rest positions and origins, and re-indexes the force elements. Allocates.
+  void appendCopies(const std::vector<int>& sources);
+
   SpringNetworkDef def_;
   ForceSet forces_;
   IntegratorDef built_integrator_;  // def_.integrator over the defaults it was built with (reset() restores it)
@@ -272,7 +291,7 @@ private:
   Eigen::Vector3d gravity_ = Eigen::Vector3d::Zero();  // [m/s²] gravity of the current step
   Eigen::VectorXd mass_;                               // [kg], kept for pinned particles too
   std::vector<char> pinned_;
-  std::vector<int> pinned_indices_;                   // the pinned particles in index order (updateStabilityBound())
+  std::vector<int> pinned_indices_;  // the pinned particles in index order (updateStabilityBound())
   Eigen::Matrix3Xd pin_target_;
   IntegratorType last_integrator_ = kImplicitEulerIntegrator;
   int last_substeps_ = 1;
@@ -303,6 +322,14 @@ private:
   bool energy_after_valid_ = false;
   long long torn_springs_ = 0;    // since build or reset
   long long torn_triangles_ = 0;  // since build or reset
+  // Per particle, its rest position [m] and the built particle it comes from; a vertex split appends
+  // copies (reset() drops them).
+  std::vector<Eigen::Vector3d> rest_positions_;
+  std::vector<int> origin_of_;
+  std::vector<std::pair<int, int>> built_pairs_;  // the particle pairs springs joined as built, sorted (tearing only)
+  std::vector<int> split_candidates_, split_fan_, split_group_, split_roots_;  // splitAlongTears()' lists, reserved
+  long long split_particles_ = 0;                                              // since build or reset
+  bool pattern_rebuilt_ = false;  // a split changed the implicit pattern since build or reset
 };
 
 }  // namespace core

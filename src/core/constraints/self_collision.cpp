@@ -321,6 +321,7 @@ void SelfCollisionSolver::buildTopology(const std::vector<SpringNetworkBody*>& b
   inverse_mass_.assign(n, 0.0);
   thickness_.assign(n, 0.0);
   body_of_.assign(n, 0);
+  origin_.assign(n, 0);
   is_point_.assign(n, 0);
   zone_.assign(n, -1);
   moved_.assign(n, 0);
@@ -344,6 +345,7 @@ void SelfCollisionSolver::buildTopology(const std::vector<SpringNetworkBody*>& b
     {
       thickness_[first + i] = thickness;
       body_of_[first + i] = static_cast<int>(b);
+      origin_[first + i] = first + body.particleOrigin(i);
     }
     // Cloth and jelly collide by their surface triangles and those triangles' edges; ropes and
     // networks without triangles by their stretch springs (chains of capsules).
@@ -540,7 +542,8 @@ void SelfCollisionSolver::findCandidates(double h, CollisionReport& report)
         entries_[bucket_fill_[tableBucket(key, k >= first_triangle)]++] = Item{key, static_cast<std::uint32_t>(k)};
       });
 
-  // Pairs: a point and a triangle, or two edges, whose boxes overlap and that share no particle.
+  // Pairs: a point and a triangle, or two edges, whose boxes overlap and that share no particle (a
+  // tear's copy counts as the particle it was split from: the two sides of a split vertex touch).
   // Each point (each edge) looks in the cells of its box; a stamp per item keeps a pair found in
   // several cells once.
   pairs_.clear();
@@ -556,13 +559,15 @@ void SelfCollisionSolver::findCandidates(double h, CollisionReport& report)
     {
       if (kj < first_triangle) return;  // a point pairs with triangles only
       const Eigen::Vector3i& t = triangles_[c];
-      if (t[0] == static_cast<int>(a) || t[1] == static_cast<int>(a) || t[2] == static_cast<int>(a)) return;
+      const int o = origin_[a];
+      if (origin_[t[0]] == o || origin_[t[1]] == o || origin_[t[2]] == o) return;
     }
     else
     {
       if (kj >= first_triangle) return;  // an edge pairs with edges only
       const Eigen::Vector2i &e = edges_[a], &f = edges_[c];
-      if (e[0] == f[0] || e[0] == f[1] || e[1] == f[0] || e[1] == f[1]) return;
+      const int e0 = origin_[e[0]], e1 = origin_[e[1]], f0 = origin_[f[0]], f1 = origin_[f[1]];
+      if (e0 == f0 || e0 == f1 || e1 == f0 || e1 == f1) return;
     }
     if (!overlap(ki, kj)) return;
     pairs_.push_back(Pair{a, c, ki < first_edge ? 0u : 1u});

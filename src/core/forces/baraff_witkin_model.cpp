@@ -123,26 +123,62 @@ void BaraffWitkinModel::coupledPairs(std::vector<std::pair<int, int>>& pairs) co
 
 void BaraffWitkinModel::bindPattern(const ImplicitEulerSolver& solver)
 {
-  triangle_blocks_.clear();
-  bend_blocks_.clear();
-  for (const BwTriangle& t : def_.triangles)
+  // The blocks of the triangles and bends as they are, and as built (after a vertex split the built
+  // ones' may be missing, −1: mend() is followed by a rebuild of the pattern).
+  auto bind = [&solver](const BaraffWitkinDef& def, std::vector<std::array<int, 9>>& triangle_blocks,
+                        std::vector<std::array<int, 16>>& bend_blocks) {
+    triangle_blocks.clear();
+    bend_blocks.clear();
+    for (const BwTriangle& t : def.triangles)
+    {
+      std::array<int, 9> blocks;
+      for (int m = 0; m < 3; ++m)
+        for (int n = 0; n < 3; ++n)
+          blocks[3 * m + n] = solver.blockIndex(t.v[m], t.v[n]);
+      triangle_blocks.push_back(blocks);
+    }
+    for (const BwBend& b : def.bends)
+    {
+      std::array<int, 16> blocks;
+      for (int m = 0; m < 4; ++m)
+        for (int n = 0; n < 4; ++n)
+          blocks[4 * m + n] = solver.blockIndex(b.v[m], b.v[n]);
+      bend_blocks.push_back(blocks);
+    }
+  };
+  bind(def_, triangle_blocks_, bend_blocks_);
+  bind(built_def_, built_triangle_blocks_, built_bend_blocks_);
+}
+
+void BaraffWitkinModel::splitParticle(int original, int copy, const std::vector<int>& /*neighbours*/,
+                                      const std::vector<Eigen::Vector3i>& triangles)
+{
+  // Triangles are matched by their corners, in any order.
+  auto sorted = [](int a, int b, int c) {
+    std::array<int, 3> corners{a, b, c};
+    std::sort(corners.begin(), corners.end());
+    return corners;
+  };
+  auto given = [&](int a, int b, int c) {
+    const std::array<int, 3> corners = sorted(a, b, c);
+    for (const Eigen::Vector3i& t : triangles)
+      if (sorted(t[0], t[1], t[2]) == corners) return true;
+    return false;
+  };
+  for (BwTriangle& t : def_.triangles)
   {
-    std::array<int, 9> blocks;
-    for (int m = 0; m < 3; ++m)
-      for (int n = 0; n < 3; ++n)
-        blocks[3 * m + n] = solver.blockIndex(t.v[m], t.v[n]);
-    triangle_blocks_.push_back(blocks);
+    if (std::find(t.v.begin(), t.v.end(), original) != t.v.end() && given(t.v[0], t.v[1], t.v[2]))
+      std::replace(t.v.begin(), t.v.end(), original, copy);
   }
-  for (const BwBend& b : def_.bends)
+  // A bend's triangles are (x0, x1, x2) and (x3, x2, x1): the one holding `original` decides (both
+  // hold it when it is on their shared edge, and then they are in the same group).
+  for (BwBend& b : def_.bends)
   {
-    std::array<int, 16> blocks;
-    for (int m = 0; m < 4; ++m)
-      for (int n = 0; n < 4; ++n)
-        blocks[4 * m + n] = solver.blockIndex(b.v[m], b.v[n]);
-    bend_blocks_.push_back(blocks);
+    const auto at = std::find(b.v.begin(), b.v.end(), original);
+    if (at == b.v.end()) continue;
+    const bool moves = at == b.v.begin() + 3 ? given(b.v[3], b.v[2], b.v[1]) : given(b.v[0], b.v[1], b.v[2]);
+    if (moves) *at = copy;
   }
-  built_triangle_blocks_ = triangle_blocks_;
-  built_bend_blocks_ = bend_blocks_;
 }
 
 Eigen::Matrix3d BaraffWitkinModel::corners(const Eigen::Matrix3Xd& x, const BwTriangle& t) const

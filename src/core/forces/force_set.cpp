@@ -124,5 +124,12 @@ void ForceSet::mend()
     element->mend();
 }
 
+void ForceSet::splitParticle(int original, int copy, const std::vector<int>& neighbours,
+                             const std::vector<Eigen::Vector3i>& triangles)
+{
+  for (const std::unique_ptr<ForceElement>& element : elements_)
+    element->splitParticle(original, copy, neighbours, triangles);
+}
+
 }  // namespace core
 }  // namespace particle_sim

@@ -172,15 +172,32 @@ void SpringForces::bindPattern(const ImplicitEulerSolver& solver)
 {
   // Every built spring keeps its blocks in the pattern, torn or not: a tear leaves them zero, so
   // the pattern (and the solver's storage) never changes.
+  // After a vertex split the pattern is the springs' as they are (the built ones' blocks may then be
+  // missing, −1: mend() is followed by a rebuild of the pattern).
+  auto blocks_of = [&solver](const Spring& spring) {
+    return std::array<int, 4>{solver.blockIndex(spring.i, spring.i), solver.blockIndex(spring.i, spring.j),
+                              solver.blockIndex(spring.j, spring.i), solver.blockIndex(spring.j, spring.j)};
+  };
   built_blocks_.clear();
   for (const Spring& spring : built_)
-  {
-    built_blocks_.push_back({solver.blockIndex(spring.i, spring.i), solver.blockIndex(spring.i, spring.j),
-                             solver.blockIndex(spring.j, spring.i), solver.blockIndex(spring.j, spring.j)});
-  }
+    built_blocks_.push_back(blocks_of(spring));
   blocks_.clear();
-  for (int origin : origin_)
-    blocks_.push_back(built_blocks_[origin]);
+  for (const Spring& spring : springs_)
+    blocks_.push_back(blocks_of(spring));
+}
+
+void SpringForces::splitParticle(int original, int copy, const std::vector<int>& neighbours,
+                                 const std::vector<Eigen::Vector3i>& /*triangles*/)
+{
+  auto joined = [&](int other) { return std::binary_search(neighbours.begin(), neighbours.end(), other); };
+  for (Spring& spring : springs_)
+  {
+    if (spring.i == original && joined(spring.j))
+      spring.i = copy;
+    else if (spring.j == original && joined(spring.i))
+      spring.j = copy;
+  }
+  ends_valid_ = false;
 }
 
 void SpringForces::addJacobians(const ForceContext& /*context*/, const Eigen::Matrix3Xd& x,

@@ -181,6 +181,7 @@ private:
   Eigen::Matrix3Xd x0_, vbar_, v_end_;  // v_end_: the velocities the step ended with
   std::vector<double> inverse_mass_, thickness_;
   std::vector<int> body_of_;
+  std::vector<int> origin_;     // per particle, the particle as built it comes from (a tear's copies share it)
   std::vector<char> is_point_;  // in some edge or triangle
   std::vector<Eigen::Vector3i> triangles_;
   std::vector<Eigen::Vector2i> edges_;

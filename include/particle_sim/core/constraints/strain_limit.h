@@ -31,6 +31,8 @@ class StrainLimit
 public:
   /// `particles`: the body's particle count; `springs`: all its springs (bend ones are skipped).
   StrainLimit(const StrainLimitDef& def, const std::vector<Spring>& springs, int particles);
+  /// Sizes the work arrays for a body that now has `particles` (a vertex split added some).
+  void resize(int particles) { unlimited_position_.setZero(3, particles); }
 
   bool enabled() const { return def_.max_strain > 0.0; }
   /// Limits these springs from now on (the body's after a tear; bend ones are skipped).

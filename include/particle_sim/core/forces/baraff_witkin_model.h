@@ -116,6 +116,10 @@ public:
   /// the bends of its edges; appends the removed triangles' corners to `torn`.
   void tear(const Eigen::Matrix3Xd& x, double tear_strain, TearRecord& torn) override;
   void mend() override;
+  /// Each triangle among `triangles`, and each bend whose triangle on `original`'s side is among them,
+  /// now uses `copy` in `original`'s place.
+  void splitParticle(int original, int copy, const std::vector<int>& neighbours,
+                     const std::vector<Eigen::Vector3i>& triangles) override;
 
 private:
   Eigen::Matrix3d corners(const Eigen::Matrix3Xd& x, const BwTriangle& t) const;

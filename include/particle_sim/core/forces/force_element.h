@@ -100,6 +100,13 @@ public:
   virtual void setSurface(const std::vector<Eigen::Vector3i>& /*triangles*/) {}
   /// Puts back every part tearing removed (its constants are resetConstants()' business).
   virtual void mend() {}
+  /// After a vertex split along a tear: particle `copy` takes `original`'s place in `triangles` (the
+  /// surface triangles given to it, corners as they were, with `original`) and in every part that
+  /// joins `original` to one of `neighbours` (the other corners of those triangles, sorted). The
+  /// implicit pattern is rebuilt afterwards (bindPattern()). Nothing for an element that cannot tear.
+  virtual void splitParticle(int /*original*/, int /*copy*/, const std::vector<int>& /*neighbours*/,
+                             const std::vector<Eigen::Vector3i>& /*triangles*/)
+  {}
 
   // Measurements ----------------------------------------------------------------------------------
   /// The largest strain [-] of what the element stretches at x; 0 when it stretches nothing.

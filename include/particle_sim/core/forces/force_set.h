@@ -45,6 +45,8 @@ public:
   void tear(const Eigen::Matrix3Xd& x, double tear_strain, TearRecord& torn);
   void setSurface(const std::vector<Eigen::Vector3i>& triangles);
   void mend();
+  void splitParticle(int original, int copy, const std::vector<int>& neighbours,
+                     const std::vector<Eigen::Vector3i>& triangles);
 
   /// The first element of type `Element`, or null (for read-only views of one element's data).
   template <class Element>

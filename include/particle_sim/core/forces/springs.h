@@ -37,6 +37,9 @@ public:
   /// Breaks every spring of positive rest length whose strain (l − L) / L exceeds `tear_strain`.
   void tear(const Eigen::Matrix3Xd& x, double tear_strain, TearRecord& torn) override;
   void mend() override;
+  /// Each spring joining `original` to one of `neighbours` now joins `copy` instead.
+  void splitParticle(int original, int copy, const std::vector<int>& neighbours,
+                     const std::vector<Eigen::Vector3i>& triangles) override;
   /// Largest (|x_j − x_i| − L) / L over the stretch and shear springs of positive rest length.
   double maxStrain(const Eigen::Matrix3Xd& x) const override;
 
