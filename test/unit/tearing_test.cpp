@@ -484,10 +484,136 @@ TEST(Tearing, BaraffWitkinClothLosesItsOverstretchedTriangles)
       if (!torn.isPinned(gridIndex(0, left)) || !torn.isPinned(gridIndex(kColumns - 1, right))) continue;
       EXPECT_NE(root(gridIndex(0, left)), root(gridIndex(kColumns - 1, right))) << "rows " << left << ", " << right;
     }
+  // Split along the tear (it has no springs: triangles hold each other through the edges they
+  // share): the conditions left are the surface left, corner for corner, every bend's two triangles
+  // are among them, and each free particle's triangles are one group through shared edges.
+  const BaraffWitkinDef& end = torn.baraffWitkin()->definition();
+  std::set<std::array<int, 3>> surface_left, conditions_left;
+  for (const Eigen::Vector3i& t : torn.surfaceTriangles())
+    surface_left.insert(key(t[0], t[1], t[2]));
+  for (const BwTriangle& t : end.triangles)
+    conditions_left.insert(key(t.v[0], t.v[1], t.v[2]));
+  EXPECT_EQ(conditions_left, surface_left);
+  for (const BwBend& b : end.bends)
+  {
+    EXPECT_EQ(conditions_left.count(key(b.v[0], b.v[1], b.v[2])), 1u);
+    EXPECT_EQ(conditions_left.count(key(b.v[3], b.v[2], b.v[1])), 1u);
+  }
+  EXPECT_NEAR(torn.particleMasses().sum(), twin.particleMasses().sum(), 1e-12);
+  for (int u = 0; u < torn.particles().size(); ++u)
+  {
+    if (torn.isPinned(u)) continue;
+    std::vector<std::array<int, 3>> fan;
+    for (const BwTriangle& t : end.triangles)
+      if (t.v[0] == u || t.v[1] == u || t.v[2] == u) fan.push_back({t.v[0], t.v[1], t.v[2]});
+    std::vector<int> group(fan.size());
+    std::iota(group.begin(), group.end(), 0);
+    std::function<int(int)> group_root = [&](int a) { return group[a] == a ? a : group[a] = group_root(group[a]); };
+    for (std::size_t a = 0; a < fan.size(); ++a)
+      for (std::size_t b = a + 1; b < fan.size(); ++b)
+        for (int w : fan[a])
+          if (w != u && std::find(fan[b].begin(), fan[b].end(), w) != fan[b].end())
+            group[group_root(static_cast<int>(b))] = group_root(static_cast<int>(a));
+    for (std::size_t a = 1; a < fan.size(); ++a)
+      EXPECT_EQ(group_root(static_cast<int>(a)), group_root(0)) << "particle " << u << "'s triangles fall apart";
+  }
   torn.reset();
+  EXPECT_EQ(torn.particles().size(), twin.particles().size());
   EXPECT_EQ(torn.baraffWitkin()->definition().triangles.size(), twin.baraffWitkin()->definition().triangles.size());
   EXPECT_EQ(torn.baraffWitkin()->definition().bends.size(), twin.baraffWitkin()->definition().bends.size());
   EXPECT_EQ(torn.tornTriangles(), 0);
+}
+
+// A Baraff–Witkin cloth of 3 x 3 particles, two cells split by the diagonal through the centre,
+// whose corners 0 and 8 start far from their rest places: the four triangles at those corners are
+// past the tear strain and go in the first step, which leaves the centre particle 4 with two
+// triangles that share only it (a bowtie). It is split: one particle per triangle, its mass shared
+// by their rest areas (equal here), each triangle and the bends across its edges with its own.
+TEST(Tearing, BaraffWitkinClothSplitsTheParticleItsTornTrianglesLeftInTwoGroups)
+{
+  SpringNetworkDef def;
+  def.name = "bowtie";
+  def.shape = NetworkShape::Cloth;
+  std::vector<Eigen::Vector2d> uvs;
+  for (int b = 0; b < 3; ++b)
+    for (int a = 0; a < 3; ++a)
+    {
+      uvs.emplace_back(0.1 * a, 0.1 * b);
+      def.positions.emplace_back(0.1 * a, 0.1 * b, 0.0);
+    }
+  def.positions[0] += Eigen::Vector3d(-0.2, -0.2, 0.0);
+  def.positions[8] += Eigen::Vector3d(0.2, 0.2, 0.0);
+  def.masses.assign(9, 0.01);
+  for (int b = 0; b < 2; ++b)
+    for (int a = 0; a < 2; ++a)
+    {
+      const int i = 3 * b + a;
+      def.triangles.emplace_back(i, i + 1, i + 4);
+      def.triangles.emplace_back(i, i + 4, i + 3);
+    }
+  std::string error;
+  ASSERT_TRUE(buildBaraffWitkin(def.positions, uvs, def.triangles, def.baraff_witkin, error)) << error;
+  def.tear_strain = kTearStrain;
+  def.integrator.type = kSymplecticEulerIntegrator;
+  ASSERT_TRUE(validate(def, 100).ok) << validate(def, 100).message;
+  SpringNetworkBody body(def);
+  const Eigen::Vector3d momentum = body.momentum();
+  body.step(1e-5, noGravity());
+  ASSERT_EQ(body.lastTornTriangles(), 4);
+  ASSERT_EQ(body.splitParticles(), 1);
+  ASSERT_EQ(body.particles().size(), 10);
+  EXPECT_EQ(body.particleOrigin(9), 4);
+  EXPECT_DOUBLE_EQ(body.particleMasses()[4], 0.005);
+  EXPECT_DOUBLE_EQ(body.particleMasses()[9], 0.005);
+  EXPECT_TRUE(body.particles().position.col(9) == body.particles().position.col(4));
+  EXPECT_LT((body.momentum() - momentum).norm(), 1e-12);
+  // The surface: (1, 2, 5) and (1, 5, 4) in one sheet, (3, 4, 7) and (3, 7, 6) in the other, which
+  // now holds the copy in place of 4; the conditions are the same triangles.
+  const std::vector<Eigen::Vector3i>& surface = body.surfaceTriangles();
+  ASSERT_EQ(surface.size(), 4u);
+  int holding_4 = 0, holding_9 = 0;
+  for (const Eigen::Vector3i& t : surface)
+  {
+    const bool first_sheet = (t.array() == 1).any();
+    const bool has_4 = (t.array() == 4).any(), has_9 = (t.array() == 9).any();
+    EXPECT_FALSE(has_4 && has_9);
+    holding_4 += has_4 ? 1 : 0;
+    holding_9 += has_9 ? 1 : 0;
+    if (has_4 || has_9)
+    {
+      EXPECT_NE(first_sheet, has_9) << t.transpose();
+    }
+  }
+  EXPECT_EQ(holding_4, 1);
+  EXPECT_EQ(holding_9, 1);
+  const BaraffWitkinDef& left = body.baraffWitkin()->definition();
+  ASSERT_EQ(left.triangles.size(), 4u);
+  for (const BwTriangle& t : left.triangles)
+  {
+    EXPECT_EQ(std::count_if(surface.begin(), surface.end(),
+                            [&](const Eigen::Vector3i& s) {
+                              std::array<int, 3> a{s[0], s[1], s[2]}, b{t.v[0], t.v[1], t.v[2]};
+                              std::sort(a.begin(), a.end());
+                              std::sort(b.begin(), b.end());
+                              return a == b;
+                            }),
+              1);
+  }
+  // The bends left join triangles of one sheet each: none holds both 4 and 9.
+  for (const BwBend& b : left.bends)
+  {
+    const bool has_4 = std::find(b.v.begin(), b.v.end(), 4) != b.v.end();
+    const bool has_9 = std::find(b.v.begin(), b.v.end(), 9) != b.v.end();
+    EXPECT_FALSE(has_4 && has_9);
+  }
+  // It steps on, and a reset puts the nine particles and eight triangles back.
+  for (int k = 0; k < 10; ++k)
+    body.step(1e-4, noGravity());
+  EXPECT_TRUE(body.particles().position.allFinite());
+  body.reset();
+  EXPECT_EQ(body.particles().size(), 9);
+  EXPECT_EQ(body.baraffWitkin()->definition().triangles.size(), 8u);
+  EXPECT_EQ(body.splitParticles(), 0);
 }
 
 // After a tear the body is the body of the springs it has left: one built from them at the same
