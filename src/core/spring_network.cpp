@@ -42,6 +42,12 @@ bool allFiniteShared(WorkerPool* workers, const Eigen::Matrix3Xd& m)
   return finite.load();
 }
 
+// (a, b) with the smaller first: a spring's or an edge's particle pair, whichever way it is given.
+std::pair<int, int> orderedPair(int a, int b)
+{
+  return a < b ? std::make_pair(a, b) : std::make_pair(b, a);
+}
+
 std::string indexed(const char* field, std::size_t i)
 {
   return std::string(field) + "[" + std::to_string(i) + "]";
@@ -197,7 +203,7 @@ SpringNetworkBody::SpringNetworkBody(const SpringNetworkDef& def, const Integrat
     joined_pairs_.reserve(def_.springs.size());
     cut_pairs_.reserve(def_.springs.size());
     for (const Spring& spring : def_.springs)
-      built_pairs_.emplace_back(std::min(spring.i, spring.j), std::max(spring.i, spring.j));
+      built_pairs_.push_back(orderedPair(spring.i, spring.j));
     std::sort(built_pairs_.begin(), built_pairs_.end());
     // A vertex split's lists: every end of a spring and corner of a triangle as candidates, and a
     // fan as large as the most triangles at one particle (a split never adds triangles to a fan).
@@ -249,7 +255,8 @@ void SpringNetworkBody::reset()
 {
   const int n = static_cast<int>(def_.positions.size());
   ParticlePool& p = particles_;
-  if (p.size() != n)
+  const bool split = split_particles_ > 0;  // the body grew and its pattern was rebuilt
+  if (split)
   {
     // Drop the particles vertex splits added (the loop below sets every built one).
     p.resize(n, n);
@@ -283,11 +290,7 @@ void SpringNetworkBody::reset()
     pin_target_.col(index) = def_.positions[index];
   }
   forces_.mend();
-  if (pattern_rebuilt_)
-  {
-    rebuildPattern();  // the built pattern again, for the mended elements
-    pattern_rebuilt_ = false;
-  }
+  if (split) rebuildPattern();  // the built pattern again, for the mended elements
   forces_.resetConstants();
   surface_ = def_.triangles;
   strain_limit_.setSprings(def_.springs);
@@ -552,64 +555,48 @@ void SpringNetworkBody::tearOverstretched()
   torn_springs_ += static_cast<long long>(torn_.springs.size());
   torn_triangles_ += static_cast<long long>(torn_.triangles.size());
 
-  // A surface triangle goes with its Baraff–Witkin triangle, or when one of its edges has no spring
-  // left joining its corners (a pair that had springs and lost them all). Runs only when something
+  // The pairs springs still join, and this step's cut edges (pairs that had springs and lost them
+  // all now): the surface is cut along the tears (cutSurfaceAlongTears). Runs only when something
   // broke.
-  auto ordered = [](int a, int b) { return a < b ? std::make_pair(a, b) : std::make_pair(b, a); };
   std::vector<std::pair<int, int>>& joined = joined_pairs_;
   joined.clear();
   for (const Spring& spring : springs())
-    joined.push_back(ordered(spring.i, spring.j));
+    joined.push_back(orderedPair(spring.i, spring.j));
   std::sort(joined.begin(), joined.end());
   std::vector<std::pair<int, int>>& cut = cut_pairs_;
   cut.clear();
   for (const std::pair<int, int>& pair : torn_.springs)
   {
-    const std::pair<int, int> edge = ordered(pair.first, pair.second);
+    const std::pair<int, int> edge = orderedPair(pair.first, pair.second);
     if (!std::binary_search(joined.begin(), joined.end(), edge)) cut.push_back(edge);
   }
   std::sort(cut.begin(), cut.end());
-  if (def_.shape == NetworkShape::Cloth)
-  {
-    splitAlongTears(cut);
-  }
-  else
-  {
-    auto is_cut = [&](int a, int b) { return std::binary_search(cut.begin(), cut.end(), ordered(a, b)); };
-    auto is_torn = [&](const Eigen::Vector3i& t) {
-      return std::find(torn_.triangles.begin(), torn_.triangles.end(), t) != torn_.triangles.end();
-    };
-    const std::size_t before = surface_.size();
-    surface_.erase(std::remove_if(surface_.begin(), surface_.end(),
-                                  [&](const Eigen::Vector3i& t) {
-                                    return is_cut(t[0], t[1]) || is_cut(t[1], t[2]) || is_cut(t[2], t[0]) || is_torn(t);
-                                  }),
-                   surface_.end());
-    if (surface_.size() != before) forces_.setSurface(surface_);
-  }
+  cutSurfaceAlongTears(cut);
   strain_limit_.setSprings(springs());
   // `auto` re-decides from the new bound at the next step anyway; its explanation is kept (rebuilt
   // when its choice changes), as writing it anew would allocate in the step.
   updateStabilityBound(false);
 }
 
-void SpringNetworkBody::splitAlongTears(const std::vector<std::pair<int, int>>& cut)
+void SpringNetworkBody::cutSurfaceAlongTears(const std::vector<std::pair<int, int>>& cut)
 {
   // An edge is cut when its particles had a spring as built (between the particles they come from)
   // and have none now: this step's tear or an earlier one.
-  auto ordered = [](int a, int b) { return a < b ? std::make_pair(a, b) : std::make_pair(b, a); };
   std::vector<std::pair<int, int>>& joined = joined_pairs_;  // sorted by tearOverstretched()
   auto is_cut = [&](int a, int b) {
-    return !std::binary_search(joined.begin(), joined.end(), ordered(a, b)) &&
-           std::binary_search(built_pairs_.begin(), built_pairs_.end(), ordered(origin_of_[a], origin_of_[b]));
+    return !std::binary_search(joined.begin(), joined.end(), orderedPair(a, b)) &&
+           std::binary_search(built_pairs_.begin(), built_pairs_.end(), orderedPair(origin_of_[a], origin_of_[b]));
   };
   auto is_torn = [&](const Eigen::Vector3i& t) {
     return std::find(torn_.triangles.begin(), torn_.triangles.end(), t) != torn_.triangles.end();
   };
 
-  // 1. A triangle goes when it tore (Baraff–Witkin) or two of its edges were cut: it would hang by
-  //    one edge or none. The corners of what went, and the ends of the cut edges, may split.
-  // The work lists are members reserved at build: a tear that splits nothing allocates nothing.
+  // 1. A triangle goes when it tore (Baraff–Witkin) or, in a cloth, two of its edges were cut (it
+  //    would hang by one edge or none; a jelly or network drops it at the first). The corners of
+  //    what went, and the ends of the cut edges, may split. The work lists are members reserved at
+  //    build: a tear that splits nothing allocates nothing.
+  const bool cloth = def_.shape == NetworkShape::Cloth;
+  const int cuts_that_drop = cloth ? 2 : 1;
   std::vector<int>& candidates = split_candidates_;
   candidates.clear();
   for (const std::pair<int, int>& edge : cut)
@@ -621,11 +608,16 @@ void SpringNetworkBody::splitAlongTears(const std::vector<std::pair<int, int>>& 
   surface_.erase(std::remove_if(surface_.begin(), surface_.end(),
                                 [&](const Eigen::Vector3i& t) {
                                   const int cuts = is_cut(t[0], t[1]) + is_cut(t[1], t[2]) + is_cut(t[2], t[0]);
-                                  if (cuts < 2 && !is_torn(t)) return false;
+                                  if (cuts < cuts_that_drop && !is_torn(t)) return false;
                                   candidates.insert(candidates.end(), {t[0], t[1], t[2]});
                                   return true;
                                 }),
                  surface_.end());
+  if (!cloth)
+  {
+    if (surface_.size() != before) forces_.setSurface(surface_);
+    return;
+  }
   std::sort(candidates.begin(), candidates.end());
   candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
 
@@ -709,7 +701,7 @@ void SpringNetworkBody::splitAlongTears(const std::vector<std::pair<int, int>>& 
     }
     joined.clear();
     for (const Spring& spring : springs())
-      joined.push_back(ordered(spring.i, spring.j));
+      joined.push_back(orderedPair(spring.i, spring.j));
     std::sort(joined.begin(), joined.end());
   }
 
@@ -745,7 +737,6 @@ void SpringNetworkBody::splitAlongTears(const std::vector<std::pair<int, int>>& 
     }
     split_particles_ += static_cast<long long>(splits.size());
     rebuildPattern();
-    pattern_rebuilt_ = true;
   }
   if (surface_.size() != before || !splits.empty()) forces_.setSurface(surface_);
 }

@@ -274,9 +274,10 @@ private:
   // The implicit pattern from the force elements' pairs as they are now, bound to every element,
   // and every integration method made anew for it (their histories start again). Allocates.
   void rebuildPattern();
-  // Drops the surface triangles the tear just cut off and splits the vertices it left in several
-  // groups of triangles (a cloth); `cut` holds the sorted particle pairs that lost their last spring.
-  void splitAlongTears(const std::vector<std::pair<int, int>>& cut);
+  // Drops the surface triangles the tears cut off and, in a cloth, splits the particles they left
+  // with several groups of triangles; `cut` holds the sorted particle pairs that lost their last
+  // spring in this step.
+  void cutSurfaceAlongTears(const std::vector<std::pair<int, int>>& cut);
   // Appends one particle per entry of `sources`, each a copy of that particle's state, free; the
   // caller sets masses, rest positions and origins, and re-indexes the force elements. Allocates.
   void appendCopies(const std::vector<int>& sources);
@@ -327,9 +328,9 @@ private:
   std::vector<Eigen::Vector3d> rest_positions_;
   std::vector<int> origin_of_;
   std::vector<std::pair<int, int>> built_pairs_;  // the particle pairs springs joined as built, sorted (tearing only)
-  std::vector<int> split_candidates_, split_fan_, split_group_, split_roots_;  // splitAlongTears()' lists, reserved
-  long long split_particles_ = 0;                                              // since build or reset
-  bool pattern_rebuilt_ = false;  // a split changed the implicit pattern since build or reset
+  std::vector<int> split_candidates_, split_fan_, split_group_,
+      split_roots_;                // cutSurfaceAlongTears()' lists, reserved
+  long long split_particles_ = 0;  // since build or reset (above 0: the body grew, its pattern was rebuilt)
 };
 
 }  // namespace core

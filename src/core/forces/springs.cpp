@@ -257,8 +257,12 @@ void SpringForces::addEnergy(const ForceContext& context, const Eigen::Matrix3Xd
 
 void SpringForces::resetConstants()
 {
+  // The constants alone: a vertex split may have moved a spring's ends to a copy.
   for (std::size_t s = 0; s < springs_.size(); ++s)
-    springs_[s] = built_[origin_[s]];
+  {
+    springs_[s].stiffness = built_[origin_[s]].stiffness;
+    springs_[s].damping = built_[origin_[s]].damping;
+  }
 }
 
 void SpringForces::tear(const Eigen::Matrix3Xd& x, double tear_strain, TearRecord& torn)

@@ -293,13 +293,7 @@ SolverReport ImplicitEulerSolver::solveLinear(const std::vector<char>& pinned, c
   // Directly, when chosen and the factorization succeeds (a singular or non-finite pivot leaves it
   // to CG, from the last step's Δv); then CG, which stops at once when the residual is small enough.
   SolverReport report;
-  if (usesDirect(settings.linear_solver) && direct_.factorize(blocks_, pinned))
-  {
-    residual_ = rhs_;
-    filter(pinned, residual_);
-    direct_.solve(residual_, delta_v_);
-    report.direct = true;
-  }
+  report.direct = usesDirect(settings.linear_solver) && solveDirectly(pinned);
   conjugateGradient(pinned, settings, report);
   // `auto` measured CG: when a solve took more iterations than the direct solve costs, or stopped
   // at the iteration cap short of the tolerance (the direct solve is exact, however dear), the
@@ -310,20 +304,25 @@ SolverReport ImplicitEulerSolver::solveLinear(const std::vector<char>& pinned, c
     auto_choice_ = DirectChoice::Cheaper;
     // A capped solve is not kept: this solve is done again directly, from the same system (CG
     // only read it), so that `auto` never ends a step short of the tolerance it could meet.
-    if (!report.converged && !report.breakdown && usesDirect(settings.linear_solver) &&
-        direct_.factorize(blocks_, pinned))
+    if (!report.converged && !report.breakdown && usesDirect(settings.linear_solver) && solveDirectly(pinned))
     {
       const int capped_iterations = report.iterations;
       report = SolverReport{};
-      residual_ = rhs_;
-      filter(pinned, residual_);
-      direct_.solve(residual_, delta_v_);
       report.direct = true;
       conjugateGradient(pinned, settings, report);
       report.iterations += capped_iterations;  // the work done, the capped CG's included
     }
   }
   return report;
+}
+
+bool ImplicitEulerSolver::solveDirectly(const std::vector<char>& pinned)
+{
+  if (!direct_.factorize(blocks_, pinned)) return false;
+  residual_ = rhs_;
+  filter(pinned, residual_);
+  direct_.solve(residual_, delta_v_);
+  return true;
 }
 
 void ImplicitEulerSolver::conjugateGradient(const std::vector<char>& pinned, const IntegratorDef& settings,

@@ -104,6 +104,9 @@ private:
   bool reviseHolds(std::vector<RestingContact>& contacts);
   // The linear solve of the (filtered) system in blocks_ and rhs_ for delta_v_.
   SolverReport solveLinear(const std::vector<char>& pinned, const IntegratorDef& settings);
+  // Δv by the direct solver (factorize and solve the filtered system); false, Δv untouched, when a
+  // pivot block is singular or not finite.
+  bool solveDirectly(const std::vector<char>& pinned);
 
   // Block-sparse rows: row i has blocks row_start_[i] .. row_start_[i + 1] − 1.
   std::vector<int> row_start_, block_row_, block_column_, diagonal_block_;
