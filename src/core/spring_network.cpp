@@ -421,12 +421,10 @@ double SpringNetworkBody::maxStrain() const
 
 double SpringNetworkBody::kineticEnergy() const
 {
-  double energy = 0.0;
-  for (int i = 0; i < particles_.size(); ++i)
-  {
-    if (!pinned_[i]) energy += 0.5 * mass_[i] * particles_.velocity.col(i).squaredNorm();
-  }
-  return energy;
+  // Summed in fixed chunks of particles, shared between threads: the same bits at any thread count.
+  return sumByChunks(workers_, particles_.size(), kParticlesPerVectorChunk, kinetic_energy_chunks_, [&](int i) {
+    return pinned_[i] ? 0.0 : 0.5 * mass_[i] * particles_.velocity.col(i).squaredNorm();
+  });
 }
 
 double SpringNetworkBody::potentialEnergy(const Eigen::Vector3d& gravity) const
@@ -487,6 +485,7 @@ void SpringNetworkBody::step(double dt, const Environment& env)
   energy_after_valid_ = false;
   guard_.beginStep(explicit_method, energy_before, energy_scale_, env.gravity.norm());
   double energy_after = 0.0;
+  bool finite = true;
 
   for (;;)
   {
@@ -506,7 +505,7 @@ void SpringNetworkBody::step(double dt, const Environment& env)
     pin_target_ = step_target_;
 
     // Blow-up of an explicit method: roll back and retry with more substeps, or freeze.
-    const bool finite = allFiniteShared(workers_, p.position) && allFiniteShared(workers_, p.velocity);
+    finite = allFiniteShared(workers_, p.position) && allFiniteShared(workers_, p.velocity);
     energy_after = explicit_method ? mechanicalEnergy(env.gravity) : 0.0;
     if (!guard_.blewUp(finite, energy_after)) break;
     p.position = saved_position_;
@@ -526,13 +525,15 @@ void SpringNetworkBody::step(double dt, const Environment& env)
   last_substeps_ = substeps;
   last_integrator_ = type;
   last_dt_ = dt;
-  for (int i = 0; i < n; ++i)
-    p.age[i] += dt;
+  shareLoop(workers_, n, kParticlesPerVectorChunk, [&](int begin, int end) {
+    for (int i = begin; i < end; ++i)
+      p.age[i] += dt;
+  });
   copyShared(workers_, saved_position_, p.previous_position);
 
-  // A non-finite state or a failed solve is never kept: go back to the last good state and stop
-  // this body.
-  if (!allFiniteShared(workers_, p.position) || !allFiniteShared(workers_, p.velocity) || last_solve_.breakdown)
+  // A non-finite state (as checked after the last try above) or a failed solve is never kept: go
+  // back to the last good state and stop this body.
+  if (!finite || last_solve_.breakdown)
   {
     p.position = saved_position_;
     p.velocity = saved_velocity_;

@@ -11,6 +11,8 @@
 #include <Eigen/Core>
 #include <algorithm>
 #include <atomic>
+#include <cmath>
+#include <cstring>
 #include <cstdint>
 #include <random>
 #include <thread>
@@ -195,6 +197,94 @@ TEST(WorkerPool, SharedSpringForcesByChunksOfParticlesEqualTheOneThreadLoopBitFo
   const Eigen::Matrix3Xd v = Eigen::Matrix3Xd::Random(3, particles);
   TwoContexts contexts(particles);
   expectSharedEqualsAlone(core::SpringForces(springs), contexts, x, v, Eigen::Matrix3Xd::Random(3, particles));
+}
+
+// sumByChunks adds its terms in fixed chunks and then chunk after chunk: the same bits at 1, 2, 3
+// and 8 threads, and within rounding of the exact sum (long double, terms of mixed sign and size).
+bool sameDouble(double a, double b)
+{
+  return std::memcmp(&a, &b, sizeof a) == 0;
+}
+
+TEST(WorkerPool, SumByChunksGivesTheSameBitsAtAnyThreadCountAndTheSumWithinRounding)
+{
+  std::mt19937 random(7);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  for (int items : {0, 1, 2047, 2048, 2049, 100000})
+  {
+    std::vector<double> terms(items);
+    long double exact = 0.0L, magnitude = 0.0L;
+    for (double& term : terms)
+    {
+      term = unit(random) * std::pow(10.0, 3.0 * unit(random));
+      exact += term;
+      magnitude += std::abs(term);
+    }
+    std::vector<double> partial, sums;
+    for (int threads : {1, 2, 3, 8})
+    {
+      core::WorkerPool pool(threads);
+      sums.push_back(core::sumByChunks(&pool, items, 2048, partial, [&](int i) { return terms[i]; }));
+    }
+    sums.push_back(core::sumByChunks(nullptr, items, 2048, partial, [&](int i) { return terms[i]; }));
+    for (double sum : sums)
+      EXPECT_TRUE(sameDouble(sum, sums[0])) << items << " items: " << sum << " against " << sums[0];
+    EXPECT_LE(std::abs(static_cast<long double>(sums[0]) - exact), 1e-15L * items * magnitude + 1e-300L)
+        << items << " items";
+  }
+}
+
+// A cloth's mechanical energy, which the blow-up check of the explicit methods reads each step
+// (kinetic, gravity and spring energies, each summed by chunks and shared), is the same bits at one
+// and two threads, and within rounding of the energies summed independently here in long double.
+TEST(WorkerPool, AClothsEnergyIsTheSameBitsAtTwoThreadsAndTheSumOfItsParts)
+{
+  core::ClothGridDef def(core::ClothModel::Springs);
+  def.name = "cloth";
+  def.nu = def.nv = 96;  // 9216 particles, about 55,000 springs: several chunks of each sum
+  def.origin = {0.0, 0.0, 2.0};
+  def.edge_u = {1.0, 0.0, 0.0};
+  def.edge_v = {0.0, 1.0, 0.0};
+  def.named_pins = {"corner_00", "corner_10"};
+  def.integrator.type = core::kSymplecticEulerIntegrator;
+  def.integrator.max_substeps = 100000;
+  core::Environment env;
+  env.ground.enabled = false;
+  double energies[2];
+  for (int threads : {1, 2})
+  {
+    core::WorkerPool pool(threads);
+    core::SpringNetworkBody body(core::buildClothGrid(def));
+    body.setWorkers(&pool);
+    for (int k = 0; k < 3; ++k)
+      body.step(1.0 / 240.0, env);
+    ASSERT_FALSE(body.frozen()) << body.frozenReason();
+    energies[threads - 1] = body.kineticEnergy() + body.potentialEnergy(env.gravity);
+
+    // Independently: ½ m v² and −m g·x of the free particles, ½ k (|x_i − x_j| − L)² per spring.
+    const core::ParticlePool& p = body.particles();
+    long double expected = 0.0L, magnitude = 0.0L;
+    for (int i = 0; i < p.size(); ++i)
+    {
+      if (p.inverse_mass[i] == 0.0) continue;
+      const double m = 1.0 / p.inverse_mass[i];
+      const long double kinetic = 0.5L * m * p.velocity.col(i).squaredNorm();
+      const long double gravity = -m * env.gravity.dot(p.position.col(i));
+      expected += kinetic + gravity;
+      magnitude += std::abs(kinetic) + std::abs(gravity);
+    }
+    for (const core::Spring& s : body.springs())
+    {
+      const double stretch = (p.position.col(s.i) - p.position.col(s.j)).norm() - s.rest_length;
+      const long double spring = 0.5L * s.stiffness * stretch * stretch;
+      expected += spring;
+      magnitude += spring;
+    }
+    EXPECT_GT(magnitude, 0.0L);
+    EXPECT_LE(std::abs(static_cast<long double>(energies[threads - 1]) - expected), 1e-12L * magnitude)
+        << threads << " threads: " << energies[threads - 1] << " J against " << static_cast<double>(expected) << " J";
+  }
+  EXPECT_TRUE(sameDouble(energies[0], energies[1])) << energies[0] << " J against " << energies[1] << " J";
 }
 
 // Every method of the core (and `auto`) steps a 64 × 64 spring cloth (4096 particles, about 24,000

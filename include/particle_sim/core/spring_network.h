@@ -289,6 +289,7 @@ private:
   AirDef air_;                     // the air of the current step
   double damping_ = 0.0;           // [1/s] global damping of the current step (Environment::damping)
   WorkerPool* workers_ = nullptr;  // the world's threads (setWorkers), or null
+  mutable std::vector<double> kinetic_energy_chunks_;  // kineticEnergy(): per chunk of particles, its energy
   Eigen::Vector3d gravity_ = Eigen::Vector3d::Zero();  // [m/s²] gravity of the current step
   Eigen::VectorXd mass_;                               // [kg], kept for pinned particles too
   std::vector<char> pinned_;

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <algorithm>
 #include <atomic>
 #include <condition_variable>
 #include <cstdint>
@@ -97,6 +98,31 @@ void shareLoop(WorkerPool* workers, int items, int chunk, Body&& body)
     workers->forEachChunk(items, chunk, body);
   else if (items > 0)
     body(0, items);
+}
+
+/// Σ term(i) over [0, items): summed in order within fixed chunks of `chunk` items (shared with
+/// `workers`), then chunk after chunk on the calling thread. The same bits at any thread count, one
+/// included, since the chunks never depend on it. `partial` holds each chunk's sum; it allocates
+/// only when it grows.
+template <class Term>
+double sumByChunks(WorkerPool* workers, int items, int chunk, std::vector<double>& partial, Term&& term)
+{
+  if (items <= 0) return 0.0;
+  partial.resize((items + chunk - 1) / chunk);
+  shareLoop(workers, items, chunk, [&](int begin, int end) {
+    for (int first = begin; first < end; first += chunk)
+    {
+      const int last = std::min(end, first + chunk);
+      double sum = 0.0;
+      for (int i = first; i < last; ++i)
+        sum += term(i);
+      partial[first / chunk] = sum;
+    }
+  });
+  double total = 0.0;
+  for (const double sum : partial)
+    total += sum;
+  return total;
 }
 
 }  // namespace core

@@ -234,25 +234,13 @@ void SpringForces::addStabilityRows(const std::vector<Eigen::Vector3d>& /*rest*/
 
 void SpringForces::addEnergy(const ForceContext& context, const Eigen::Matrix3Xd& x, double& energy) const
 {
-  const int springs = static_cast<int>(springs_.size());
-  if (context.workers && context.workers->threads() > 1 && springs > kSpringsPerChunk)
-  {
-    // Each spring's energy shared between threads, then summed here in spring order: the
-    // one-thread loop's sum, bit for bit (only the square roots and products are shared).
-    spring_energy_.resize(springs);  // within its capacity after the first call
-    context.workers->forEachChunk(springs, kSpringsPerChunk, [&](int begin, int end) {
-      for (int k = begin; k < end; ++k)
-      {
+  // Summed in fixed chunks of springs (shared between threads), then chunk after chunk: the same
+  // bits at any thread count.
+  energy +=
+      sumByChunks(context.workers, static_cast<int>(springs_.size()), kSpringsPerChunk, chunk_energy_, [&](int k) {
         const Spring& s = springs_[k];
-        spring_energy_[k] = springEnergy(x.col(s.i), x.col(s.j), s.rest_length, s.stiffness);
-      }
-    });
-    for (double spring_energy : spring_energy_)
-      energy += spring_energy;
-    return;
-  }
-  for (const Spring& s : springs_)
-    energy += springEnergy(x.col(s.i), x.col(s.j), s.rest_length, s.stiffness);
+        return springEnergy(x.col(s.i), x.col(s.j), s.rest_length, s.stiffness);
+      });
 }
 
 void SpringForces::resetConstants()

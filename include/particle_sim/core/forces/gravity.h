@@ -1,5 +1,7 @@
 #pragma once
 
+#include <vector>
+
 #include "particle_sim/core/forces/force_element.h"
 
 namespace particle_sim
@@ -15,6 +17,9 @@ public:
   void addForces(const ForceContext& context, const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v,
                  Eigen::Matrix3Xd& force) const override;
   void addEnergy(const ForceContext& context, const Eigen::Matrix3Xd& x, double& energy) const override;
+
+private:
+  mutable std::vector<double> chunk_energy_;  // addEnergy(): per chunk of particles, its energy
 };
 
 }  // namespace core

@@ -69,9 +69,9 @@ private:
   mutable bool ends_valid_ = false;
   mutable bool by_chunks_ = false;  // chunk_springs_ in use (else the two passes); decided once
   mutable bool mode_decided_ = false;
-  mutable std::vector<int> chunk_start_;       // per chunk c: its springs are chunk_springs_[chunk_start_[c] …)
-  mutable std::vector<int> chunk_springs_;     // per chunk, the springs touching it, ascending
-  mutable std::vector<double> spring_energy_;  // addEnergy() shared: per spring of springs_ its energy
+  mutable std::vector<int> chunk_start_;      // per chunk c: its springs are chunk_springs_[chunk_start_[c] …)
+  mutable std::vector<int> chunk_springs_;    // per chunk, the springs touching it, ascending
+  mutable std::vector<double> chunk_energy_;  // addEnergy(): per chunk of springs, its energy
 };
 
 }  // namespace core
