@@ -54,6 +54,8 @@ void ImplicitEulerSolver::setPattern(int particles, const std::vector<std::pair<
   auto_choice_ = DirectChoice::Undecided;
   direct_in_cg_iterations_ = 0.0;
   inverse_diagonal_.assign(particles, Eigen::Matrix3d::Identity());
+  curvature_chunks_.assign((particles + kRowsPerChunk - 1) / kRowsPerChunk, 0.0);
+  residual_chunks_.assign((particles + kParticlesPerVectorChunk - 1) / kParticlesPerVectorChunk, ResidualSums());
   for (Eigen::Matrix3Xd* m :
        {&delta_v_, &rhs_, &residual_, &direction_, &product_, &preconditioned_, &held_change_, &original_rhs_})
     m->setZero(3, particles);
@@ -354,18 +356,32 @@ void ImplicitEulerSolver::conjugateGradient(const std::vector<char>& pinned, con
     filter(pinned, direction_);
   }
   double delta_new = dot(residual_, direction_);
-  // Each iteration's per-particle work (the product, the updates, the preconditioner) is shared by
-  // rows (WorkerPool): every row is computed alone, in the same operations as on one thread. The
-  // three sums over all particles stay on the calling thread.
+  // Each iteration is three passes over the particles, each shared by rows (WorkerPool): the product
+  // A d with the curvature d·Ad; the updates of Δv and r with the preconditioned residual z and the
+  // sums r·z, |r|² and Σ |r_i|² / m_i; the new direction. Every row is computed alone, in the same
+  // operations as on one thread, and every sum is taken in fixed chunks of rows and then chunk after
+  // chunk (like sumByChunks()): the same bits at any thread count.
   const int rows = static_cast<int>(diagonal_block_.size());
   while (!within(norms) && report.iterations < settings.cg_max_iterations)
   {
     shareLoop(workers_, rows, kRowsPerChunk, [&](int begin, int end) {
-      multiplyRows(direction_, product_, begin, end);
-      for (int i = begin; i < end; ++i)
-        if (pinned[i]) product_.col(i).setZero();
+      for (int first = begin; first < end; first += kRowsPerChunk)
+      {
+        const int last = std::min(end, first + kRowsPerChunk);
+        multiplyRows(direction_, product_, first, last);
+        // Three running sums, one per coordinate, so that each add need not wait for the last.
+        Eigen::Vector3d curvature = Eigen::Vector3d::Zero();
+        for (int i = first; i < last; ++i)
+        {
+          if (pinned[i]) product_.col(i).setZero();
+          curvature += direction_.col(i).cwiseProduct(product_.col(i));
+        }
+        curvature_chunks_[first / kRowsPerChunk] = curvature.sum();
+      }
     });
-    const double curvature = dot(direction_, product_);
+    double curvature = 0.0;
+    for (const double chunk : curvature_chunks_)
+      curvature += chunk;
     if (!(curvature > 0.0))
     {
       report.breakdown = true;  // not positive definite (or NaN): the solve failed
@@ -373,14 +389,40 @@ void ImplicitEulerSolver::conjugateGradient(const std::vector<char>& pinned, con
     }
     const double alpha = delta_new / curvature;
     shareLoop(workers_, rows, kParticlesPerVectorChunk, [&](int begin, int end) {
-      const int count = end - begin;
-      delta_v_.middleCols(begin, count) += alpha * direction_.middleCols(begin, count);
-      residual_.middleCols(begin, count) -= alpha * product_.middleCols(begin, count);
-      for (int i = begin; i < end; ++i)
-        preconditioned_.col(i).noalias() = inverse_diagonal_[i] * residual_.col(i);
+      for (int first = begin; first < end; first += kParticlesPerVectorChunk)
+      {
+        const int last = std::min(end, first + kParticlesPerVectorChunk);
+        Eigen::Vector3d preconditioned = Eigen::Vector3d::Zero(), squared = Eigen::Vector3d::Zero(),
+                        weighted = Eigen::Vector3d::Zero();  // per coordinate, as above
+        for (int i = first; i < last; ++i)
+        {
+          delta_v_.col(i) += alpha * direction_.col(i);
+          const Eigen::Vector3d r = residual_.col(i) - alpha * product_.col(i);
+          residual_.col(i) = r;
+          const Eigen::Vector3d z = inverse_diagonal_[i] * r;
+          preconditioned_.col(i) = z;
+          preconditioned += r.cwiseProduct(z);
+          const Eigen::Vector3d r2 = r.cwiseAbs2();
+          squared += r2;
+          const double m = (*mass_)[i];
+          if (m > 0.0) weighted += r2 / m;
+        }
+        ResidualSums sums;
+        sums.preconditioned = preconditioned.sum();
+        sums.squared = squared.sum();
+        sums.weighted = weighted.sum();
+        residual_chunks_[first / kParticlesPerVectorChunk] = sums;
+      }
     });
+    ResidualSums total;
+    for (const ResidualSums& chunk : residual_chunks_)
+    {
+      total.preconditioned += chunk.preconditioned;
+      total.squared += chunk.squared;
+      total.weighted += chunk.weighted;
+    }
     const double delta_old = delta_new;
-    delta_new = dot(residual_, preconditioned_);
+    delta_new = total.preconditioned;
     const double beta = delta_new / delta_old;
     shareLoop(workers_, rows, kParticlesPerVectorChunk, [&](int begin, int end) {
       const int count = end - begin;
@@ -389,7 +431,7 @@ void ImplicitEulerSolver::conjugateGradient(const std::vector<char>& pinned, con
       for (int i = begin; i < end; ++i)
         if (pinned[i]) direction_.col(i).setZero();
     });
-    norms = residualNorms(residual_, free_mass);
+    norms = {std::sqrt(total.squared), free_mass > 0.0 ? std::sqrt(total.weighted / free_mass) : 0.0};
     ++report.iterations;
   }
   report.relative_residual = rhs_norm > 0.0 ? norms.euclidean / rhs_norm : 0.0;

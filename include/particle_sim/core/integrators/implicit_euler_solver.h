@@ -75,9 +75,9 @@ public:
   double directCostInCgIterations() const;
   /// Forgets the warm start (after a reset or a jump of the state).
   void clearWarmStart() { delta_v_.setZero(); }
-  /// Threads to share the conjugate gradient's per-particle loops with (null: none). Its products
-  /// and vector updates are shared by rows; its dot products stay on one thread, in their order, so
-  /// that the result is the same bits at any thread count.
+  /// Threads to share the conjugate gradient's per-particle loops with (null: none). Its products,
+  /// vector updates and sums are shared by rows; each sum is taken in fixed chunks of rows and then
+  /// chunk after chunk, so that the result is the same bits at any thread count.
   void setWorkers(WorkerPool* workers) { workers_ = workers; }
 
 private:
@@ -90,6 +90,11 @@ private:
     double velocity;   // [m/s] sqrt(Σ |r_i|² / m_i / free_mass): SolverReport::velocity_error
   };
   ResidualNorms residualNorms(const Eigen::Matrix3Xd& r, double free_mass) const;
+  // One chunk's sums in an iteration: r·z, |r|² and Σ |r_i|² / m_i.
+  struct ResidualSums
+  {
+    double preconditioned = 0.0, squared = 0.0, weighted = 0.0;
+  };
   void multiply(const Eigen::Matrix3Xd& p, Eigen::Matrix3Xd& out) const;
   // out = A p on rows [begin, end).
   void multiplyRows(const Eigen::Matrix3Xd& p, Eigen::Matrix3Xd& out, int begin, int end) const;
@@ -132,6 +137,9 @@ private:
   std::vector<Eigen::Vector3d> held_rhs_;
   std::vector<Eigen::Matrix3d> original_blocks_;  // the system before holding, for a solve again
   Eigen::Matrix3Xd original_rhs_;
+  // Per chunk of rows, an iteration's sums (conjugateGradient()).
+  std::vector<double> curvature_chunks_;
+  std::vector<ResidualSums> residual_chunks_;
   Eigen::Matrix3Xd delta_v_, rhs_, residual_, direction_, product_, preconditioned_;
 };
 
