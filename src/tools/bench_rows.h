@@ -22,22 +22,32 @@ struct Timing
   double min = 0.0, median = 0.0, max = 0.0;  // [ms] per step
 };
 
+// The min, median and max of the times per step of several repeats (at least one).
+inline Timing summarize(std::vector<double> per_step)
+{
+  std::sort(per_step.begin(), per_step.end());
+  return {per_step.front(), per_step[per_step.size() / 2], per_step.back()};
+}
+
+// The time per step [ms] of `steps` calls of `step`.
+inline double timeRepeat(const std::function<void()>& step, int steps)
+{
+  using Clock = std::chrono::steady_clock;
+  const auto start = Clock::now();
+  for (int i = 0; i < steps; ++i)
+    step();
+  return std::chrono::duration<double, std::milli>(Clock::now() - start).count() / steps;
+}
+
 // Runs `warmup` steps, then `repeats` times `steps` steps; the time per step of each repeat.
 inline Timing timeSteps(const std::function<void()>& step, int warmup, int steps, int repeats)
 {
-  using Clock = std::chrono::steady_clock;
   for (int i = 0; i < warmup; ++i)
     step();
   std::vector<double> per_step;
   for (int r = 0; r < repeats; ++r)
-  {
-    const auto start = Clock::now();
-    for (int i = 0; i < steps; ++i)
-      step();
-    per_step.push_back(std::chrono::duration<double, std::milli>(Clock::now() - start).count() / steps);
-  }
-  std::sort(per_step.begin(), per_step.end());
-  return {per_step.front(), per_step[per_step.size() / 2], per_step.back()};
+    per_step.push_back(timeRepeat(step, steps));
+  return summarize(per_step);
 }
 
 // One CSV row: case, variant, size (the sweep's parameter), elements (what the cost should grow

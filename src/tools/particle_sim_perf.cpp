@@ -41,6 +41,8 @@
 namespace core = particle_sim::core;
 using particle_sim_bench::Row;
 using particle_sim_bench::timeSteps;
+using particle_sim_bench::summarize;
+using particle_sim_bench::timeRepeat;
 using particle_sim_bench::writeRow;
 using Clock = std::chrono::steady_clock;
 
@@ -480,28 +482,47 @@ void threads(std::ostream& out, bool quick)
           squareCloth(n, implicit ? core::LinearSolverType::ConjugateGradient : core::LinearSolverType::Auto);
       def.integrator.type = method.type;
       def.integrator.max_substeps = verlet ? 100000 : 1;
+      // The two bodies' repeats alternate (one thread, two threads, one, ...), so that a spell of
+      // load on the machine's other core slows both alike rather than one of them.
+      core::WorkerPool one_thread(1), two_threads(2);
+      core::WorkerPool* pools[2] = {&one_thread, &two_threads};
+      std::vector<std::unique_ptr<core::SpringNetworkBody>> bodies;
+      for (core::WorkerPool* pool : pools)
+      {
+        bodies.push_back(std::make_unique<core::SpringNetworkBody>(core::buildClothGrid(def)));
+        bodies.back()->setWorkers(pool);
+      }
+      const double dt = verlet || implicit ? 1.0 / 60.0 : 0.5 * 2.0 / bodies[0]->frequencyBound();
+      const double per_step = verlet || implicit ? 1e3 : 1.0;  // rough cost in units of one force pass
+      const int steps = quick ? 2 : std::max(2, static_cast<int>(4e5 / (static_cast<double>(n) * n * per_step)));
+      const int repeats = quick ? 2 : 7;
+      const core::Environment env = noGround();
+      std::vector<double> per_step_times[2];
+      for (int repeat = -1; repeat < repeats; ++repeat)  // repeat −1: the warm-up steps, untimed
+      {
+        for (int b = 0; b < 2; ++b)
+        {
+          const double time = timeRepeat([&] { bodies[b]->step(dt, env); }, repeat < 0 ? (quick ? 1 : 2) : steps);
+          if (repeat >= 0) per_step_times[b].push_back(time);
+        }
+      }
       Row rows[2];
       Eigen::Matrix3Xd end_state[2];
-      int substeps = 1;
-      for (int threads : {1, 2})
+      for (int b = 0; b < 2; ++b)
       {
-        core::WorkerPool pool(threads);
-        core::SpringNetworkBody body(core::buildClothGrid(def));
-        body.setWorkers(&pool);
-        const double dt = verlet || implicit ? 1.0 / 60.0 : 0.5 * 2.0 / body.frequencyBound();
-        const double per_step = verlet || implicit ? 1e3 : 1.0;  // rough cost in units of one force pass
-        const int steps = quick ? 2 : std::max(2, static_cast<int>(4e5 / (static_cast<double>(n) * n * per_step)));
-        Row& row = rows[threads - 1];
-        row = timeBody(body, dt, quick ? 1 : 2, steps, quick ? 2 : 5);
+        const core::SpringNetworkBody& body = *bodies[b];
+        Row& row = rows[b];
+        row.timing = summarize(per_step_times[b]);
+        if (body.frozen()) row.detail = "FROZE: " + body.frozenReason();
         row.case_name = "threads";
-        row.variant = std::string(method.name) + (threads == 1 ? " 1 thread" : " 2 threads");
+        row.variant = std::string(method.name) + (b == 0 ? " 1 thread" : " 2 threads");
         row.size = n;
         row.elements = static_cast<double>(n) * n;
         const int count = body.particles().size();
-        end_state[threads - 1].resize(3, 2 * count);
-        end_state[threads - 1] << body.particles().position.leftCols(count), body.particles().velocity.leftCols(count);
-        substeps = body.lastSubsteps();
+        end_state[b].resize(3, 2 * count);
+        end_state[b] << body.particles().position.leftCols(count), body.particles().velocity.leftCols(count);
       }
+      const int substeps = bodies[1]->lastSubsteps();
       const bool same =
           end_state[0].size() == end_state[1].size() &&
           std::memcmp(end_state[0].data(), end_state[1].data(), sizeof(double) * end_state[0].size()) == 0;
