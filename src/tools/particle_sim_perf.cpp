@@ -40,9 +40,9 @@
 
 namespace core = particle_sim::core;
 using particle_sim_bench::Row;
-using particle_sim_bench::timeSteps;
 using particle_sim_bench::summarize;
 using particle_sim_bench::timeRepeat;
+using particle_sim_bench::timeSteps;
 using particle_sim_bench::writeRow;
 using Clock = std::chrono::steady_clock;
 
@@ -498,11 +498,19 @@ void threads(std::ostream& out, bool quick)
       const int repeats = quick ? 2 : 7;
       const core::Environment env = noGround();
       std::vector<double> per_step_times[2];
-      for (int repeat = -1; repeat < repeats; ++repeat)  // repeat −1: the warm-up steps, untimed
+      long long iterations[2] = {0, 0}, timed_steps[2] = {0, 0};  // CG iterations over the timed steps
+      for (int repeat = -1; repeat < repeats; ++repeat)           // repeat −1: the warm-up steps, untimed
       {
         for (int b = 0; b < 2; ++b)
         {
-          const double time = timeRepeat([&] { bodies[b]->step(dt, env); }, repeat < 0 ? (quick ? 1 : 2) : steps);
+          const double time = timeRepeat(
+              [&] {
+                bodies[b]->step(dt, env);
+                if (repeat < 0) return;
+                iterations[b] += bodies[b]->lastSolve().iterations;
+                ++timed_steps[b];
+              },
+              repeat < 0 ? (quick ? 1 : 2) : steps);
           if (repeat >= 0) per_step_times[b].push_back(time);
         }
       }
@@ -513,6 +521,7 @@ void threads(std::ostream& out, bool quick)
         const core::SpringNetworkBody& body = *bodies[b];
         Row& row = rows[b];
         row.timing = summarize(per_step_times[b]);
+        row.iterations = timed_steps[b] > 0 ? static_cast<double>(iterations[b]) / timed_steps[b] : 0.0;
         if (body.frozen()) row.detail = "FROZE: " + body.frozenReason();
         row.case_name = "threads";
         row.variant = std::string(method.name) + (b == 0 ? " 1 thread" : " 2 threads");
