@@ -568,7 +568,9 @@ def main():
                      '256², stepped from rest by one thread and by two (`WorkerPool`, README "Threads") over the same '
                      'steps; the two runs must end in the same bits. Verlet at dt = 1/60 with the substeps its '
                      'stability needs (191 at 128², more than the default cap of 64, so `auto` runs implicit Euler '
-                     'there), and symplectic Euler at half its limit (one force pass a step). This machine has 2 cores; the ratio is min against min.')
+                     'there), and symplectic Euler at half its limit (one force pass a step). The two bodies\' repeats '
+                     'alternate (one thread, two threads, one, ...), so that load on the other core slows both alike. '
+                     'This machine has 2 cores; the ratio is min against min.')
         lines.append('')
         lines.append('| method | n | ms per step at 1 thread, min (median–max) | at 2 threads | speed-up, end state |')
         lines.append('|---|---|---|---|---|')
