@@ -12,8 +12,9 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
-#include <cstring>
 #include <cstdint>
+#include <cstring>
+#include <memory>
 #include <random>
 #include <thread>
 #include <vector>
@@ -201,10 +202,24 @@ TEST(WorkerPool, SharedSpringForcesByChunksOfParticlesEqualTheOneThreadLoopBitFo
 
 // sumByChunks adds its terms in fixed chunks and then chunk after chunk: the same bits at 1, 2, 3
 // and 8 threads, and within rounding of the exact sum (long double, terms of mixed sign and size).
+namespace
+{
 bool sameDouble(double a, double b)
 {
   return std::memcmp(&a, &b, sizeof a) == 0;
 }
+
+// A body built from `def`, with `pool`'s threads, after three steps of 1/240 s in `env`.
+std::unique_ptr<core::SpringNetworkBody> clothSteppedWith(core::WorkerPool& pool, const core::ClothGridDef& def,
+                                                          const core::Environment& env)
+{
+  auto body = std::make_unique<core::SpringNetworkBody>(core::buildClothGrid(def));
+  body->setWorkers(&pool);
+  for (int k = 0; k < 3; ++k)
+    body->step(1.0 / 240.0, env);
+  return body;
+}
+}  // namespace
 
 TEST(WorkerPool, SumByChunksGivesTheSameBitsAtAnyThreadCountAndTheSumWithinRounding)
 {
@@ -254,15 +269,12 @@ TEST(WorkerPool, AClothsEnergyIsTheSameBitsAtTwoThreadsAndTheSumOfItsParts)
   for (int threads : {1, 2})
   {
     core::WorkerPool pool(threads);
-    core::SpringNetworkBody body(core::buildClothGrid(def));
-    body.setWorkers(&pool);
-    for (int k = 0; k < 3; ++k)
-      body.step(1.0 / 240.0, env);
-    ASSERT_FALSE(body.frozen()) << body.frozenReason();
-    energies[threads - 1] = body.kineticEnergy() + body.potentialEnergy(env.gravity);
+    const auto body = clothSteppedWith(pool, def, env);
+    ASSERT_FALSE(body->frozen()) << body->frozenReason();
+    energies[threads - 1] = body->kineticEnergy() + body->potentialEnergy(env.gravity);
 
     // Independently: ½ m v² and −m g·x of the free particles, ½ k (|x_i − x_j| − L)² per spring.
-    const core::ParticlePool& p = body.particles();
+    const core::ParticlePool& p = body->particles();
     long double expected = 0.0L, magnitude = 0.0L;
     for (int i = 0; i < p.size(); ++i)
     {
@@ -273,7 +285,7 @@ TEST(WorkerPool, AClothsEnergyIsTheSameBitsAtTwoThreadsAndTheSumOfItsParts)
       expected += kinetic + gravity;
       magnitude += std::abs(kinetic) + std::abs(gravity);
     }
-    for (const core::Spring& s : body.springs())
+    for (const core::Spring& s : body->springs())
     {
       const double stretch = (p.position.col(s.i) - p.position.col(s.j)).norm() - s.rest_length;
       const long double spring = 0.5L * s.stiffness * stretch * stretch;
@@ -364,13 +376,10 @@ TEST(WorkerPool, CollisionsWithEveryKindOfColliderGiveTheSameBitsAtTwoThreads)
   for (int threads : {1, 2})
   {
     core::WorkerPool pool(threads);
-    core::SpringNetworkBody body(core::buildClothGrid(def));
-    body.setWorkers(&pool);
-    for (int k = 0; k < 3; ++k)
-      body.step(1.0 / 240.0, env);
-    ASSERT_FALSE(body.frozen()) << body.frozenReason();
-    end[threads - 1] = positionsAndVelocities(body.particles());
-    EXPECT_GE(body.particles().position.row(2).minCoeff(), env.ground.height - 1e-9) << threads << " threads";
+    const auto body = clothSteppedWith(pool, def, env);
+    ASSERT_FALSE(body->frozen()) << body->frozenReason();
+    end[threads - 1] = positionsAndVelocities(body->particles());
+    EXPECT_GE(body->particles().position.row(2).minCoeff(), env.ground.height - 1e-9) << threads << " threads";
     if (threads == 2)
     {
       EXPECT_GT(pool.sharedLoops(), 0u);
