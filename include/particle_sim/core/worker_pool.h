@@ -100,6 +100,18 @@ void shareLoop(WorkerPool* workers, int items, int chunk, Body&& body)
     body(0, items);
 }
 
+/// body(index, first, last) once for every chunk [first, last) of `chunk` items (the last one
+/// shorter), index = first / chunk: shared with `workers`, always one call a chunk, whatever the
+/// thread count. For loops whose chunks keep a result of their own, such as a partial sum.
+template <class Body>
+void forEachFixedChunk(WorkerPool* workers, int items, int chunk, Body&& body)
+{
+  shareLoop(workers, items, chunk, [&](int begin, int end) {
+    for (int first = begin; first < end; first += chunk)
+      body(first / chunk, first, std::min(end, first + chunk));
+  });
+}
+
 /// Σ term(i) over [0, items): summed in order within fixed chunks of `chunk` items (shared with
 /// `workers`), then chunk after chunk on the calling thread. The same bits at any thread count, one
 /// included, since the chunks never depend on it. `partial` holds each chunk's sum; it allocates
@@ -109,15 +121,11 @@ double sumByChunks(WorkerPool* workers, int items, int chunk, std::vector<double
 {
   if (items <= 0) return 0.0;
   partial.resize((items + chunk - 1) / chunk);
-  shareLoop(workers, items, chunk, [&](int begin, int end) {
-    for (int first = begin; first < end; first += chunk)
-    {
-      const int last = std::min(end, first + chunk);
-      double sum = 0.0;
-      for (int i = first; i < last; ++i)
-        sum += term(i);
-      partial[first / chunk] = sum;
-    }
+  forEachFixedChunk(workers, items, chunk, [&](int index, int first, int last) {
+    double sum = 0.0;
+    for (int i = first; i < last; ++i)
+      sum += term(i);
+    partial[index] = sum;
   });
   double total = 0.0;
   for (const double sum : partial)

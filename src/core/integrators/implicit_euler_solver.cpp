@@ -364,20 +364,16 @@ void ImplicitEulerSolver::conjugateGradient(const std::vector<char>& pinned, con
   const int rows = static_cast<int>(diagonal_block_.size());
   while (!within(norms) && report.iterations < settings.cg_max_iterations)
   {
-    shareLoop(workers_, rows, kRowsPerChunk, [&](int begin, int end) {
-      for (int first = begin; first < end; first += kRowsPerChunk)
+    forEachFixedChunk(workers_, rows, kRowsPerChunk, [&](int index, int first, int last) {
+      multiplyRows(direction_, product_, first, last);
+      // Three running sums, one per coordinate, so that each add need not wait for the last.
+      Eigen::Vector3d curvature = Eigen::Vector3d::Zero();
+      for (int i = first; i < last; ++i)
       {
-        const int last = std::min(end, first + kRowsPerChunk);
-        multiplyRows(direction_, product_, first, last);
-        // Three running sums, one per coordinate, so that each add need not wait for the last.
-        Eigen::Vector3d curvature = Eigen::Vector3d::Zero();
-        for (int i = first; i < last; ++i)
-        {
-          if (pinned[i]) product_.col(i).setZero();
-          curvature += direction_.col(i).cwiseProduct(product_.col(i));
-        }
-        curvature_chunks_[first / kRowsPerChunk] = curvature.sum();
+        if (pinned[i]) product_.col(i).setZero();
+        curvature += direction_.col(i).cwiseProduct(product_.col(i));
       }
+      curvature_chunks_[index] = curvature.sum();
     });
     double curvature = 0.0;
     for (const double chunk : curvature_chunks_)
@@ -388,31 +384,23 @@ void ImplicitEulerSolver::conjugateGradient(const std::vector<char>& pinned, con
       break;
     }
     const double alpha = delta_new / curvature;
-    shareLoop(workers_, rows, kParticlesPerVectorChunk, [&](int begin, int end) {
-      for (int first = begin; first < end; first += kParticlesPerVectorChunk)
+    forEachFixedChunk(workers_, rows, kParticlesPerVectorChunk, [&](int index, int first, int last) {
+      Eigen::Vector3d preconditioned = Eigen::Vector3d::Zero(), squared = Eigen::Vector3d::Zero(),
+                      weighted = Eigen::Vector3d::Zero();  // per coordinate, as above
+      for (int i = first; i < last; ++i)
       {
-        const int last = std::min(end, first + kParticlesPerVectorChunk);
-        Eigen::Vector3d preconditioned = Eigen::Vector3d::Zero(), squared = Eigen::Vector3d::Zero(),
-                        weighted = Eigen::Vector3d::Zero();  // per coordinate, as above
-        for (int i = first; i < last; ++i)
-        {
-          delta_v_.col(i) += alpha * direction_.col(i);
-          const Eigen::Vector3d r = residual_.col(i) - alpha * product_.col(i);
-          residual_.col(i) = r;
-          const Eigen::Vector3d z = inverse_diagonal_[i] * r;
-          preconditioned_.col(i) = z;
-          preconditioned += r.cwiseProduct(z);
-          const Eigen::Vector3d r2 = r.cwiseAbs2();
-          squared += r2;
-          const double m = (*mass_)[i];
-          if (m > 0.0) weighted += r2 / m;
-        }
-        ResidualSums sums;
-        sums.preconditioned = preconditioned.sum();
-        sums.squared = squared.sum();
-        sums.weighted = weighted.sum();
-        residual_chunks_[first / kParticlesPerVectorChunk] = sums;
+        delta_v_.col(i) += alpha * direction_.col(i);
+        const Eigen::Vector3d r = residual_.col(i) - alpha * product_.col(i);
+        residual_.col(i) = r;
+        const Eigen::Vector3d z = inverse_diagonal_[i] * r;
+        preconditioned_.col(i) = z;
+        preconditioned += r.cwiseProduct(z);
+        const Eigen::Vector3d r2 = r.cwiseAbs2();
+        squared += r2;
+        const double m = (*mass_)[i];
+        if (m > 0.0) weighted += r2 / m;
       }
+      residual_chunks_[index] = {preconditioned.sum(), squared.sum(), weighted.sum()};
     });
     ResidualSums total;
     for (const ResidualSums& chunk : residual_chunks_)
@@ -431,7 +419,7 @@ void ImplicitEulerSolver::conjugateGradient(const std::vector<char>& pinned, con
       for (int i = begin; i < end; ++i)
         if (pinned[i]) direction_.col(i).setZero();
     });
-    norms = {std::sqrt(total.squared), free_mass > 0.0 ? std::sqrt(total.weighted / free_mass) : 0.0};
+    norms = normsOf(total.squared, total.weighted, free_mass);
     ++report.iterations;
   }
   report.relative_residual = rhs_norm > 0.0 ? norms.euclidean / rhs_norm : 0.0;
@@ -451,6 +439,11 @@ ImplicitEulerSolver::ResidualNorms ImplicitEulerSolver::residualNorms(const Eige
     const double m = (*mass_)[i];
     if (m > 0.0) weighted += s / m;
   }
+  return normsOf(squared, weighted, free_mass);
+}
+
+ImplicitEulerSolver::ResidualNorms ImplicitEulerSolver::normsOf(double squared, double weighted, double free_mass)
+{
   return {std::sqrt(squared), free_mass > 0.0 ? std::sqrt(weighted / free_mass) : 0.0};
 }
 

@@ -90,6 +90,8 @@ private:
     double velocity;   // [m/s] sqrt(Σ |r_i|² / m_i / free_mass): SolverReport::velocity_error
   };
   ResidualNorms residualNorms(const Eigen::Matrix3Xd& r, double free_mass) const;
+  // The norms from the sums Σ |r_i|² and Σ |r_i|² / m_i.
+  static ResidualNorms normsOf(double squared, double weighted, double free_mass);
   // One chunk's sums in an iteration: r·z, |r|² and Σ |r_i|² / m_i.
   struct ResidualSums
   {
