@@ -210,11 +210,7 @@ void SpringForces::addJacobians(const ForceContext& /*context*/, const Eigen::Ma
     Eigen::Matrix3d dfdx, dfdv;
     springJacobians(x.col(spring.i), x.col(spring.j), spring.rest_length, spring.stiffness, spring.damping, true, dfdx,
                     dfdv);
-    const std::array<int, 4>& blocks = blocks_[s];
-    solver.addBlock(blocks[0], dfdx, dfdv);
-    solver.addBlock(blocks[1], -dfdx, -dfdv);
-    solver.addBlock(blocks[2], -dfdx, -dfdv);
-    solver.addBlock(blocks[3], dfdx, dfdv);
+    solver.addPairBlocks(blocks_[s], dfdx, dfdv);
   }
 }
 

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <array>
 #include <utility>
 #include <vector>
 
@@ -57,6 +58,26 @@ public:
   void addToDiagonal(int i, const Eigen::Matrix3d& dfdx, const Eigen::Matrix3d& dfdv)
   {
     addBlock(diagonal_block_[i], dfdx, dfdv);
+  }
+  /// Adds a two-particle element whose Jacobians are ∂f_i/∂x_i = ∂f_j/∂x_j = −∂f_i/∂x_j =
+  /// −∂f_j/∂x_i = dfdx (alike for v), as a spring's are, at `blocks` = (i, i), (i, j), (j, i), (j, j).
+  /// The same bits as addBlock() on each with ±dfdx and ±dfdv (a negation is exact), for less work:
+  /// h dfdv + h² dfdx and the two products with v0 are formed once each instead of four times.
+  void addPairBlocks(const std::array<int, 4>& blocks, const Eigen::Matrix3d& dfdx, const Eigen::Matrix3d& dfdv)
+  {
+    const Eigen::Matrix3d combined = h_ * dfdv + h_ * h_ * dfdx;
+    blocks_[blocks[0]] -= combined;
+    blocks_[blocks[1]] += combined;
+    blocks_[blocks[2]] += combined;
+    blocks_[blocks[3]] -= combined;
+    if (!v0_) return;
+    const int i = block_row_[blocks[0]], j = block_row_[blocks[3]];
+    const Eigen::Vector3d at_i = h_ * h_ * (dfdx * v0_->col(i));
+    const Eigen::Vector3d at_j = h_ * h_ * (dfdx * v0_->col(j));
+    rhs_.col(i) += at_i;
+    rhs_.col(i) -= at_j;
+    rhs_.col(j) -= at_i;
+    rhs_.col(j) += at_j;
   }
   /// Solves for Δv with pinned rows filtered and resting contacts held, then v += Δv, x += h v.
   /// Pinned particles keep the velocity in v (the one that carries them to their target). Each
