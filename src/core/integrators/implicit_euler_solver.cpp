@@ -54,6 +54,7 @@ void ImplicitEulerSolver::setPattern(int particles, const std::vector<std::pair<
   auto_choice_ = DirectChoice::Undecided;
   direct_in_cg_iterations_ = 0.0;
   inverse_diagonal_.assign(particles, Eigen::Matrix3d::Identity());
+  inverse_mass_.assign(particles, 0.0);
   curvature_chunks_.assign((particles + kRowsPerChunk - 1) / kRowsPerChunk, 0.0);
   residual_chunks_.assign((particles + kParticlesPerVectorChunk - 1) / kParticlesPerVectorChunk, ResidualSums());
   for (Eigen::Matrix3Xd* m :
@@ -337,9 +338,15 @@ void ImplicitEulerSolver::conjugateGradient(const std::vector<char>& pinned, con
   filter(pinned, delta_v_);
   residual_ = rhs_;
   filter(pinned, residual_);
+  // The free mass, and 1/m for the velocity error's Σ |r_i|² / m_i (0 for a massless particle, which
+  // only a pinned one can be): a product in the iterations' pass instead of a division.
   double free_mass = 0.0;
   for (int i = 0; i < static_cast<int>(pinned.size()); ++i)
-    free_mass += pinned[i] ? 0.0 : (*mass_)[i];
+  {
+    const double m = (*mass_)[i];
+    free_mass += pinned[i] ? 0.0 : m;
+    inverse_mass_[i] = m > 0.0 ? 1.0 / m : 0.0;
+  }
   const double rhs_norm = residualNorms(residual_, free_mass).euclidean;
   multiply(delta_v_, product_);
   residual_ -= product_;
@@ -384,6 +391,7 @@ void ImplicitEulerSolver::conjugateGradient(const std::vector<char>& pinned, con
       break;
     }
     const double alpha = delta_new / curvature;
+    const double* const inverse_mass = inverse_mass_.data();
     forEachFixedChunk(workers_, rows, kParticlesPerVectorChunk, [&](int index, int first, int last) {
       Eigen::Vector3d preconditioned = Eigen::Vector3d::Zero(), squared = Eigen::Vector3d::Zero(),
                       weighted = Eigen::Vector3d::Zero();  // per coordinate, as above
@@ -397,8 +405,7 @@ void ImplicitEulerSolver::conjugateGradient(const std::vector<char>& pinned, con
         preconditioned += r.cwiseProduct(z);
         const Eigen::Vector3d r2 = r.cwiseAbs2();
         squared += r2;
-        const double m = (*mass_)[i];
-        if (m > 0.0) weighted += r2 / m;
+        weighted += inverse_mass[i] * r2;
       }
       residual_chunks_[index] = {preconditioned.sum(), squared.sum(), weighted.sum()};
     });
@@ -436,8 +443,7 @@ ImplicitEulerSolver::ResidualNorms ImplicitEulerSolver::residualNorms(const Eige
   {
     const double s = r.col(i).squaredNorm();
     squared += s;
-    const double m = (*mass_)[i];
-    if (m > 0.0) weighted += s / m;
+    weighted += inverse_mass_[i] * s;
   }
   return normsOf(squared, weighted, free_mass);
 }
