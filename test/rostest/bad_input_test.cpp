@@ -362,8 +362,9 @@ TEST_F(BadInputTest, EveryBadRequestIsRefusedAndTheNodeKeepsServingWithoutGrowin
     expectRefused(refused, "steps = 1000000 is out of range", {"100000"});
 
     // The longest step allowed runs in slices: ~status keeps coming while it runs, and the
-    // answer comes when every step has run.
-    const double t0 = lastStatus().sim_time;
+    // answer comes when every step has run. The sim times come from the answers, which the node
+    // writes when it answers: the last ~status received may be older than the last step.
+    const double t0 = refused.sim_time;
     const int statuses_before = statusCount();
     req.steps = 20000;
     const auto stepped = call<Step>("step", req);
@@ -371,8 +372,9 @@ TEST_F(BadInputTest, EveryBadRequestIsRefusedAndTheNodeKeepsServingWithoutGrowin
     EXPECT_NEAR(stepped.sim_time - t0, 20000 * kDt, 1e-6);
     EXPECT_GT(statusCount() - statuses_before, 2) << "no ~status while the step ran";
 
-    // Unpause while a ~step runs is refused (the step goes on to its end).
-    const double t1 = lastStatus().sim_time;
+    // Unpause while a ~step runs is refused (the step goes on to its end). The step has started
+    // once a ~status shows a sim time past the last answer's (paused, nothing else steps).
+    const double t1 = stepped.sim_time;
     std::thread long_step([&] {
       Step srv;
       srv.request.steps = 100000;
