@@ -436,8 +436,9 @@ void ImplicitEulerSolver::conjugateGradient(const std::vector<char>& pinned, con
 
 ImplicitEulerSolver::ResidualNorms ImplicitEulerSolver::residualNorms(const Eigen::Matrix3Xd& r, double free_mass) const
 {
-  // |r| and |r|_M⁻¹ / sqrt(Σ m) in one pass (pinned rows are zero after filtering; a massless
-  // particle, which only a pinned one can be, adds nothing).
+  // |r| and |r|_M⁻¹ / sqrt(Σ m) in one pass, with the 1/m that conjugateGradient() took for this
+  // solve (pinned rows are zero after filtering; a massless particle, which only a pinned one can
+  // be, adds nothing).
   double squared = 0.0, weighted = 0.0;
   for (int i = 0; i < static_cast<int>(r.cols()); ++i)
   {
