@@ -200,10 +200,9 @@ TEST(WorkerPool, SharedSpringForcesByChunksOfParticlesEqualTheOneThreadLoopBitFo
   expectSharedEqualsAlone(core::SpringForces(springs), contexts, x, v, Eigen::Matrix3Xd::Random(3, particles));
 }
 
-// sumByChunks adds its terms in fixed chunks and then chunk after chunk: the same bits at 1, 2, 3
-// and 8 threads, and within rounding of the exact sum (long double, terms of mixed sign and size).
 namespace
 {
+// Whether two doubles are the same bits.
 bool sameDouble(double a, double b)
 {
   return std::memcmp(&a, &b, sizeof a) == 0;
@@ -221,6 +220,8 @@ std::unique_ptr<core::SpringNetworkBody> clothSteppedWith(core::WorkerPool& pool
 }
 }  // namespace
 
+// sumByChunks adds its terms in fixed chunks and then chunk after chunk: the same bits at 1, 2, 3
+// and 8 threads, and within rounding of the exact sum (long double, terms of mixed sign and size).
 TEST(WorkerPool, SumByChunksGivesTheSameBitsAtAnyThreadCountAndTheSumWithinRounding)
 {
   std::mt19937 random(7);

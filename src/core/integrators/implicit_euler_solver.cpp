@@ -82,8 +82,13 @@ void ImplicitEulerSolver::begin(double h, const Eigen::VectorXd& mass, const Eig
   mass_ = &mass;
   for (Eigen::Matrix3d& block : blocks_)
     block.setZero();
+  // A = M on the diagonal; and 1/m for the velocity error's Σ |r_i|² / m_i, a product in CG's
+  // iterations instead of a division (0 for a massless particle, which only a pinned one can be).
   for (int i = 0; i < static_cast<int>(diagonal_block_.size()); ++i)
+  {
     blocks_[diagonal_block_[i]] = mass[i] * Eigen::Matrix3d::Identity();
+    inverse_mass_[i] = mass[i] > 0.0 ? 1.0 / mass[i] : 0.0;
+  }
   rhs_ = h * force;
 }
 
@@ -338,15 +343,9 @@ void ImplicitEulerSolver::conjugateGradient(const std::vector<char>& pinned, con
   filter(pinned, delta_v_);
   residual_ = rhs_;
   filter(pinned, residual_);
-  // The free mass, and 1/m for the velocity error's Σ |r_i|² / m_i (0 for a massless particle, which
-  // only a pinned one can be): a product in the iterations' pass instead of a division.
   double free_mass = 0.0;
   for (int i = 0; i < static_cast<int>(pinned.size()); ++i)
-  {
-    const double m = (*mass_)[i];
-    free_mass += pinned[i] ? 0.0 : m;
-    inverse_mass_[i] = m > 0.0 ? 1.0 / m : 0.0;
-  }
+    free_mass += pinned[i] ? 0.0 : (*mass_)[i];
   const double rhs_norm = residualNorms(residual_, free_mass).euclidean;
   multiply(delta_v_, product_);
   residual_ -= product_;
@@ -436,9 +435,8 @@ void ImplicitEulerSolver::conjugateGradient(const std::vector<char>& pinned, con
 
 ImplicitEulerSolver::ResidualNorms ImplicitEulerSolver::residualNorms(const Eigen::Matrix3Xd& r, double free_mass) const
 {
-  // |r| and |r|_M⁻¹ / sqrt(Σ m) in one pass, with the 1/m that conjugateGradient() took for this
-  // solve (pinned rows are zero after filtering; a massless particle, which only a pinned one can
-  // be, adds nothing).
+  // |r| and |r|_M⁻¹ / sqrt(Σ m) in one pass, with begin()'s 1/m (pinned rows are zero after
+  // filtering; a massless particle, which only a pinned one can be, adds nothing).
   double squared = 0.0, weighted = 0.0;
   for (int i = 0; i < static_cast<int>(r.cols()); ++i)
   {

@@ -141,7 +141,7 @@ private:
   std::vector<int> transpose_block_;  // the index of block (j, i) for block (i, j)
   std::vector<Eigen::Matrix3d> blocks_;
   std::vector<Eigen::Matrix3d> inverse_diagonal_;
-  std::vector<double> inverse_mass_;  // 1/m per particle (0 where m is 0), set by each CG solve
+  std::vector<double> inverse_mass_;  // 1/m per particle (0 where m is 0), set by begin()
   SparseBlockLdlt direct_;
   enum class DirectChoice
   {
