@@ -181,23 +181,35 @@ TEST(WorkerPool, SharedSpringForcesEqualTheOneThreadLoopBitForBit)
 
 TEST(WorkerPool, SharedSpringForcesByChunksOfParticlesEqualTheOneThreadLoopBitForBit)
 {
-  // Springs between near indices (a strip 37 particles wide, in shuffled order): few cross the
-  // chunks of 2048 particles, so each chunk's thread computes the springs touching it and adds to
-  // its own particles; the boundary springs are computed by both chunks.
+  // Springs between near indices (a strip 37 particles wide): few cross the chunks of 2048
+  // particles, so each chunk's thread computes the springs touching it and adds to its own
+  // particles; the boundary springs are computed by both chunks. In the built order a chunk's
+  // springs come in long runs with both ends inside it; shuffled, in runs of one, either end inside.
   const int particles = 10000;
   std::vector<core::Spring> springs;
   for (int i = 0; i < particles; ++i)
     for (int step : {1, 2, 37, 38})
       if (i + step < particles)
         springs.push_back(core::Spring{i, i + step, 0.1, 100.0 + i % 7, 0.01 * (i % 3), core::SpringClass::Stretch});
+  const Eigen::Matrix3Xd x = Eigen::Matrix3Xd::Random(3, particles);
+  const Eigen::Matrix3Xd v = Eigen::Matrix3Xd::Random(3, particles);
+  const Eigen::Matrix3Xd before = Eigen::Matrix3Xd::Random(3, particles);
+  TwoContexts contexts(particles);
+  core::SpringForces in_order(springs);
+  expectSharedEqualsAlone(in_order, contexts, x, v, before);
+  // After a tear (of the springs stretched most by the random positions) the runs follow the
+  // springs that are left.
+  core::TearRecord torn;
+  in_order.tear(x, 16.0, torn);
+  ASSERT_GT(torn.springs.size(), 100u);
+  ASSERT_LT(torn.springs.size(), springs.size() / 2);
+  expectSharedEqualsAlone(in_order, contexts, x, v, before);
+
   std::mt19937 random(3);
   std::shuffle(springs.begin(), springs.end(), random);
   for (core::Spring& spring : springs)
     if (random() % 2) std::swap(spring.i, spring.j);  // either end may be the lower index
-  const Eigen::Matrix3Xd x = Eigen::Matrix3Xd::Random(3, particles);
-  const Eigen::Matrix3Xd v = Eigen::Matrix3Xd::Random(3, particles);
-  TwoContexts contexts(particles);
-  expectSharedEqualsAlone(core::SpringForces(springs), contexts, x, v, Eigen::Matrix3Xd::Random(3, particles));
+  expectSharedEqualsAlone(core::SpringForces(springs), contexts, x, v, before);
 }
 
 namespace

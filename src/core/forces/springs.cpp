@@ -19,6 +19,23 @@ namespace
 // costs a few per cent of it.
 constexpr int kSpringsPerChunk = 2048;
 constexpr int kParticlesPerChunk = 2048;
+
+// The forces of the consecutive springs [first, last), added to their ends i (if kAddI) and j (if
+// kAddJ) only: those inside the chunk being summed. Nothing is tested per spring, so that the
+// loop costs what the one-thread loop costs.
+template <bool kAddI, bool kAddJ>
+[[gnu::always_inline]] inline void addRunForces(const Spring* first, const Spring* last, const double* xs,
+                                                const double* vs, double* fs)
+{
+  for (const Spring* s = first; s != last; ++s)
+  {
+    const Eigen::Vector3d f = springForce(Eigen::Vector3d::Map(xs + 3 * s->i), Eigen::Vector3d::Map(xs + 3 * s->j),
+                                          Eigen::Vector3d::Map(vs + 3 * s->i), Eigen::Vector3d::Map(vs + 3 * s->j),
+                                          s->rest_length, s->stiffness, s->damping);
+    if (kAddI) Eigen::Vector3d::Map(fs + 3 * s->i) += f;
+    if (kAddJ) Eigen::Vector3d::Map(fs + 3 * s->j) -= f;
+  }
+}
 }  // namespace
 
 void SpringForces::addForces(const ForceContext& context, const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v,
@@ -51,21 +68,22 @@ void SpringForces::addForcesShared(WorkerPool& workers, const Eigen::Matrix3Xd& 
     const double* const vs = v.data();
     double* const fs = force.data();
     const Spring* const all = springs_.data();
-    const int* const listed = chunk_springs_.data();
+    const SpringRun* const runs = chunk_runs_.data();
     const int* const starts = chunk_start_.data();
     workers.forEachChunk(particles, kParticlesPerChunk, [=](int begin, int end) {
       for (int chunk = begin / kParticlesPerChunk; chunk * kParticlesPerChunk < end; ++chunk)
       {
-        const int first = chunk * kParticlesPerChunk;
-        const int last = std::min(end, first + kParticlesPerChunk);
-        for (int e = starts[chunk]; e < starts[chunk + 1]; ++e)
+        for (int r = starts[chunk]; r < starts[chunk + 1]; ++r)
         {
-          const Spring s = all[listed[e]];
-          const Eigen::Vector3d f = springForce(Eigen::Vector3d::Map(xs + 3 * s.i), Eigen::Vector3d::Map(xs + 3 * s.j),
-                                                Eigen::Vector3d::Map(vs + 3 * s.i), Eigen::Vector3d::Map(vs + 3 * s.j),
-                                                s.rest_length, s.stiffness, s.damping);
-          if (s.i >= first && s.i < last) Eigen::Vector3d::Map(fs + 3 * s.i) += f;
-          if (s.j >= first && s.j < last) Eigen::Vector3d::Map(fs + 3 * s.j) -= f;
+          const SpringRun run = runs[r];
+          const Spring* const first = all + run.first_spring;
+          const Spring* const last = first + run.springs;
+          if (run.ends == SpringRun::kBothEnds)
+            addRunForces<true, true>(first, last, xs, vs, fs);
+          else if (run.ends == SpringRun::kEndI)
+            addRunForces<true, false>(first, last, xs, vs, fs);
+          else
+            addRunForces<false, true>(first, last, xs, vs, fs);
         }
       }
     });
@@ -134,6 +152,28 @@ void SpringForces::indexEnds(int particles) const
     for (int c = chunks; c > 0; --c)
       chunk_start_[c] = chunk_start_[c - 1];
     chunk_start_[0] = 0;
+    // Each chunk's list, cut into runs of consecutive springs with the same ends inside the chunk;
+    // chunk_start_ then indexes the runs. There are never more runs than listed springs, so the
+    // runs allocate only when the list grows.
+    chunk_runs_.clear();
+    chunk_runs_.reserve(chunk_springs_.size());
+    for (int c = 0; c < chunks; ++c)
+    {
+      const int first_run = static_cast<int>(chunk_runs_.size());
+      for (int e = chunk_start_[c]; e < chunk_start_[c + 1]; ++e)
+      {
+        const int k = chunk_springs_[e];
+        const int ends = (chunk_of(springs_[k].i) == c ? SpringRun::kEndI : 0) |
+                         (chunk_of(springs_[k].j) == c ? SpringRun::kEndJ : 0);
+        SpringRun* const previous = static_cast<int>(chunk_runs_.size()) > first_run ? &chunk_runs_.back() : nullptr;
+        if (previous && previous->ends == ends && previous->first_spring + previous->springs == k)
+          ++previous->springs;
+        else
+          chunk_runs_.push_back(SpringRun{k, 1, ends});
+      }
+      chunk_start_[c] = first_run;
+    }
+    chunk_start_[chunks] = static_cast<int>(chunk_runs_.size());
     ends_valid_ = true;
     return;
   }

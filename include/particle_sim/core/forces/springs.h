@@ -47,9 +47,10 @@ private:
   /// addForces() shared between threads, by chunks of particles. Each chunk's thread computes
   /// the force of every spring that touches the chunk, in spring order, and adds it to the ends
   /// inside the chunk: each particle gets the one-thread loop's additions in its order (and so
-  /// its bits). A spring across two chunks is computed twice. When that would be more than a
-  /// quarter of the springs (a network numbered without locality), every spring's force goes
-  /// into spring_force_ once and every particle then sums its springs' in spring order.
+  /// its bits). A spring across two chunks is computed twice. A chunk's springs are kept as runs
+  /// of consecutive springs with the same ends inside it, so that the inner loop tests nothing. When that would be more
+  /// than a quarter of the springs (a network numbered without locality), every spring's force goes into spring_force_
+  /// once and every particle then sums its springs' in spring order.
   void addForcesShared(WorkerPool& workers, const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v,
                        Eigen::Matrix3Xd& force) const;
   /// Rebuilds the chunks' spring lists (or ends_) for `particles` particles when the springs or
@@ -69,9 +70,20 @@ private:
   mutable bool ends_valid_ = false;
   mutable bool by_chunks_ = false;  // chunk_springs_ in use (else the two passes); decided once
   mutable bool mode_decided_ = false;
-  mutable std::vector<int> chunk_start_;      // per chunk c: its springs are chunk_springs_[chunk_start_[c] …)
-  mutable std::vector<int> chunk_springs_;    // per chunk, the springs touching it, ascending
-  mutable std::vector<double> chunk_energy_;  // addEnergy(): per chunk of springs, its energy
+  /// Consecutive springs of springs_, all touching one chunk with the same ends inside it.
+  struct SpringRun
+  {
+    static constexpr int kEndI = 1;
+    static constexpr int kEndJ = 2;
+    static constexpr int kBothEnds = kEndI | kEndJ;
+    int first_spring;
+    int springs;
+    int ends;  // kEndI, kEndJ or kBothEnds: those inside the chunk
+  };
+  mutable std::vector<int> chunk_start_;       // per chunk c: its runs are chunk_runs_[chunk_start_[c] …)
+  mutable std::vector<SpringRun> chunk_runs_;  // per chunk, the runs of springs touching it, ascending
+  mutable std::vector<int> chunk_springs_;     // indexEnds()' scratch: per chunk, its springs, ascending
+  mutable std::vector<double> chunk_energy_;   // addEnergy(): per chunk of springs, its energy
 };
 
 }  // namespace core
