@@ -20,10 +20,24 @@ void ForceSet::setEnergyOrder(std::vector<int> order)
 void ForceSet::computeForces(const ForceContext& context, const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v,
                              Eigen::Matrix3Xd& force) const
 {
+  if (elements_.empty())
+  {
+    force.setZero();
+    return;
+  }
+  // The first element writes its forces onto nothing (gravity, in every body, without a pass of
+  // its own to zero them); the others add theirs.
+  elements_.front()->setForces(context, x, v, force);
+  for (std::size_t e = 1; e < elements_.size(); ++e)
+    elements_[e]->addForces(context, x, v, force);
+}
+
+void ForceElement::setForces(const ForceContext& context, const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v,
+                             Eigen::Matrix3Xd& force) const
+{
   shareLoop(context.workers, static_cast<int>(force.cols()), kParticlesPerVectorChunk,
             [&](int begin, int end) { force.middleCols(begin, end - begin).setZero(); });
-  for (const std::unique_ptr<ForceElement>& element : elements_)
-    element->addForces(context, x, v, force);
+  addForces(context, x, v, force);
 }
 
 void ForceSet::coupledPairs(std::vector<std::pair<int, int>>& pairs) const

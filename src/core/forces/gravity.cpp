@@ -13,6 +13,17 @@ void GravityForce::addForces(const ForceContext& context, const Eigen::Matrix3Xd
   });
 }
 
+void GravityForce::setForces(const ForceContext& context, const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& /*v*/,
+                             Eigen::Matrix3Xd& force) const
+{
+  // 0.0 + (m g) rather than m g: the sum with the zeroed force the other elements start from
+  // (it turns a −0 into +0), kept by the compiler as it would change that sign.
+  shareLoop(context.workers, static_cast<int>(x.cols()), kParticlesPerVectorChunk, [&](int begin, int end) {
+    for (int i = begin; i < end; ++i)
+      force.col(i) = (context.mass[i] * context.gravity).array() + 0.0;
+  });
+}
+
 void GravityForce::addEnergy(const ForceContext& context, const Eigen::Matrix3Xd& x, double& energy) const
 {
   // Summed in fixed chunks of particles, shared between threads: the same bits at any thread count.

@@ -54,6 +54,10 @@ public:
   /// force += the element's force on every particle at (x, v) [N].
   virtual void addForces(const ForceContext& context, const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v,
                          Eigen::Matrix3Xd& force) const = 0;
+  /// force = 0 + the element's force [N], for the first element of a set: the same bits as zeroing
+  /// `force` and calling addForces(), which is what it does unless an element saves that pass.
+  virtual void setForces(const ForceContext& context, const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v,
+                         Eigen::Matrix3Xd& force) const;
 
   // Jacobian ------------------------------------------------------------------------------------
   /// Appends the particle pairs the element's Jacobian couples (for the solver's pattern).

@@ -16,6 +16,9 @@ class GravityForce : public ForceElement
 public:
   void addForces(const ForceContext& context, const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v,
                  Eigen::Matrix3Xd& force) const override;
+  /// One pass that writes 0 + m_i g (without the zeroing pass).
+  void setForces(const ForceContext& context, const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v,
+                 Eigen::Matrix3Xd& force) const override;
   void addEnergy(const ForceContext& context, const Eigen::Matrix3Xd& x, double& energy) const override;
 
 private:
