@@ -252,6 +252,7 @@ private:
   Eigen::Matrix3Xd& positions() override { return particles_.position; }
   Eigen::Matrix3Xd& velocities() override { return particles_.velocity; }
   const Eigen::VectorXd& masses() const override { return mass_; }
+  const Eigen::VectorXd& inverseMasses() const override { return particles_.inverse_mass; }
   const std::vector<char>& pinned() const override { return pinned_; }
   std::vector<RestingContact>& restingContacts() override { return resting_contacts_; }
   void computeForces(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v, Eigen::Matrix3Xd& force) const override

@@ -8,12 +8,16 @@ SolverReport SymplecticEulerMethod::step(double h, DynamicSystem& system, const 
 {
   Eigen::Matrix3Xd& x = system.positions();
   Eigen::Matrix3Xd& v = system.velocities();
-  system.accelerations(x, v, acceleration_);
-  // Per particle alone, so shared between threads by chunks of particles.
+  system.computeForces(x, v, force_);
+  const Eigen::VectorXd& inverse_mass = system.inverseMasses();
+  // Per particle alone, so shared between threads by chunks of particles: a = f/m (0 for pinned
+  // particles), then the update.
   shareLoop(system.workers(), static_cast<int>(x.cols()), kParticlesPerVectorChunk, [&](int begin, int end) {
-    const int count = end - begin;
-    v.middleCols(begin, count) += h * acceleration_.middleCols(begin, count);
-    x.middleCols(begin, count) += h * v.middleCols(begin, count);
+    for (int i = begin; i < end; ++i)
+    {
+      v.col(i) += h * (force_.col(i) * inverse_mass[i]);
+      x.col(i) += h * v.col(i);
+    }
   });
   return SolverReport{};
 }

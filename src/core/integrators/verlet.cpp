@@ -8,18 +8,21 @@ SolverReport VerletMethod::step(double h, DynamicSystem& system, const Integrato
 {
   Eigen::Matrix3Xd& x = system.positions();
   Eigen::Matrix3Xd& u = system.velocities();  // the displacement over h
-  system.accelerations(x, u, acceleration_);
-  if (!started_)
-  {
-    u -= 0.5 * h * acceleration_;
-    started_ = true;
-  }
-  // Per particle alone, so shared between threads by chunks of particles.
+  system.computeForces(x, u, force_);
+  const Eigen::VectorXd& inverse_mass = system.inverseMasses();
+  const bool start = !started_;
+  started_ = true;
+  // Per particle alone, so shared between threads by chunks of particles: a = f/m (0 for pinned
+  // particles), the second-order start on the first step, then the update.
   const double damping = settings.verlet_damping;
   shareLoop(system.workers(), static_cast<int>(x.cols()), kParticlesPerVectorChunk, [&](int begin, int end) {
-    const int count = end - begin;
-    u.middleCols(begin, count) = damping * u.middleCols(begin, count) + h * acceleration_.middleCols(begin, count);
-    x.middleCols(begin, count) += h * u.middleCols(begin, count);
+    for (int i = begin; i < end; ++i)
+    {
+      const Eigen::Vector3d a = force_.col(i) * inverse_mass[i];
+      if (start) u.col(i) -= 0.5 * h * a;
+      u.col(i) = damping * u.col(i) + h * a;
+      x.col(i) += h * u.col(i);
+    }
   });
   return SolverReport{};
 }

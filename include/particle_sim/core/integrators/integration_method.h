@@ -25,6 +25,8 @@ public:
   virtual Eigen::Matrix3Xd& positions() = 0;
   virtual Eigen::Matrix3Xd& velocities() = 0;
   virtual const Eigen::VectorXd& masses() const = 0;  ///< [kg], also of pinned particles
+  /// [1/kg]: 1/m for free particles, 0 for pinned ones (a = f/m without a pass of its own).
+  virtual const Eigen::VectorXd& inverseMasses() const = 0;
   virtual const std::vector<char>& pinned() const = 0;
   /// The particles resting on colliders at the start of the step, which implicit methods hold in
   /// their solve (and on which they report what they did); empty for explicit methods.

@@ -16,11 +16,11 @@ public:
   static constexpr int kOrder = 1;                // of the global error
   static constexpr double kStabilityLimit = 2.0;  // h·ω on an undamped oscillator
 
-  explicit SymplecticEulerMethod(int particles) : acceleration_(Eigen::Matrix3Xd::Zero(3, particles)) {}
+  explicit SymplecticEulerMethod(int particles) : force_(Eigen::Matrix3Xd::Zero(3, particles)) {}
   SolverReport step(double h, DynamicSystem& system, const IntegratorDef& settings) override;
 
 private:
-  Eigen::Matrix3Xd acceleration_;
+  Eigen::Matrix3Xd force_;  // f(x, v) [N]; the update takes a = f/m particle by particle
 };
 
 /// Symplectic Euler as a body's IntegratorDef::type.

@@ -20,14 +20,14 @@ public:
   static constexpr int kOrder = 2;                // of the global error
   static constexpr double kStabilityLimit = 2.0;  // h·ω on an undamped oscillator
 
-  explicit VerletMethod(int particles) : acceleration_(Eigen::Matrix3Xd::Zero(3, particles)) {}
+  explicit VerletMethod(int particles) : force_(Eigen::Matrix3Xd::Zero(3, particles)) {}
   SolverReport step(double h, DynamicSystem& system, const IntegratorDef& settings) override;
   void restart() override { started_ = false; }
   bool hasHistory() const override { return started_; }
 
 private:
-  bool started_ = false;  // false until the second-order start is done
-  Eigen::Matrix3Xd acceleration_;
+  bool started_ = false;    // false until the second-order start is done
+  Eigen::Matrix3Xd force_;  // f(x, v) [N]; the update takes a = f/m particle by particle
 };
 
 /// Verlet as a body's IntegratorDef::type.
