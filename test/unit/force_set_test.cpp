@@ -1,0 +1,88 @@
+// ForceSet::computeForces() lets its first element write the forces (ForceElement::setForces())
+// instead of zeroing them first: the result must be the bits of zeroing and adding every element.
+
+#include "particle_sim/core/forces/force_set.h"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Core>
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <vector>
+
+#include "particle_sim/core/forces/gravity.h"
+#include "particle_sim/core/forces/springs.h"
+#include "particle_sim/core/worker_pool.h"
+#include "test_helpers.h"
+
+namespace core = particle_sim::core;
+using particle_sim_test::sameBits;
+
+namespace
+{
+// 0 + Σ element forces, the elements added in order onto a zeroed array.
+Eigen::Matrix3Xd zeroedThenAdded(const std::vector<const core::ForceElement*>& elements,
+                                 const core::ForceContext& context, const Eigen::Matrix3Xd& x,
+                                 const Eigen::Matrix3Xd& v)
+{
+  Eigen::Matrix3Xd force = Eigen::Matrix3Xd::Zero(3, x.cols());
+  for (const core::ForceElement* element : elements)
+    element->addForces(context, x, v, force);
+  return force;
+}
+
+// A 4097-particle chain (more than one chunk of a shared loop) with random masses and state.
+struct Chain
+{
+  Chain()
+  {
+    mass = Eigen::VectorXd::Random(particles).array().abs() + 0.01;
+    x = Eigen::Matrix3Xd::Random(3, particles);
+    v = Eigen::Matrix3Xd::Random(3, particles);
+    for (int i = 0; i + 1 < particles; ++i)
+      springs.push_back(core::Spring{i, i + 1, 0.01, 100.0 + i % 5, 0.1, core::SpringClass::Stretch});
+  }
+  static constexpr int particles = 4097;
+  Eigen::VectorXd mass;
+  std::vector<char> pinned = std::vector<char>(particles, 0);
+  Eigen::Matrix3Xd x, v;
+  std::vector<core::Spring> springs;
+};
+}  // namespace
+
+TEST(ForceSet, FirstElementWritesTheBitsOfZeroingAndAdding)
+{
+  const Chain chain;
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  for (int threads : {1, 2})
+  {
+    core::WorkerPool pool(threads);
+    // A gravity with a −0 component: 0 + (−0) is +0, which writing m g alone would not give.
+    const Eigen::Vector3d gravity(-0.0, 1.5, -9.81);
+    const core::ForceContext context{chain.mass, chain.pinned, gravity, {}, 0.0, &pool};
+
+    // Gravity alone: every column written, whatever was in the array.
+    core::GravityForce gravity_force;
+    Eigen::Matrix3Xd written = Eigen::Matrix3Xd::Constant(3, chain.particles, nan);
+    gravity_force.setForces(context, chain.x, chain.v, written);
+    const Eigen::Matrix3Xd expected_gravity = zeroedThenAdded({&gravity_force}, context, chain.x, chain.v);
+    EXPECT_TRUE(sameBits(expected_gravity, written)) << threads << " threads";
+    EXPECT_FALSE(std::signbit(written(0, 0)));  // +0, as 0 + (−0)
+
+    // A set of gravity then springs, and of springs alone (the default setForces()).
+    core::ForceSet with_gravity, springs_only;
+    with_gravity.add(std::make_unique<core::GravityForce>());
+    with_gravity.add(std::make_unique<core::SpringForces>(chain.springs));
+    springs_only.add(std::make_unique<core::SpringForces>(chain.springs));
+    const core::SpringForces springs(chain.springs);
+    for (const auto& [set, elements] :
+         {std::make_pair(&with_gravity, std::vector<const core::ForceElement*>{&gravity_force, &springs}),
+          std::make_pair(&springs_only, std::vector<const core::ForceElement*>{&springs})})
+    {
+      Eigen::Matrix3Xd force = Eigen::Matrix3Xd::Constant(3, chain.particles, nan);
+      set->computeForces(context, chain.x, chain.v, force);
+      EXPECT_TRUE(sameBits(zeroedThenAdded(elements, context, chain.x, chain.v), force)) << threads << " threads";
+    }
+  }
+}
