@@ -47,10 +47,11 @@ private:
   /// addForces() shared between threads, by chunks of particles. Each chunk's thread computes
   /// the force of every spring that touches the chunk, in spring order, and adds it to the ends
   /// inside the chunk: each particle gets the one-thread loop's additions in its order (and so
-  /// its bits). A spring across two chunks is computed twice. A chunk's springs are kept as runs
-  /// of consecutive springs with the same ends inside it, so that the inner loop tests nothing. When that would be more
-  /// than a quarter of the springs (a network numbered without locality), every spring's force goes into spring_force_
-  /// once and every particle then sums its springs' in spring order.
+  /// its bits). A spring across two chunks is computed twice; when that would be more than a
+  /// quarter of the springs (a network numbered without locality), every spring's force goes into
+  /// spring_force_ once and every particle then sums its springs' in spring order. A chunk's
+  /// springs are kept as runs of consecutive springs with the same ends inside it, so that the
+  /// inner loop tests nothing.
   void addForcesShared(WorkerPool& workers, const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v,
                        Eigen::Matrix3Xd& force) const;
   /// Rebuilds the chunks' spring lists (or ends_) for `particles` particles when the springs or
@@ -68,7 +69,7 @@ private:
   mutable std::vector<int> end_start_;  // per particle p: its ends are ends_[end_start_[p] … end_start_[p + 1])
   mutable std::vector<int> ends_;       // 2 s for end i of spring s, 2 s + 1 for end j, ascending s
   mutable bool ends_valid_ = false;
-  mutable bool by_chunks_ = false;  // chunk_springs_ in use (else the two passes); decided once
+  mutable bool by_chunks_ = false;  // chunk_runs_ in use (else the two passes); decided once
   mutable bool mode_decided_ = false;
   /// Consecutive springs of springs_, all touching one chunk with the same ends inside it.
   struct SpringRun
