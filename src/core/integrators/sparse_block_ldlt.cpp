@@ -241,7 +241,8 @@ bool SparseBlockLdlt::factorize(const std::vector<Eigen::Matrix3d>& blocks, cons
     for (int a = 0; a < count; ++a)
     {
       const Eigen::Matrix3d w = lower_[first + a];
-      lower_[first + a] = w * pivot_inverse_[j];
+      // L_ij = W_i D_j⁻¹ (inline: GCC called Eigen's product out of line here, a fifth of the time).
+      multiplyInline(w, pivot_inverse_[j], lower_[first + a]);
       for (int b = 0; b <= a; ++b)
       {
         const int s = *update++;

@@ -9,6 +9,20 @@ namespace particle_sim
 {
 namespace core
 {
+/// out = a b, inline, the same bits as Eigen's `out.noalias() = a * b` (Eigen 3.4, SSE2): each
+/// coefficient summed in Eigen's order, rows 0 and 1 (a packet) left to right, row 2 (a scalar
+/// reduction) with its last two terms first. For a loop where GCC calls Eigen's product out of line.
+inline void multiplyInline(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b, Eigen::Matrix3d& out)
+{
+  for (int c = 0; c < 3; ++c)
+  {
+    const double b0 = b(0, c), b1 = b(1, c), b2 = b(2, c);
+    out(0, c) = (a(0, 0) * b0 + a(0, 1) * b1) + a(0, 2) * b2;
+    out(1, c) = (a(1, 0) * b0 + a(1, 1) * b1) + a(1, 2) * b2;
+    out(2, c) = a(2, 0) * b0 + (a(2, 1) * b1 + a(2, 2) * b2);
+  }
+}
+
 /// A direct solver for the implicit methods' symmetric block-sparse systems (3x3 blocks, one block
 /// row per particle): A = L D Lᵀ with L unit lower triangular and D block diagonal, in a
 /// fill-reducing order of the particles (approximate minimum degree, Amestoy, Davis & Duff 1996).
