@@ -1,6 +1,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <string>
 
 namespace particle_sim
@@ -72,8 +73,27 @@ struct Spring
 /// With `definite` set, the transverse factor (1 − L/l) is clamped at 0 for compressed springs,
 /// so that −dfdx is positive semi-definite and the implicit solve stays a symmetric positive
 /// definite system (Choi & Ko 2002). Without it the blocks are the exact derivatives.
-void springJacobians(const Eigen::Vector3d& xi, const Eigen::Vector3d& xj, double rest_length, double stiffness,
-                     double damping, bool definite, Eigen::Matrix3d& dfdx, Eigen::Matrix3d& dfdv);
+/// Inline, as springForce is: an assembly calls it for every spring of every implicit step.
+[[gnu::always_inline]] inline void springJacobians(const Eigen::Vector3d& xi, const Eigen::Vector3d& xj,
+                                                   double rest_length, double stiffness, double damping, bool definite,
+                                                   Eigen::Matrix3d& dfdx, Eigen::Matrix3d& dfdv)
+{
+  const Eigen::Vector3d delta = xj - xi;
+  const double length = delta.norm();
+  if (length == 0.0)
+  {
+    // No direction: take the along-spring stiffness in every direction.
+    dfdx = -stiffness * Eigen::Matrix3d::Identity();
+    dfdv = -damping * Eigen::Matrix3d::Identity();
+    return;
+  }
+  const Eigen::Vector3d d = delta / length;
+  const Eigen::Matrix3d along = d * d.transpose();
+  double transverse = 1.0 - rest_length / length;
+  if (definite) transverse = std::max(transverse, 0.0);
+  dfdx = -stiffness * (along + transverse * (Eigen::Matrix3d::Identity() - along));
+  dfdv = -damping * along;
+}
 
 }  // namespace core
 }  // namespace particle_sim

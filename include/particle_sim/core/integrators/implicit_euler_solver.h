@@ -63,7 +63,9 @@ public:
   /// −∂f_j/∂x_i = dfdx (alike for v), as a spring's are, at `blocks` = (i, i), (i, j), (j, i), (j, j).
   /// The same bits as addBlock() on each with ±dfdx and ±dfdv (a negation is exact), for less work:
   /// h dfdv + h² dfdx and the two products with v0 are formed once each instead of four times.
-  void addPairBlocks(const std::array<int, 4>& blocks, const Eigen::Matrix3d& dfdx, const Eigen::Matrix3d& dfdv)
+  /// Inline: called for every spring of every implicit step.
+  [[gnu::always_inline]] void addPairBlocks(const std::array<int, 4>& blocks, const Eigen::Matrix3d& dfdx,
+                                            const Eigen::Matrix3d& dfdv)
   {
     const Eigen::Matrix3d combined = h_ * dfdv + h_ * h_ * dfdx;
     blocks_[blocks[0]] -= combined;
