@@ -390,17 +390,29 @@ void ImplicitEulerSolver::conjugateGradient(const std::vector<char>& pinned, con
       break;
     }
     const double alpha = delta_new / curvature;
-    const double* const inverse_mass = inverse_mass_.data();
     forEachFixedChunk(workers_, rows, kParticlesPerVectorChunk, [&](int index, int first, int last) {
+      // Through raw pointers held in registers: Eigen's packet stores may alias anything, so what the
+      // loop reads through members (or through the lambda's references) would be read again after
+      // every store.
+      const double* const inverse_mass = inverse_mass_.data();
+      double* const delta_v = delta_v_.data();
+      double* const residual = residual_.data();
+      double* const preconditioned_out = preconditioned_.data();
+      const double* const direction = direction_.data();
+      const double* const product = product_.data();
+      const Eigen::Matrix3d* const inverse_diagonal = inverse_diagonal_.data();
+      const double step = alpha;
+      using Column = Eigen::Map<Eigen::Vector3d>;
+      using ConstColumn = Eigen::Map<const Eigen::Vector3d>;
       Eigen::Vector3d preconditioned = Eigen::Vector3d::Zero(), squared = Eigen::Vector3d::Zero(),
                       weighted = Eigen::Vector3d::Zero();  // per coordinate, as above
       for (int i = first; i < last; ++i)
       {
-        delta_v_.col(i) += alpha * direction_.col(i);
-        const Eigen::Vector3d r = residual_.col(i) - alpha * product_.col(i);
-        residual_.col(i) = r;
-        const Eigen::Vector3d z = inverse_diagonal_[i] * r;
-        preconditioned_.col(i) = z;
+        Column(delta_v + 3 * i) += step * ConstColumn(direction + 3 * i);
+        const Eigen::Vector3d r = Column(residual + 3 * i) - step * ConstColumn(product + 3 * i);
+        Column(residual + 3 * i) = r;
+        const Eigen::Vector3d z = inverse_diagonal[i] * r;
+        Column(preconditioned_out + 3 * i) = z;
         preconditioned += r.cwiseProduct(z);
         const Eigen::Vector3d r2 = r.cwiseAbs2();
         squared += r2;
