@@ -1,5 +1,6 @@
 // ForceSet::computeForces() lets its first element write the forces (ForceElement::setForces())
 // instead of zeroing them first: the result must be the bits of zeroing and adding every element.
+// SpringForces adds its springs two at a time: the result must be the bits of one at a time.
 
 #include "particle_sim/core/forces/force_set.h"
 
@@ -83,6 +84,61 @@ TEST(ForceSet, FirstElementWritesTheBitsOfZeroingAndAdding)
       Eigen::Matrix3Xd force = Eigen::Matrix3Xd::Constant(3, chain.particles, nan);
       set->computeForces(context, chain.x, chain.v, force);
       EXPECT_TRUE(sameBits(zeroedThenAdded(elements, context, chain.x, chain.v), force)) << threads << " threads";
+    }
+  }
+}
+
+// SpringForces adds its springs two at a time in paired arithmetic: the result must be the bits of
+// springForce() added spring after spring in list order, for lists of every length (the odd spring
+// at the end), with zero-length springs (no direction, no force) in either lane of a pair, with
+// springs sharing ends, and on the shared loop at two threads.
+TEST(SpringForces, AddsTheBitsOfEachSpringForceInListOrder)
+{
+  const Chain chain;
+  std::vector<core::Spring> springs;
+  for (int k = 0; k < 5000; ++k)
+  {
+    // Mostly neighbours (shared ends, long runs) and some far pairs; every 5th a damper alone (so that
+    // the damping term's rounding shows); below, every 7th and every 11th spring gets its two ends at
+    // the same position (zero length).
+    const int i = (k * 3) % (chain.particles - 40);
+    const int j = k % 13 == 0 ? (i * 7 + 11) % chain.particles : i + 1 + k % 3;
+    springs.push_back(
+        core::Spring{i, j, 0.02, k % 5 == 0 ? 0.0 : 50.0 + k % 7, 0.05 * (1 + k % 3), core::SpringClass::Stretch});
+  }
+  Eigen::Matrix3Xd x = chain.x;
+  for (std::size_t k = 0; k < springs.size(); k += 7)
+    x.col(springs[k].j) = x.col(springs[k].i);
+  for (std::size_t k = 4; k < springs.size(); k += 11)
+    x.col(springs[k].j) = x.col(springs[k].i);
+
+  for (std::size_t count : {std::size_t{0}, std::size_t{1}, std::size_t{2}, std::size_t{3}, std::size_t{8},
+                            std::size_t{4999}, std::size_t{5000}})
+  {
+    const std::vector<core::Spring> list(springs.begin(), springs.begin() + count);
+    Eigen::Matrix3Xd expected = Eigen::Matrix3Xd::Random(3, chain.particles);
+    const Eigen::Matrix3Xd start = expected;
+    int zero_length = 0;
+    for (const core::Spring& s : list)
+    {
+      const Eigen::Vector3d f = core::springForce(x.col(s.i), x.col(s.j), chain.v.col(s.i), chain.v.col(s.j),
+                                                  s.rest_length, s.stiffness, s.damping);
+      expected.col(s.i) += f;
+      expected.col(s.j) -= f;
+      zero_length += (x.col(s.i) - x.col(s.j)).norm() == 0.0;
+    }
+    if (count >= 4999)
+    {
+      EXPECT_GT(zero_length, 1000);
+    }
+    for (int threads : {1, 2})
+    {
+      core::WorkerPool pool(threads);
+      const core::ForceContext context{chain.mass, chain.pinned, Eigen::Vector3d::Zero(), {}, 0.0, &pool};
+      const core::SpringForces forces(list);
+      Eigen::Matrix3Xd force = start;
+      forces.addForces(context, x, chain.v, force);
+      EXPECT_TRUE(sameBits(expected, force)) << count << " springs, " << threads << " threads";
     }
   }
 }
