@@ -38,9 +38,10 @@ template <bool kAddI, bool kAddJ>
 // Two springs at a time, one in each lane of a pair of doubles: springForce()'s operations, lane by
 // lane (|δ| as sqrt((δx² + δy²) + δz²) and the dot product as (a_x b_x + a_y b_y) + a_z b_z, Eigen's
 // order), so the same bits, with one square root and three divisions for the two springs instead of
-// two and six: the divider is what bounds this loop. The forces are then added spring after spring,
-// in the order of the list. A pair with a spring of zero length (no direction) takes springForce()
-// itself.
+// two and six: the divider bounds this loop while the particles are in cache (a 128² cloth's step,
+// 3-9 % faster); beyond that memory does (256²: no change). The forces are then added spring after
+// spring, in the order of the list. A pair with a spring of zero length (no direction) takes
+// springForce() itself.
 template <bool kAddI, bool kAddJ>
 [[gnu::always_inline]] inline void addRunForces(const Spring* first, const Spring* last, const double* xs,
                                                 const double* vs, double* fs)
