@@ -32,8 +32,9 @@ template <bool kAddI, bool kAddJ>
 }
 
 // The forces of the consecutive springs [first, last), added to their ends i (if kAddI) and j (if
-// kAddJ) only: those inside the chunk being summed. Nothing is tested per spring, so that the
-// loop costs what the one-thread loop costs.
+// kAddJ) only: those inside the chunk being summed. Which ends is fixed for the whole run, not tested
+// per spring, so that a chunk's run costs what the one-thread loop costs (this function over every
+// spring, both ends).
 //
 // Two springs at a time, one in each lane of a pair of doubles: springForce()'s operations, lane by
 // lane (|δ| as sqrt((δx² + δy²) + δz²) and the dot product as (a_x b_x + a_y b_y) + a_z b_z, Eigen's
