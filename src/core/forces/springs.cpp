@@ -120,19 +120,19 @@ void SpringForces::addForcesShared(WorkerPool& workers, const Eigen::Matrix3Xd& 
     const double* const vs = v.data();
     double* const fs = force.data();
     const Spring* const all = springs_.data();
-    const SpringRun* const runs = chunk_runs_.data();
-    const int* const starts = chunk_start_.data();
-    workers.forEachChunk(particles, kParticlesPerChunk, [=](int begin, int end) {
+    const PairChunks::Run* const runs = chunks_.runs();
+    const PairChunks& chunks = chunks_;
+    workers.forEachChunk(particles, kParticlesPerChunk, [=, &chunks](int begin, int end) {
       for (int chunk = begin / kParticlesPerChunk; chunk * kParticlesPerChunk < end; ++chunk)
       {
-        for (int r = starts[chunk]; r < starts[chunk + 1]; ++r)
+        for (int r = chunks.runStart(chunk); r < chunks.runStart(chunk + 1); ++r)
         {
-          const SpringRun run = runs[r];
-          const Spring* const first = all + run.first_spring;
-          const Spring* const last = first + run.springs;
-          if (run.ends == SpringRun::kBothEnds)
+          const PairChunks::Run run = runs[r];
+          const Spring* const first = all + run.first;
+          const Spring* const last = first + run.count;
+          if (run.ends == PairChunks::kBothEnds)
             addRunForces<true, true>(first, last, xs, vs, fs);
-          else if (run.ends == SpringRun::kEndI)
+          else if (run.ends == PairChunks::kEndI)
             addRunForces<true, false>(first, last, xs, vs, fs);
           else
             addRunForces<false, true>(first, last, xs, vs, fs);
@@ -171,61 +171,20 @@ void SpringForces::addForcesShared(WorkerPool& workers, const Eigen::Matrix3Xd& 
 void SpringForces::indexEnds(int particles) const
 {
   const int chunks = (particles + kParticlesPerChunk - 1) / kParticlesPerChunk;
-  if (ends_valid_ && static_cast<int>(chunk_start_.size()) == chunks + 1 &&
-      (by_chunks_ || static_cast<int>(end_start_.size()) == particles + 1))
+  if (ends_valid_ && chunks_.chunks() == chunks && (by_chunks_ || static_cast<int>(end_start_.size()) == particles + 1))
     return;
   const int springs = static_cast<int>(springs_.size());
-  auto chunk_of = [](int particle) { return particle / kParticlesPerChunk; };
-  // Counting sort of the springs by the chunks they touch (one or two), filled in spring order.
-  chunk_start_.assign(chunks + 1, 0);
-  for (const Spring& s : springs_)
-  {
-    ++chunk_start_[chunk_of(s.i) + 1];
-    if (chunk_of(s.j) != chunk_of(s.i)) ++chunk_start_[chunk_of(s.j) + 1];
-  }
-  for (int c = 0; c < chunks; ++c)
-    chunk_start_[c + 1] += chunk_start_[c];
+  chunks_.build(
+      springs, particles, kParticlesPerChunk, [this](int k) { return springs_[k].i; },
+      [this](int k) { return springs_[k].j; });
   if (!mode_decided_)
   {
     // Decided once, from the springs as first indexed (a tear only removes springs).
-    by_chunks_ = chunk_start_[chunks] - springs <= springs / 4;
+    by_chunks_ = chunks_.listed() - springs <= springs / 4;
     mode_decided_ = true;
   }
   if (by_chunks_)
   {
-    chunk_springs_.resize(chunk_start_[chunks]);
-    for (int k = 0; k < springs; ++k)
-    {
-      const Spring& s = springs_[k];
-      chunk_springs_[chunk_start_[chunk_of(s.i)]++] = k;
-      if (chunk_of(s.j) != chunk_of(s.i)) chunk_springs_[chunk_start_[chunk_of(s.j)]++] = k;
-    }
-    // The fill moved each start to the next chunk's: shift them back.
-    for (int c = chunks; c > 0; --c)
-      chunk_start_[c] = chunk_start_[c - 1];
-    chunk_start_[0] = 0;
-    // Each chunk's list, cut into runs of consecutive springs with the same ends inside the chunk;
-    // chunk_start_ then indexes the runs. There are never more runs than listed springs, so the
-    // runs allocate only when the list grows.
-    chunk_runs_.clear();
-    chunk_runs_.reserve(chunk_springs_.size());
-    for (int c = 0; c < chunks; ++c)
-    {
-      const int first_run = static_cast<int>(chunk_runs_.size());
-      for (int e = chunk_start_[c]; e < chunk_start_[c + 1]; ++e)
-      {
-        const int k = chunk_springs_[e];
-        const int ends = (chunk_of(springs_[k].i) == c ? SpringRun::kEndI : 0) |
-                         (chunk_of(springs_[k].j) == c ? SpringRun::kEndJ : 0);
-        SpringRun* const previous = static_cast<int>(chunk_runs_.size()) > first_run ? &chunk_runs_.back() : nullptr;
-        if (previous && previous->ends == ends && previous->first_spring + previous->springs == k)
-          ++previous->springs;
-        else
-          chunk_runs_.push_back(SpringRun{k, 1, ends});
-      }
-      chunk_start_[c] = first_run;
-    }
-    chunk_start_[chunks] = static_cast<int>(chunk_runs_.size());
     ends_valid_ = true;
     return;
   }

@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "particle_sim/core/forces/force_element.h"
+#include "particle_sim/core/pair_chunks.h"
 #include "particle_sim/core/spring.h"
 
 namespace particle_sim
@@ -49,9 +50,7 @@ private:
   /// inside the chunk: each particle gets the one-thread loop's additions in its order (and so
   /// its bits). A spring across two chunks is computed twice; when that would be more than a
   /// quarter of the springs (a network numbered without locality), every spring's force goes into
-  /// spring_force_ once and every particle then sums its springs' in spring order. A chunk's
-  /// springs are kept as runs of consecutive springs with the same ends inside it, so that the
-  /// inner loop tests nothing.
+  /// spring_force_ once and every particle then sums its springs' in spring order (PairChunks).
   void addForcesShared(WorkerPool& workers, const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v,
                        Eigen::Matrix3Xd& force) const;
   /// Rebuilds the chunks' spring lists (or ends_) for `particles` particles when the springs or
@@ -69,22 +68,10 @@ private:
   mutable std::vector<int> end_start_;  // per particle p: its ends are ends_[end_start_[p] … end_start_[p + 1])
   mutable std::vector<int> ends_;       // 2 s for end i of spring s, 2 s + 1 for end j, ascending s
   mutable bool ends_valid_ = false;
-  mutable bool by_chunks_ = false;  // chunk_runs_ in use (else the two passes); decided once
+  mutable bool by_chunks_ = false;  // chunks_ in use (else the two passes); decided once
   mutable bool mode_decided_ = false;
-  /// Consecutive springs of springs_, all touching one chunk with the same ends inside it.
-  struct SpringRun
-  {
-    static constexpr int kEndI = 1;
-    static constexpr int kEndJ = 2;
-    static constexpr int kBothEnds = kEndI | kEndJ;
-    int first_spring;
-    int springs;
-    int ends;  // kEndI, kEndJ or kBothEnds: those inside the chunk
-  };
-  mutable std::vector<int> chunk_start_;       // per chunk c: its runs are chunk_runs_[chunk_start_[c] …)
-  mutable std::vector<SpringRun> chunk_runs_;  // per chunk, the runs of springs touching it, ascending
-  mutable std::vector<int> chunk_springs_;     // indexEnds()' scratch: per chunk, its springs, ascending
-  mutable std::vector<double> chunk_energy_;   // addEnergy(): per chunk of springs, its energy
+  mutable PairChunks chunks_;                 // the springs by chunks of particles (by_chunks_)
+  mutable std::vector<double> chunk_energy_;  // addEnergy(): per chunk of springs, its energy
 };
 
 }  // namespace core
