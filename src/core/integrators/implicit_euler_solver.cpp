@@ -17,6 +17,47 @@ double dot(const Eigen::Matrix3Xd& a, const Eigen::Matrix3Xd& b)
 
 // Rows per chunk of a shared product with the block matrix (about ten blocks a row).
 constexpr int kRowsPerChunk = 2048;
+
+// out_i += C (p_j − p_i) at end i (if kAddI), out_j −= C (p_j − p_i) at end j (if kAddJ), for the
+// kept pairs [first, last) in order (ImplicitEulerSolver::multiplyPairRows()). C is symmetric, given
+// by its lower triangle (C00, C10, C20, C11, C21, C22).
+template <bool kAddI, bool kAddJ>
+[[gnu::always_inline]] inline void addPairProducts(const std::array<int, 2>* ends, const std::array<double, 6>* cs,
+                                                   int first, int last, const double* p, double* out)
+{
+  for (int k = first; k < last; ++k)
+  {
+    const double* const pi = p + 3 * ends[k][0];
+    const double* const pj = p + 3 * ends[k][1];
+    const double* const c = cs[k].data();
+    const double d0 = pj[0] - pi[0], d1 = pj[1] - pi[1], d2 = pj[2] - pi[2];
+    const double w0 = (c[0] * d0 + c[1] * d1) + c[2] * d2;
+    const double w1 = (c[1] * d0 + c[3] * d1) + c[4] * d2;
+    const double w2 = (c[2] * d0 + c[4] * d1) + c[5] * d2;
+    if (kAddI)
+    {
+      double* const oi = out + 3 * ends[k][0];
+      oi[0] += w0;
+      oi[1] += w1;
+      oi[2] += w2;
+    }
+    if (kAddJ)
+    {
+      double* const oj = out + 3 * ends[k][1];
+      oj[0] -= w0;
+      oj[1] -= w1;
+      oj[2] -= w2;
+    }
+  }
+}
+
+// A kept pair's C as a full block.
+Eigen::Matrix3d pairBlock(const std::array<double, 6>& c)
+{
+  Eigen::Matrix3d block;
+  block << c[0], c[1], c[2], c[1], c[3], c[4], c[2], c[4], c[5];
+  return block;
+}
 }  // namespace
 
 void ImplicitEulerSolver::setPattern(int particles, const std::vector<std::pair<int, int>>& coupled_pairs)
@@ -47,6 +88,21 @@ void ImplicitEulerSolver::setPattern(int particles, const std::vector<std::pair<
     row_start_[i + 1] = static_cast<int>(block_row_.size());
   }
   blocks_.assign(block_row_.size(), Eigen::Matrix3d::Zero());
+  off_diagonal_zero_ = true;
+  // Room for a kept pair per coupled pair, and the pair chunks of the coupled pairs, which are the
+  // kept pairs of a body of springs alone (its springs in order), so that no step allocates. A body
+  // whose elements add blocks of their own gives them back at its second step (begin()).
+  const int pairs = static_cast<int>(coupled_pairs.size());
+  pair_ends_.resize(pairs);
+  for (int k = 0; k < pairs; ++k)
+    pair_ends_[k] = {coupled_pairs[k].first, coupled_pairs[k].second};
+  pair_blocks_.resize(pairs);
+  pair_c_.resize(pairs);
+  indexPairs(pairs, particles);
+  adds_blocks_ = false;
+  kept_pairs_ = 0;
+  pairs_in_blocks_ = true;
+  own_diagonal_.assign(particles, Eigen::Matrix3d::Zero());
   transpose_block_.resize(block_row_.size());
   for (std::size_t k = 0; k < block_row_.size(); ++k)
     transpose_block_[k] = blockIndex(block_column_[k], block_row_[k]);
@@ -80,16 +136,107 @@ void ImplicitEulerSolver::begin(double h, const Eigen::VectorXd& mass, const Eig
   h_ = h;
   v0_ = v0;
   mass_ = &mass;
-  for (Eigen::Matrix3d& block : blocks_)
-    block.setZero();
+  // Only a step that wrote off-diagonal blocks leaves them to clear (the diagonal is set below).
+  // Pairs are kept aside until a solve or another element needs them in the blocks; a body whose
+  // elements add blocks of their own writes them in every step.
+  if (!off_diagonal_zero_)
+  {
+    for (Eigen::Matrix3d& block : blocks_)
+      block.setZero();
+  }
+  off_diagonal_zero_ = !adds_blocks_;
+  // A body with an element that adds blocks of its own (Baraff–Witkin, bending) writes its springs'
+  // blocks at once: they would be moved into the blocks in every step.
+  kept_pairs_ = 0;
+  pairs_in_blocks_ = adds_blocks_;
+  if (adds_blocks_ && !pair_ends_.empty())
+  {
+    std::vector<std::array<int, 2>>().swap(pair_ends_);
+    std::vector<std::array<int, 2>>().swap(pair_blocks_);
+    std::vector<std::array<double, 6>>().swap(pair_c_);
+    pair_chunks_ = PairChunks();
+  }
   // A = M on the diagonal; and 1/m for the velocity error's Σ |r_i|² / m_i, a product in CG's
   // iterations instead of a division (0 for a massless particle, which only a pinned one can be).
   for (int i = 0; i < static_cast<int>(diagonal_block_.size()); ++i)
   {
     blocks_[diagonal_block_[i]] = mass[i] * Eigen::Matrix3d::Identity();
+    own_diagonal_[i] = blocks_[diagonal_block_[i]];
     inverse_mass_[i] = mass[i] > 0.0 ? 1.0 / mass[i] : 0.0;
   }
   rhs_ = h * force;
+}
+
+void ImplicitEulerSolver::indexPairs(int pairs, int rows)
+{
+  pair_chunks_.build(
+      pairs, rows, kRowsPerChunk, [this](int k) { return pair_ends_[k][0]; },
+      [this](int k) { return pair_ends_[k][1]; });
+  pairs_have_locality_ = pair_chunks_.listed() - pairs <= pairs / 4;
+  indexed_pairs_ = pairs;
+  pairs_changed_ = false;
+}
+
+void ImplicitEulerSolver::growPairs()
+{
+  const std::size_t size = std::max<std::size_t>(64, 2 * pair_ends_.size());
+  pair_ends_.resize(size, {-1, -1});
+  pair_blocks_.resize(size);
+  pair_c_.resize(size);
+}
+
+void ImplicitEulerSolver::movePairsIntoBlocks()
+{
+  if (pairs_in_blocks_) return;
+  for (int k = 0; k < kept_pairs_; ++k)
+  {
+    const Eigen::Matrix3d c = pairBlock(pair_c_[k]);
+    blocks_[pair_blocks_[k][0]] += c;
+    blocks_[pair_blocks_[k][1]] += c;
+  }
+  pairs_in_blocks_ = true;
+  off_diagonal_zero_ = false;
+}
+
+bool ImplicitEulerSolver::preparePairProduct()
+{
+  const int rows = static_cast<int>(diagonal_block_.size());
+  if (pairs_changed_ || indexed_pairs_ != kept_pairs_) indexPairs(kept_pairs_, rows);
+  if (pairs_have_locality_) return true;
+  movePairsIntoBlocks();
+  return false;
+}
+
+void ImplicitEulerSolver::multiplyPairRows(const Eigen::Matrix3Xd& p, Eigen::Matrix3Xd& out, int chunk, int first,
+                                           int last) const
+{
+  for (int i = first; i < last; ++i)
+    out.col(i).noalias() = own_diagonal_[i] * p.col(i);
+  const std::array<int, 2>* const ends = pair_ends_.data();
+  const std::array<double, 6>* const cs = pair_c_.data();
+  const double* const ps = p.data();
+  double* const outs = out.data();
+  for (int r = pair_chunks_.runStart(chunk); r < pair_chunks_.runStart(chunk + 1); ++r)
+  {
+    const PairChunks::Run run = pair_chunks_.runs()[r];
+    if (run.ends == PairChunks::kBothEnds)
+      addPairProducts<true, true>(ends, cs, run.first, run.first + run.count, ps, outs);
+    else if (run.ends == PairChunks::kEndI)
+      addPairProducts<true, false>(ends, cs, run.first, run.first + run.count, ps, outs);
+    else
+      addPairProducts<false, true>(ends, cs, run.first, run.first + run.count, ps, outs);
+  }
+}
+
+void ImplicitEulerSolver::multiplyAll(const Eigen::Matrix3Xd& p, Eigen::Matrix3Xd& out, bool pair_product) const
+{
+  if (!pair_product)
+  {
+    multiply(p, out);
+    return;
+  }
+  forEachFixedChunk(workers_, static_cast<int>(diagonal_block_.size()), kRowsPerChunk,
+                    [&](int chunk, int first, int last) { multiplyPairRows(p, out, chunk, first, last); });
 }
 
 void ImplicitEulerSolver::multiply(const Eigen::Matrix3Xd& p, Eigen::Matrix3Xd& out) const
@@ -263,6 +410,7 @@ SolverReport ImplicitEulerSolver::solve(const std::vector<char>& pinned, std::ve
   // status and diagnostics warn of, rather than costing an unbounded number of factorizations.
   for (RestingContact& contact : contacts)
     contact.let_go = contact.slipping = false;
+  if (!contacts.empty()) movePairsIntoBlocks();  // holding contacts works on the rows of A
   bool holding = holdContacts(pinned, contacts, v, true);
   SolverReport report = solveLinear(pinned, settings);
   int solves = 1;
@@ -326,6 +474,7 @@ SolverReport ImplicitEulerSolver::solveLinear(const std::vector<char>& pinned, c
 
 bool ImplicitEulerSolver::solveDirectly(const std::vector<char>& pinned)
 {
+  movePairsIntoBlocks();
   if (!direct_.factorize(blocks_, pinned)) return false;
   residual_ = rhs_;
   filter(pinned, residual_);
@@ -340,6 +489,8 @@ void ImplicitEulerSolver::conjugateGradient(const std::vector<char>& pinned, con
   // pinned rows filtered out of the start, every residual and every direction. It stops when the
   // residual is within cg_tolerance of |b|, or when the velocity error it bounds is within
   // cg_velocity_tolerance (residualNorms), or at the cap.
+  // The product by the kept pairs when there are any to use (see addPairBlocks()), else by the blocks.
+  const bool pair_product = !pairs_in_blocks_ && preparePairProduct();
   filter(pinned, delta_v_);
   residual_ = rhs_;
   filter(pinned, residual_);
@@ -347,7 +498,7 @@ void ImplicitEulerSolver::conjugateGradient(const std::vector<char>& pinned, con
   for (int i = 0; i < static_cast<int>(pinned.size()); ++i)
     free_mass += pinned[i] ? 0.0 : (*mass_)[i];
   const double rhs_norm = residualNorms(residual_, free_mass).euclidean;
-  multiply(delta_v_, product_);
+  multiplyAll(delta_v_, product_, pair_product);
   residual_ -= product_;
   filter(pinned, residual_);
   ResidualNorms norms = residualNorms(residual_, free_mass);
@@ -371,7 +522,10 @@ void ImplicitEulerSolver::conjugateGradient(const std::vector<char>& pinned, con
   while (!within(norms) && report.iterations < settings.cg_max_iterations)
   {
     forEachFixedChunk(workers_, rows, kRowsPerChunk, [&](int index, int first, int last) {
-      multiplyRows(direction_, product_, first, last);
+      if (pair_product)
+        multiplyPairRows(direction_, product_, index, first, last);
+      else
+        multiplyRows(direction_, product_, first, last);
       // Three running sums, one per coordinate, so that each add need not wait for the last.
       Eigen::Vector3d curvature = Eigen::Vector3d::Zero();
       for (int i = first; i < last; ++i)

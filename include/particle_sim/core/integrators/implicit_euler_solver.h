@@ -8,6 +8,7 @@
 #include "particle_sim/core/constraints/resting_contact.h"
 #include "particle_sim/core/integrator.h"
 #include "particle_sim/core/integrators/sparse_block_ldlt.h"
+#include "particle_sim/core/pair_chunks.h"
 #include "particle_sim/core/worker_pool.h"
 
 namespace particle_sim
@@ -28,8 +29,9 @@ namespace core
 ///
 /// The matrix is block-sparse with 3x3 blocks. Its pattern (which particle pairs are coupled) is
 /// set once per body by setPattern(); each step the force elements add their Jacobian blocks with
-/// addBlock(), by the block index they looked up once with blockIndex(). Nothing allocates after
-/// setPattern().
+/// addBlock(), by the block index they looked up once with blockIndex(), and springs theirs with
+/// addPairBlocks(), which keeps one symmetric block a spring for the conjugate gradient's product
+/// instead of writing four (see there). Nothing allocates after the first steps.
 ///
 /// Use per step: begin(), addBlock() for every element block, solve().
 class ImplicitEulerSolver
@@ -48,30 +50,46 @@ public:
   /// the Newton iterations, whose right-hand side is given whole in `force`).
   void begin(double h, const Eigen::VectorXd& mass, const Eigen::Matrix3Xd& force, const Eigen::Matrix3Xd* v0);
   /// Adds the block ∂f_i/∂x_j = dfdx, ∂f_i/∂v_j = dfdv at `block` (row i, column j):
-  /// A_ij −= h dfdv + h² dfdx and b_i += h² dfdx v0_j.
+  /// A_ij −= h dfdv + h² dfdx and b_i += h² dfdx v0_j. The pairs kept so far are written into their
+  /// blocks first, so that every block gets its terms in the order they were added.
   void addBlock(int block, const Eigen::Matrix3d& dfdx, const Eigen::Matrix3d& dfdv)
   {
-    blocks_[block].noalias() -= h_ * dfdv + h_ * h_ * dfdx;
-    if (v0_) rhs_.col(block_row_[block]).noalias() += h_ * h_ * (dfdx * v0_->col(block_column_[block]));
+    if (!pairs_in_blocks_) movePairsIntoBlocks();
+    adds_blocks_ = true;
+    addToBlock(block, dfdx, dfdv);
   }
-  /// Adds ∂f_i/∂x_i = dfdx, ∂f_i/∂v_i = dfdv to particle i's diagonal block.
+  /// Adds ∂f_i/∂x_i = dfdx, ∂f_i/∂v_i = dfdv to particle i's diagonal block (and to its diagonal
+  /// without the pairs' part, for the pair product).
   void addToDiagonal(int i, const Eigen::Matrix3d& dfdx, const Eigen::Matrix3d& dfdv)
   {
-    addBlock(diagonal_block_[i], dfdx, dfdv);
+    addToBlock(diagonal_block_[i], dfdx, dfdv);
+    own_diagonal_[i].noalias() -= h_ * dfdv + h_ * h_ * dfdx;
   }
   /// Adds a two-particle element whose Jacobians are ∂f_i/∂x_i = ∂f_j/∂x_j = −∂f_i/∂x_j =
-  /// −∂f_j/∂x_i = dfdx (alike for v), as a spring's are, at `blocks` = (i, i), (i, j), (j, i), (j, j).
-  /// The same bits as addBlock() on each with ±dfdx and ±dfdv (a negation is exact), for less work:
-  /// h dfdv + h² dfdx and the two products with v0 are formed once each instead of four times.
-  /// Inline: called for every spring of every implicit step.
+  /// −∂f_j/∂x_i = dfdx (alike for v), both symmetric bit for bit as a spring's are, at `blocks` =
+  /// (i, i), (i, j), (j, i), (j, j). C = h dfdv + h² dfdx goes into the diagonal blocks at once
+  /// (A_ii −= C, A_jj −= C); for A_ij = A_ji += C the pair is kept, as (i, j) and the six numbers
+  /// of C's lower triangle, in the order of the calls. The conjugate gradient multiplies by the
+  /// pairs themselves: C (p_j − p_i) at i and its negative at j, one symmetric block read and one
+  /// 3x3 product a spring, where A's blocks cost two full blocks and two products. The pairs go into
+  /// the off-diagonal blocks, in their order, only when a solve needs A whole (the direct solver,
+  /// resting contacts) or an element adds a block with addBlock(): A is then the same bits as if
+  /// they had been added at once. Inline: called for every spring of every implicit step.
   [[gnu::always_inline]] void addPairBlocks(const std::array<int, 4>& blocks, const Eigen::Matrix3d& dfdx,
                                             const Eigen::Matrix3d& dfdv)
   {
     const Eigen::Matrix3d combined = h_ * dfdv + h_ * h_ * dfdx;
     blocks_[blocks[0]] -= combined;
-    blocks_[blocks[1]] += combined;
-    blocks_[blocks[2]] += combined;
     blocks_[blocks[3]] -= combined;
+    if (pairs_in_blocks_)
+    {
+      blocks_[blocks[1]] += combined;
+      blocks_[blocks[2]] += combined;
+    }
+    else
+    {
+      keepPair(blocks, combined);
+    }
     if (!v0_) return;
     const int i = block_row_[blocks[0]], j = block_row_[blocks[3]];
     const Eigen::Vector3d at_i = h_ * h_ * (dfdx * v0_->col(i));
@@ -96,6 +114,8 @@ public:
   /// counts: 18 a block of A and about 40 a particle for one iteration). Analyses the pattern
   /// (allocates): for decisions taken once.
   double directCostInCgIterations() const;
+  /// The pairs kept by addPairBlocks() in this step, not yet in the blocks of A (for tests).
+  int keptPairs() const { return pairs_in_blocks_ ? 0 : kept_pairs_; }
   /// Forgets the warm start (after a reset or a jump of the state).
   void clearWarmStart() { delta_v_.setZero(); }
   /// Threads to share the conjugate gradient's per-particle loops with (null: none). Its products,
@@ -104,6 +124,42 @@ public:
   void setWorkers(WorkerPool* workers) { workers_ = workers; }
 
 private:
+  // A_ij −= h dfdv + h² dfdx at `block` (row i, column j) and b_i += h² dfdx v0_j.
+  void addToBlock(int block, const Eigen::Matrix3d& dfdx, const Eigen::Matrix3d& dfdv)
+  {
+    blocks_[block].noalias() -= h_ * dfdv + h_ * h_ * dfdx;
+    if (v0_) rhs_.col(block_row_[block]).noalias() += h_ * h_ * (dfdx * v0_->col(block_column_[block]));
+  }
+  // Keeps pair C (addPairBlocks()); notes when its particles differ from the last step's pair at
+  // this place in the list (the pair chunks are then indexed again).
+  [[gnu::always_inline]] void keepPair(const std::array<int, 4>& blocks, const Eigen::Matrix3d& c)
+  {
+    if (kept_pairs_ == static_cast<int>(pair_ends_.size())) growPairs();
+    const int k = kept_pairs_++;
+    const int i = block_row_[blocks[0]], j = block_row_[blocks[3]];
+    if (pair_ends_[k][0] != i || pair_ends_[k][1] != j) pairs_changed_ = true;
+    pair_ends_[k] = {i, j};
+    pair_blocks_[k] = {blocks[1], blocks[2]};
+    pair_c_[k] = {c(0, 0), c(1, 0), c(2, 0), c(1, 1), c(2, 1), c(2, 2)};
+  }
+  // Indexes the first `pairs` pairs of pair_ends_ by chunks of `rows` rows (pair_chunks_).
+  void indexPairs(int pairs, int rows);
+  // More room for kept pairs (setPattern() makes room for one a coupled pair, so only a body with
+  // more pair elements than coupled pairs gets here).
+  void growPairs();
+  // Adds every kept pair's C to its off-diagonal blocks (i, j) and (j, i), in the pairs' order; from
+  // now on in this step addPairBlocks() writes them there at once.
+  void movePairsIntoBlocks();
+  // Makes the pair product ready for this step's kept pairs: the pair chunks, indexed again when
+  // the list changed. False when it is not worth it (pairs without locality, more
+  // than a quarter of them across two chunks of rows): the pairs are then moved into the blocks.
+  bool preparePairProduct();
+  // out = A p on the rows [first, last) of chunk `chunk` of kRowsPerChunk rows, from the kept pairs:
+  // (A p)_i = E_i p_i + Σ over the pairs at i, in list order, of ±C (p_j − p_i) (+ at end i, − at j),
+  // with E_i = A_ii + Σ C its diagonal block without the pairs' part (own_diagonal_).
+  void multiplyPairRows(const Eigen::Matrix3Xd& p, Eigen::Matrix3Xd& out, int chunk, int first, int last) const;
+  // out = A p, all rows: from the kept pairs when `pair_product`, else from the blocks.
+  void multiplyAll(const Eigen::Matrix3Xd& p, Eigen::Matrix3Xd& out, bool pair_product) const;
   // CG iterations from delta_v_ until the filtered residual is within cg_tolerance |b|, or the
   // velocity error it bounds within cg_velocity_tolerance, or the cap.
   void conjugateGradient(const std::vector<char>& pinned, const IntegratorDef& settings, SolverReport& report);
@@ -142,6 +198,22 @@ private:
   std::vector<int> row_start_, block_row_, block_column_, diagonal_block_;
   std::vector<int> transpose_block_;  // the index of block (j, i) for block (i, j)
   std::vector<Eigen::Matrix3d> blocks_;
+  // The pairs of addPairBlocks() (struct of arrays, kept_pairs_ of them in this step): their
+  // particles (i, j), their off-diagonal blocks (i, j) and (j, i), and C's lower triangle by columns
+  // (C00, C10, C20, C11, C21, C22).
+  std::vector<std::array<int, 2>> pair_ends_, pair_blocks_;
+  std::vector<std::array<double, 6>> pair_c_;
+  int kept_pairs_ = 0;
+  bool pairs_in_blocks_ = true;       // the kept pairs are in blocks_ (and addPairBlocks() writes there)
+  bool adds_blocks_ = false;          // addBlock() was called since setPattern(): pairs are not kept
+  bool pairs_changed_ = true;         // the list differs from the one pair_chunks_ indexes
+  int indexed_pairs_ = -1;            // how many pairs pair_chunks_ indexes
+  bool pairs_have_locality_ = false;  // pair_chunks_ lists at most 1.25 times the pairs
+  bool off_diagonal_zero_ = false;    // every off-diagonal block of blocks_ is zero
+  PairChunks pair_chunks_;            // the pairs by chunks of kRowsPerChunk rows
+  // E_i = A_ii + Σ C over the pairs at i: M_i and what addToDiagonal() added, in this step (an
+  // element that adds blocks with addBlock() moves the pairs into the blocks, so E is not used).
+  std::vector<Eigen::Matrix3d> own_diagonal_;
   std::vector<Eigen::Matrix3d> inverse_diagonal_;
   std::vector<double> inverse_mass_;  // 1/m per particle (0 where m is 0), set by begin()
   SparseBlockLdlt direct_;
