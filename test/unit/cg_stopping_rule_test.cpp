@@ -88,8 +88,11 @@ IntegratorDef cgSettings(double relative, double velocity)
   return settings;
 }
 
-// Δv from ImplicitEulerSolver with `settings` (h = 1, v0 = 0, so that A = M + K and b = rhs).
-Eigen::Matrix3Xd solveWith(const RandomSystem& system, const IntegratorDef& settings, SolverReport& report)
+// Δv from ImplicitEulerSolver with `settings` (h = 1, v0 = 0, so that A = M + K and b = rhs), each
+// pair added as four single blocks, or with addPairBlocks() when `as_pairs`; `kept` (if given) gets
+// how many pairs the solver still kept aside after the solve.
+Eigen::Matrix3Xd solveWith(const RandomSystem& system, const IntegratorDef& settings, SolverReport& report,
+                           bool as_pairs = false, int* kept = nullptr)
 {
   ImplicitEulerSolver solver;
   solver.setPattern(system.particles, system.pairs);
@@ -99,6 +102,13 @@ Eigen::Matrix3Xd solveWith(const RandomSystem& system, const IntegratorDef& sett
     const auto [i, j] = system.pairs[p];
     const Eigen::Matrix3d& k = system.terms[p];
     const Eigen::Matrix3d zero = Eigen::Matrix3d::Zero();
+    if (as_pairs)
+    {
+      solver.addPairBlocks(
+          {solver.blockIndex(i, i), solver.blockIndex(i, j), solver.blockIndex(j, i), solver.blockIndex(j, j)}, -k,
+          zero);
+      continue;
+    }
     solver.addBlock(solver.blockIndex(i, i), -k, zero);  // A −= h² ∂f/∂x
     solver.addBlock(solver.blockIndex(j, j), -k, zero);
     solver.addBlock(solver.blockIndex(i, j), k, zero);
@@ -108,6 +118,7 @@ Eigen::Matrix3Xd solveWith(const RandomSystem& system, const IntegratorDef& sett
   Eigen::Matrix3Xd x = Eigen::Matrix3Xd::Zero(3, system.particles);
   Eigen::Matrix3Xd v = Eigen::Matrix3Xd::Zero(3, system.particles);
   report = solver.solve(system.pinned, contacts, settings, x, v);
+  if (kept) *kept = solver.keptPairs();
   return v;
 }
 
@@ -315,37 +326,10 @@ TEST(ImplicitEulerSolver, ThePairProductSolvesTheSystemOfTheBlocks)
   {
     const RandomSystem system = randomSystem(10, seed);
     const Eigen::Matrix3Xd exact = solveDense(system);
-    auto solve = [&system](bool as_pairs, int& kept, SolverReport& report) {
-      ImplicitEulerSolver solver;
-      solver.setPattern(system.particles, system.pairs);
-      solver.begin(1.0, system.mass, system.rhs, nullptr);
-      const Eigen::Matrix3d zero = Eigen::Matrix3d::Zero();
-      for (std::size_t p = 0; p < system.pairs.size(); ++p)
-      {
-        const auto [i, j] = system.pairs[p];
-        const std::array<int, 4> blocks = {solver.blockIndex(i, i), solver.blockIndex(i, j), solver.blockIndex(j, i),
-                                           solver.blockIndex(j, j)};
-        if (as_pairs)
-        {
-          solver.addPairBlocks(blocks, -system.terms[p], zero);
-          continue;
-        }
-        solver.addBlock(blocks[0], -system.terms[p], zero);
-        solver.addBlock(blocks[1], system.terms[p], zero);
-        solver.addBlock(blocks[2], system.terms[p], zero);
-        solver.addBlock(blocks[3], -system.terms[p], zero);
-      }
-      std::vector<RestingContact> contacts;
-      Eigen::Matrix3Xd x = Eigen::Matrix3Xd::Zero(3, system.particles);
-      Eigen::Matrix3Xd v = Eigen::Matrix3Xd::Zero(3, system.particles);
-      report = solver.solve(system.pinned, contacts, cgSettings(1e-12, 0.0), x, v);
-      kept = solver.keptPairs();
-      return v;
-    };
     int kept_pairs = 0, kept_singles = 0;
     SolverReport pairs, singles;
-    const Eigen::Matrix3Xd v_pairs = solve(true, kept_pairs, pairs);
-    const Eigen::Matrix3Xd v_singles = solve(false, kept_singles, singles);
+    const Eigen::Matrix3Xd v_pairs = solveWith(system, cgSettings(1e-12, 0.0), pairs, true, &kept_pairs);
+    const Eigen::Matrix3Xd v_singles = solveWith(system, cgSettings(1e-12, 0.0), singles, false, &kept_singles);
     ASSERT_TRUE(pairs.converged && singles.converged);
     EXPECT_EQ(kept_pairs, static_cast<int>(system.pairs.size()));
     EXPECT_EQ(kept_singles, 0);

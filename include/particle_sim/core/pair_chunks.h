@@ -36,6 +36,9 @@ public:
 
   /// Pairs listed over all chunks: the pairs, and once more each pair across two chunks.
   int listed() const { return listed_; }
+  /// Whether the runs are worth using: at most a quarter of the pairs cross two chunks (else the
+  /// pairs are numbered without locality, and a loop over them costs much more than one thread's).
+  bool hasLocality() const { return listed_ - pairs_ <= pairs_ / 4; }
   int chunks() const { return static_cast<int>(chunk_start_.size()) - 1; }
   /// The runs of chunk c: runs()[runStart(c)] … runs()[runStart(c + 1) − 1].
   int runStart(int c) const { return chunk_start_[c]; }
@@ -46,6 +49,7 @@ private:
   std::vector<Run> runs_;
   std::vector<int> chunk_pairs_;  // build()'s scratch: per chunk, its pairs, ascending
   int listed_ = 0;
+  int pairs_ = 0;
 };
 
 template <class EndI, class EndJ>
@@ -64,6 +68,7 @@ void PairChunks::build(int pairs, int particles, int chunk_size, EndI&& end_i, E
   for (int c = 0; c < chunks; ++c)
     chunk_start_[c + 1] += chunk_start_[c];
   listed_ = chunk_start_[chunks];
+  pairs_ = pairs;
   chunk_pairs_.resize(listed_);
   for (int k = 0; k < pairs; ++k)
   {

@@ -180,7 +180,7 @@ void SpringForces::indexEnds(int particles) const
   if (!mode_decided_)
   {
     // Decided once, from the springs as first indexed (a tear only removes springs).
-    by_chunks_ = chunks_.listed() - springs <= springs / 4;
+    by_chunks_ = chunks_.hasLocality();
     mode_decided_ = true;
   }
   if (by_chunks_)

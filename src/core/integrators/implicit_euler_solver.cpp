@@ -172,7 +172,6 @@ void ImplicitEulerSolver::indexPairs(int pairs, int rows)
   pair_chunks_.build(
       pairs, rows, kRowsPerChunk, [this](int k) { return pair_ends_[k][0]; },
       [this](int k) { return pair_ends_[k][1]; });
-  pairs_have_locality_ = pair_chunks_.listed() - pairs <= pairs / 4;
   indexed_pairs_ = pairs;
   pairs_changed_ = false;
 }
@@ -202,7 +201,7 @@ bool ImplicitEulerSolver::preparePairProduct()
 {
   const int rows = static_cast<int>(diagonal_block_.size());
   if (pairs_changed_ || indexed_pairs_ != kept_pairs_) indexPairs(kept_pairs_, rows);
-  if (pairs_have_locality_) return true;
+  if (pair_chunks_.hasLocality()) return true;
   movePairsIntoBlocks();
   return false;
 }
@@ -228,20 +227,15 @@ void ImplicitEulerSolver::multiplyPairRows(const Eigen::Matrix3Xd& p, Eigen::Mat
   }
 }
 
-void ImplicitEulerSolver::multiplyAll(const Eigen::Matrix3Xd& p, Eigen::Matrix3Xd& out, bool pair_product) const
+void ImplicitEulerSolver::multiply(const Eigen::Matrix3Xd& p, Eigen::Matrix3Xd& out, bool pair_product) const
 {
   if (!pair_product)
   {
-    multiply(p, out);
+    multiplyRows(p, out, 0, static_cast<int>(diagonal_block_.size()));
     return;
   }
   forEachFixedChunk(workers_, static_cast<int>(diagonal_block_.size()), kRowsPerChunk,
                     [&](int chunk, int first, int last) { multiplyPairRows(p, out, chunk, first, last); });
-}
-
-void ImplicitEulerSolver::multiply(const Eigen::Matrix3Xd& p, Eigen::Matrix3Xd& out) const
-{
-  multiplyRows(p, out, 0, static_cast<int>(diagonal_block_.size()));
 }
 
 void ImplicitEulerSolver::multiplyRows(const Eigen::Matrix3Xd& p, Eigen::Matrix3Xd& out, int begin, int end) const
@@ -498,7 +492,7 @@ void ImplicitEulerSolver::conjugateGradient(const std::vector<char>& pinned, con
   for (int i = 0; i < static_cast<int>(pinned.size()); ++i)
     free_mass += pinned[i] ? 0.0 : (*mass_)[i];
   const double rhs_norm = residualNorms(residual_, free_mass).euclidean;
-  multiplyAll(delta_v_, product_, pair_product);
+  multiply(delta_v_, product_, pair_product);
   residual_ -= product_;
   filter(pinned, residual_);
   ResidualNorms norms = residualNorms(residual_, free_mass);

@@ -158,8 +158,6 @@ private:
   // (A p)_i = E_i p_i + Σ over the pairs at i, in list order, of ±C (p_j − p_i) (+ at end i, − at j),
   // with E_i = A_ii + Σ C its diagonal block without the pairs' part (own_diagonal_).
   void multiplyPairRows(const Eigen::Matrix3Xd& p, Eigen::Matrix3Xd& out, int chunk, int first, int last) const;
-  // out = A p, all rows: from the kept pairs when `pair_product`, else from the blocks.
-  void multiplyAll(const Eigen::Matrix3Xd& p, Eigen::Matrix3Xd& out, bool pair_product) const;
   // CG iterations from delta_v_ until the filtered residual is within cg_tolerance |b|, or the
   // velocity error it bounds within cg_velocity_tolerance, or the cap.
   void conjugateGradient(const std::vector<char>& pinned, const IntegratorDef& settings, SolverReport& report);
@@ -176,7 +174,8 @@ private:
   {
     double preconditioned = 0.0, squared = 0.0, weighted = 0.0;
   };
-  void multiply(const Eigen::Matrix3Xd& p, Eigen::Matrix3Xd& out) const;
+  // out = A p, all rows: from the kept pairs when `pair_product`, else from the blocks.
+  void multiply(const Eigen::Matrix3Xd& p, Eigen::Matrix3Xd& out, bool pair_product) const;
   // out = A p on rows [begin, end).
   void multiplyRows(const Eigen::Matrix3Xd& p, Eigen::Matrix3Xd& out, int begin, int end) const;
   static void filter(const std::vector<char>& pinned, Eigen::Matrix3Xd& p);
@@ -204,13 +203,12 @@ private:
   std::vector<std::array<int, 2>> pair_ends_, pair_blocks_;
   std::vector<std::array<double, 6>> pair_c_;
   int kept_pairs_ = 0;
-  bool pairs_in_blocks_ = true;       // the kept pairs are in blocks_ (and addPairBlocks() writes there)
-  bool adds_blocks_ = false;          // addBlock() was called since setPattern(): pairs are not kept
-  bool pairs_changed_ = true;         // the list differs from the one pair_chunks_ indexes
-  int indexed_pairs_ = -1;            // how many pairs pair_chunks_ indexes
-  bool pairs_have_locality_ = false;  // pair_chunks_ lists at most 1.25 times the pairs
-  bool off_diagonal_zero_ = false;    // every off-diagonal block of blocks_ is zero
-  PairChunks pair_chunks_;            // the pairs by chunks of kRowsPerChunk rows
+  bool pairs_in_blocks_ = true;     // the kept pairs are in blocks_ (and addPairBlocks() writes there)
+  bool adds_blocks_ = false;        // addBlock() was called since setPattern(): pairs are not kept
+  bool pairs_changed_ = true;       // the list differs from the one pair_chunks_ indexes
+  int indexed_pairs_ = -1;          // how many pairs pair_chunks_ indexes
+  bool off_diagonal_zero_ = false;  // every off-diagonal block of blocks_ is zero
+  PairChunks pair_chunks_;          // the pairs by chunks of kRowsPerChunk rows
   // E_i = A_ii + Σ C over the pairs at i: M_i and what addToDiagonal() added, in this step (an
   // element that adds blocks with addBlock() moves the pairs into the blocks, so E is not used).
   std::vector<Eigen::Matrix3d> own_diagonal_;
