@@ -539,8 +539,11 @@ def main():
         lines.append('Triad bandwidth `a[i] = b[i] + s c[i]`: %.1f GB/s (%s).' % (triad[0]['ms_min'], triad[0]['detail']))
         lines.append('')
     lines.append('A symplectic Euler step of an n × n spring cloth at half its stability limit, one force pass a '
-                 'step. The floor is the 40-byte spring record read once at the triad bandwidth; the step also '
-                 'integrates, applies the pins and computes the blow-up guard\'s energy, so it is further from the '
+                 'step: the blow-up guard\'s energy after the step comes out of the pass that evaluates the end '
+                 'state\'s forces, which the next step takes (README, "Stability on hard cases"), so no pass over '
+                 'the springs is the guard\'s alone. The floor is the 40-byte spring record read once at the triad '
+                 'bandwidth; the step also integrates, applies the pins, copies the state it may roll back to and '
+                 'sums the kinetic and gravity energies (passes over the particles), so it is further from the '
                  'floor than the force pass alone.')
     lines.append('')
     lines.append('| n | springs | ms per step, min (median–max) | per spring |')

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <numeric>
 
@@ -194,6 +195,8 @@ SpringNetworkBody::SpringNetworkBody(const SpringNetworkDef& def, const Integrat
   saved_position_.setZero(3, n);
   saved_velocity_.setZero(3, n);
   substep_start_.setZero(3, n);
+  carried_force_.setZero(3, n);
+  carried_pin_velocity_.setZero(3, n);
   resting_contacts_.reserve(n);
   if (def_.tear_strain > 0.0)
   {
@@ -268,6 +271,8 @@ void SpringNetworkBody::reset()
     saved_velocity_.setZero(3, n);
     substep_start_.setZero(3, n);
     step_target_.setZero(3, n);
+    carried_force_.setZero(3, n);
+    carried_pin_velocity_.setZero(3, n);
   }
   rest_positions_ = def_.positions;
   origin_of_.resize(n);
@@ -302,6 +307,8 @@ void SpringNetworkBody::reset()
   updateStabilityBound();
   last_substeps_ = 1;
   last_dt_ = 0.0;
+  carry_pause_ = 0;
+  carried_force_steps_ = 0;
   last_solve_ = SolverReport{};
   frozen_reason_.clear();
   restartMethods();
@@ -468,7 +475,9 @@ void SpringNetworkBody::step(double dt, const Environment& env)
   const int n = p.size();
   copyShared(workers_, p.position, saved_position_);
   copyShared(workers_, p.velocity, saved_velocity_);
-  step_target_ = pin_target_;
+  // The pins' targets for the end of the step (only pinned columns are read or changed below).
+  for (const int i : pinned_indices_)
+    step_target_.col(i) = pin_target_.col(i);
   bool switched = false;
   const IntegratorType type = guard_.resolve(integrator_.type, dt, omega_bound_, dampingBound(), implicit_step_cost_,
                                              integrator_.max_substeps, last_integrator_, switched);
@@ -478,14 +487,19 @@ void SpringNetworkBody::step(double dt, const Environment& env)
   int substeps = guard_.substeps(type, dt, omega_bound_, dampingBound(), integrator_.max_substeps, last_substeps_);
   // The blow-up check's energy before the step: what the last explicit step measured after itself,
   // when nothing has changed it since (updateStabilityBound() forgets it on every change of pins,
-  // constants or springs, and the gravity is the same), else measured now: one pass over the
-  // springs a step instead of two.
+  // constants or springs, and the gravity is the same), else measured now.
   const bool energy_known = explicit_method && energy_after_valid_ && env.gravity == energy_after_gravity_;
   const double energy_before = explicit_method ? (energy_known ? energy_after_ : mechanicalEnergy(env.gravity)) : 0.0;
-  energy_after_valid_ = false;
+  // The forces the last step carried, for this one's first evaluation when the state and the
+  // environment they were computed in still hold (takeCarriedForces() checks the pins).
+  carried_armed_ = carried_valid_ && energy_known && method(type).evaluatesForcesFirst() &&
+                   env.air.drag == carried_air_.drag && env.air.wind == carried_air_.wind &&
+                   env.damping == carried_damping_;
+  if (carried_valid_ && !carried_armed_) carry_pause_ = kCarryPause;
+  energy_after_valid_ = carried_valid_ = false;
   guard_.beginStep(explicit_method, energy_before, energy_scale_, env.gravity.norm());
   double energy_after = 0.0;
-  bool finite = true;
+  bool finite = true, carried = false;
 
   for (;;)
   {
@@ -502,11 +516,21 @@ void SpringNetworkBody::step(double dt, const Environment& env)
       }
       substep(dt / substeps, type, env);
     }
-    pin_target_ = step_target_;
+    for (const int i : pinned_indices_)
+      pin_target_.col(i) = step_target_.col(i);
 
     // Blow-up of an explicit method: roll back and retry with more substeps, or freeze.
+    carried_armed_ = false;
     finite = allFiniteShared(workers_, p.position) && allFiniteShared(workers_, p.velocity);
-    energy_after = explicit_method ? mechanicalEnergy(env.gravity) : 0.0;
+    // The energy after an explicit step, with the forces of its end state when the next step may
+    // take them (the springs' energy comes out of their force pass): kinetic + potential, as
+    // mechanicalEnergy() sums it, the same bits.
+    carried = explicit_method && finite && carry_pause_ == 0;
+    if (carried)
+      energy_after = kineticEnergy() +
+                     forces_.computeForcesAndEnergy(forceContext(env.gravity), p.position, p.velocity, carried_force_);
+    else
+      energy_after = explicit_method ? mechanicalEnergy(env.gravity) : 0.0;
     if (!guard_.blewUp(finite, energy_after)) break;
     p.position = saved_position_;
     p.velocity = saved_velocity_;
@@ -529,13 +553,15 @@ void SpringNetworkBody::step(double dt, const Environment& env)
     for (int i = begin; i < end; ++i)
       p.age[i] += dt;
   });
-  copyShared(workers_, saved_position_, p.previous_position);
+  // The step's start becomes the previous position by a swap of the arrays, not a copy (the next
+  // step saves its start anew).
+  p.previous_position.swap(saved_position_);
 
   // A non-finite state (as checked after the last try above) or a failed solve is never kept: go
   // back to the last good state and stop this body.
   if (!finite || last_solve_.breakdown)
   {
-    p.position = saved_position_;
+    p.position = p.previous_position;
     p.velocity = saved_velocity_;
     frozen_reason_ = guard_.freezeReason(type, dt, last_solve_.breakdown);
     return;
@@ -545,6 +571,18 @@ void SpringNetworkBody::step(double dt, const Environment& env)
     energy_after_ = energy_after;
     energy_after_gravity_ = env.gravity;
     energy_after_valid_ = true;
+    if (carried)
+    {
+      carried_valid_ = true;
+      carried_air_ = env.air;
+      carried_damping_ = env.damping;
+      for (const int i : pinned_indices_)
+        carried_pin_velocity_.col(i) = p.velocity.col(i);
+    }
+    else if (carry_pause_ > 0)
+    {
+      --carry_pause_;
+    }
   }
   if (def_.tear_strain > 0.0) tearOverstretched();  // a tear forgets energy_after_ (updateStabilityBound)
 }
@@ -769,6 +807,8 @@ void SpringNetworkBody::appendCopies(const std::vector<int>& sources)
   grow(saved_velocity_);
   grow(substep_start_);
   grow(step_target_);
+  grow(carried_force_);
+  grow(carried_pin_velocity_);
   pinned_.resize(n, 0);
   pinned_indices_.reserve(n);
   resting_contacts_.reserve(n);
@@ -870,9 +910,29 @@ void SpringNetworkBody::restartMethods()
     entry.second->restart();
 }
 
+bool SpringNetworkBody::takeCarriedForces(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v,
+                                          Eigen::Matrix3Xd& force) const
+{
+  if (!carried_armed_) return false;
+  carried_armed_ = false;
+  bool same = &x == &particles_.position && &v == &particles_.velocity && force.cols() == carried_force_.cols();
+  // Bit for bit (a −0 where there was +0 may change a force's zero's sign).
+  for (std::size_t k = 0; same && k < pinned_indices_.size(); ++k)
+    same = std::memcmp(v.col(pinned_indices_[k]).data(), carried_pin_velocity_.col(pinned_indices_[k]).data(),
+                       3 * sizeof(double)) == 0;
+  if (!same)
+  {
+    carry_pause_ = kCarryPause;
+    return false;
+  }
+  copyShared(workers_, carried_force_, force);
+  ++carried_force_steps_;
+  return true;
+}
+
 void SpringNetworkBody::accelerations(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v, Eigen::Matrix3Xd& a) const
 {
-  computeForces(x, v, gravity_, a);
+  if (!takeCarriedForces(x, v, a)) computeForces(x, v, gravity_, a);
   shareLoop(workers_, static_cast<int>(a.cols()), kParticlesPerVectorChunk, [&](int begin, int end) {
     for (int i = begin; i < end; ++i)
       a.col(i) *= particles_.inverse_mass[i];  // 0 for pinned
@@ -888,7 +948,7 @@ void SpringNetworkBody::updateStabilityBound(bool re_explain)
 {
   // Gershgorin: each element adds k |∂C/∂x_i| Σ_n |∂C/∂x_n| to row i (springs: 2 k at both ends),
   // alike for damping; the bound is the largest row over the mass of its (free) particle.
-  energy_after_valid_ = false;  // whatever changed the bound may have changed the energy
+  energy_after_valid_ = carried_valid_ = false;  // whatever changed the bound may have changed the energy
   const int n = particles_.size();
   std::vector<double>& stiffness_rows = stiffness_rows_;
   std::vector<double>& damping_rows = damping_rows_;

@@ -8,6 +8,7 @@
 
 #include <Eigen/Core>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <memory>
 #include <vector>
@@ -50,6 +51,27 @@ struct Chain
   Eigen::Matrix3Xd x, v;
   std::vector<core::Spring> springs;
 };
+
+// 5000 springs on `chain`, mostly neighbours (shared ends, long runs) and some far pairs; every 5th a
+// damper alone (so that the damping term's rounding shows). Every 7th and every 11th spring gets its
+// two ends at the same position in `x` (zero length).
+std::vector<core::Spring> awkwardSprings(const Chain& chain, Eigen::Matrix3Xd& x)
+{
+  std::vector<core::Spring> springs;
+  for (int k = 0; k < 5000; ++k)
+  {
+    const int i = (k * 3) % (chain.particles - 40);
+    const int j = k % 13 == 0 ? (i * 7 + 11) % chain.particles : i + 1 + k % 3;
+    springs.push_back(
+        core::Spring{i, j, 0.02, k % 5 == 0 ? 0.0 : 50.0 + k % 7, 0.05 * (1 + k % 3), core::SpringClass::Stretch});
+  }
+  x = chain.x;
+  for (std::size_t k = 0; k < springs.size(); k += 7)
+    x.col(springs[k].j) = x.col(springs[k].i);
+  for (std::size_t k = 4; k < springs.size(); k += 11)
+    x.col(springs[k].j) = x.col(springs[k].i);
+  return springs;
+}
 }  // namespace
 
 TEST(ForceSet, FirstElementWritesTheBitsOfZeroingAndAdding)
@@ -95,22 +117,8 @@ TEST(ForceSet, FirstElementWritesTheBitsOfZeroingAndAdding)
 TEST(SpringForces, AddsTheBitsOfEachSpringForceInListOrder)
 {
   const Chain chain;
-  std::vector<core::Spring> springs;
-  for (int k = 0; k < 5000; ++k)
-  {
-    // Mostly neighbours (shared ends, long runs) and some far pairs; every 5th a damper alone (so that
-    // the damping term's rounding shows); below, every 7th and every 11th spring gets its two ends at
-    // the same position (zero length).
-    const int i = (k * 3) % (chain.particles - 40);
-    const int j = k % 13 == 0 ? (i * 7 + 11) % chain.particles : i + 1 + k % 3;
-    springs.push_back(
-        core::Spring{i, j, 0.02, k % 5 == 0 ? 0.0 : 50.0 + k % 7, 0.05 * (1 + k % 3), core::SpringClass::Stretch});
-  }
-  Eigen::Matrix3Xd x = chain.x;
-  for (std::size_t k = 0; k < springs.size(); k += 7)
-    x.col(springs[k].j) = x.col(springs[k].i);
-  for (std::size_t k = 4; k < springs.size(); k += 11)
-    x.col(springs[k].j) = x.col(springs[k].i);
+  Eigen::Matrix3Xd x;
+  const std::vector<core::Spring> springs = awkwardSprings(chain, x);
 
   for (std::size_t count : {std::size_t{0}, std::size_t{1}, std::size_t{2}, std::size_t{3}, std::size_t{8},
                             std::size_t{4999}, std::size_t{5000}})
@@ -139,6 +147,60 @@ TEST(SpringForces, AddsTheBitsOfEachSpringForceInListOrder)
       Eigen::Matrix3Xd force = start;
       forces.addForces(context, x, chain.v, force);
       EXPECT_TRUE(sameBits(expected, force)) << count << " springs, " << threads << " threads";
+    }
+  }
+}
+
+// ForceSet::computeForcesAndEnergy() takes the springs' energy out of their force pass (each spring's
+// stretch is the force's): its forces must be the bits of computeForces() and its energy the bits of
+// energy(), with zero-length springs, for every list length (the odd spring of a pair), at one and two
+// threads (where a spring across two chunks of particles is visited twice, or, for springs numbered
+// without locality, each spring once into a list), and with the springs as the set's first element
+// (which keeps nothing: their energy is then computed apart).
+TEST(ForceSet, ForcesAndEnergyInOnePassAreTheBitsOfEachAlone)
+{
+  const Chain chain;
+  Eigen::Matrix3Xd x;
+  const std::vector<core::Spring> springs = awkwardSprings(chain, x);
+  std::vector<core::Spring> far = springs;  // every spring across the chain: no locality
+  for (core::Spring& s : far)
+    s.j = (s.i + chain.particles / 2) % chain.particles;
+  std::vector<std::vector<core::Spring>> lists;
+  for (std::size_t count : {std::size_t{0}, std::size_t{1}, std::size_t{3}, std::size_t{4999}, std::size_t{5000}})
+    lists.emplace_back(springs.begin(), springs.begin() + count);
+  lists.push_back(far);
+  for (const std::vector<core::Spring>& list : lists)
+  {
+    const std::size_t count = list.size();
+    core::ForceSet with_gravity, springs_first;
+    with_gravity.add(std::make_unique<core::GravityForce>());
+    with_gravity.add(std::make_unique<core::SpringForces>(list));
+    springs_first.add(std::make_unique<core::SpringForces>(list));
+    springs_first.add(std::make_unique<core::GravityForce>());
+    for (int threads : {1, 2})
+    {
+      core::WorkerPool pool(threads);
+      const core::ForceContext context{chain.mass, chain.pinned, Eigen::Vector3d(0.3, -0.2, -9.81), {}, 0.0, &pool};
+      for (const core::ForceSet* set : {&with_gravity, &springs_first})
+      {
+        Eigen::Matrix3Xd expected(3, chain.particles), force(3, chain.particles);
+        set->computeForces(context, x, chain.v, expected);
+        const double energy = set->computeForcesAndEnergy(context, x, chain.v, force);
+        EXPECT_TRUE(sameBits(expected, force)) << count << " springs, " << threads << " threads";
+        const double expected_energy = set->energy(context, x);
+        EXPECT_EQ(0, std::memcmp(&expected_energy, &energy, sizeof energy))
+            << count << " springs, " << threads << " threads: " << energy << " against " << expected_energy;
+        // The energy of another state, after forces of that state: not what the last pass kept.
+        const Eigen::Matrix3Xd moved = x * 1.5;
+        set->computeForces(context, moved, chain.v, force);
+        const double moved_energy = set->computeForcesAndEnergy(context, moved, chain.v, force);
+        const double expected_moved = set->energy(context, moved);
+        EXPECT_EQ(0, std::memcmp(&expected_moved, &moved_energy, sizeof moved_energy)) << count << " springs";
+        if (count > 0)
+        {
+          EXPECT_NE(expected_moved, expected_energy);
+        }
+      }
     }
   }
 }

@@ -179,6 +179,9 @@ public:
   /// (Gershgorin, at rest geometry; recomputed when spring constants change).
   double frequencyBound() const { return omega_bound_; }
   double dampingBound() const;
+  /// Explicit steps since build or reset whose first force evaluation took the forces the step before
+  /// computed at its end state along with its energy (a pass over the springs saved each).
+  long long carriedForceSteps() const { return carried_force_steps_; }
   /// Stability events (substeps added, blow-ups rolled back) since build or reset.
   long long stabilityEvents() const { return guard_.events(); }
   const std::string& lastStabilityEvent() const { return guard_.lastEvent(); }
@@ -209,11 +212,11 @@ public:
   /// What the World's SelfCollisionSolver reads and moves after the step: the positions at the
   /// step's start [m], and the particles (positions and velocities), which it changes only through
   /// impulses; it then calls particlesMovedAfterStep().
-  const Eigen::Matrix3Xd& stepStartPositions() const { return saved_position_; }
+  const Eigen::Matrix3Xd& stepStartPositions() const { return particles_.previous_position; }
   ParticlePool& particlesForContacts() { return particles_; }
   /// Says that something outside the step moved the particles (the energy the step measured after
   /// itself no longer holds).
-  void particlesMovedAfterStep() { energy_after_valid_ = false; }
+  void particlesMovedAfterStep() { energy_after_valid_ = carried_valid_ = false; }
 
   // Measurements -------------------------------------------------------------------------------
   /// Largest (|x_j − x_i| − L) / L over the stretch and shear springs [-].
@@ -257,8 +260,12 @@ private:
   std::vector<RestingContact>& restingContacts() override { return resting_contacts_; }
   void computeForces(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v, Eigen::Matrix3Xd& force) const override
   {
-    computeForces(x, v, gravity_, force);
+    if (!takeCarriedForces(x, v, force)) computeForces(x, v, gravity_, force);
   }
+  // force = carried_force_ when this is the step's first evaluation, armed, of the state the forces
+  // were carried for (the body's own x and v, the pinned particles' velocities the same bits); false
+  // (and nothing written) otherwise. Disarms either way.
+  bool takeCarriedForces(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v, Eigen::Matrix3Xd& force) const;
   void accelerations(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v, Eigen::Matrix3Xd& a) const override;
   void addJacobians(const Eigen::Matrix3Xd& x, ImplicitEulerSolver& solver) const override;
   void coupledPairs(std::vector<std::pair<int, int>>& pairs) const override { forces_.coupledPairs(pairs); }
@@ -323,8 +330,22 @@ private:
   double energy_after_ = 0.0;
   Eigen::Vector3d energy_after_gravity_ = Eigen::Vector3d::Zero();
   bool energy_after_valid_ = false;
-  long long torn_springs_ = 0;    // since build or reset
-  long long torn_triangles_ = 0;  // since build or reset
+  // The forces [N] at the state the last explicit step ended in, computed with its energy after (one
+  // pass over the springs for both), for the next step's first force evaluation: the same state,
+  // unless something changed it, the pins, constants or springs (carried_valid_ falls with
+  // energy_after_valid_), the air or the global damping (kept here), or the pinned particles'
+  // velocities (kept per pinned particle). When a carry goes unused (pins moving every step), the
+  // energy is measured alone for kCarryPause steps.
+  static constexpr int kCarryPause = 16;
+  Eigen::Matrix3Xd carried_force_, carried_pin_velocity_;
+  AirDef carried_air_;
+  double carried_damping_ = 0.0;
+  bool carried_valid_ = false;
+  mutable bool carried_armed_ = false;  // this step's first force evaluation may take carried_force_
+  mutable int carry_pause_ = 0;
+  mutable long long carried_force_steps_ = 0;  // since build or reset
+  long long torn_springs_ = 0;                 // since build or reset
+  long long torn_triangles_ = 0;               // since build or reset
   // Per particle, its rest position [m] and the built particle it comes from; a vertex split appends
   // copies (reset() drops them).
   std::vector<Eigen::Vector3d> rest_positions_;

@@ -81,6 +81,24 @@ double ForceSet::energy(const ForceContext& context, const Eigen::Matrix3Xd& x) 
   return energy;
 }
 
+double ForceSet::computeForcesAndEnergy(const ForceContext& context, const Eigen::Matrix3Xd& x,
+                                        const Eigen::Matrix3Xd& v, Eigen::Matrix3Xd& force) const
+{
+  if (elements_.empty())
+  {
+    force.setZero();
+    return 0.0;
+  }
+  // computeForces()'s order; the first element (gravity) keeps nothing, its addKeptEnergy() computes.
+  elements_.front()->setForces(context, x, v, force);
+  for (std::size_t e = 1; e < elements_.size(); ++e)
+    elements_[e]->addForcesKeepingEnergy(context, x, v, force);
+  double energy = 0.0;
+  for (int index : energy_order_)
+    elements_[index]->addKeptEnergy(context, x, energy);
+  return energy;
+}
+
 bool ForceSet::suppliesEnergy(const ForceContext& context) const
 {
   for (const std::unique_ptr<ForceElement>& element : elements_)

@@ -8,7 +8,7 @@ namespace particle_sim
 namespace core
 {
 SpringForces::SpringForces(std::vector<Spring> springs)
-    : built_(springs), springs_(std::move(springs)), origin_(springs_.size())
+    : built_(springs), springs_(std::move(springs)), origin_(springs_.size()), kept_energy_(springs_.size())
 {
   std::iota(origin_.begin(), origin_.end(), 0);
 }
@@ -20,15 +20,22 @@ namespace
 constexpr int kSpringsPerChunk = 2048;
 constexpr int kParticlesPerChunk = 2048;
 
-// One spring's force (springForce()), added to its end i (if kAddI) and taken from its end j (if kAddJ).
+// One spring's force (springForce()), added to its end i (if kAddI) and taken from its end j (if kAddJ);
+// its energy (springEnergy()) into *energy when that is not null.
 template <bool kAddI, bool kAddJ>
-[[gnu::always_inline]] inline void addSpringForce(const Spring* s, const double* xs, const double* vs, double* fs)
+[[gnu::always_inline]] inline void addSpringForce(const Spring* s, const double* xs, const double* vs, double* fs,
+                                                  double* energy)
 {
   const Eigen::Vector3d f = springForce(Eigen::Vector3d::Map(xs + 3 * s->i), Eigen::Vector3d::Map(xs + 3 * s->j),
                                         Eigen::Vector3d::Map(vs + 3 * s->i), Eigen::Vector3d::Map(vs + 3 * s->j),
                                         s->rest_length, s->stiffness, s->damping);
   if (kAddI) Eigen::Vector3d::Map(fs + 3 * s->i) += f;
   if (kAddJ) Eigen::Vector3d::Map(fs + 3 * s->j) -= f;
+  if (energy)
+  {
+    *energy = springEnergy(Eigen::Vector3d::Map(xs + 3 * s->i), Eigen::Vector3d::Map(xs + 3 * s->j), s->rest_length,
+                           s->stiffness);
+  }
 }
 
 // The forces of the consecutive springs [first, last), added to their ends i (if kAddI) and j (if
@@ -43,9 +50,12 @@ template <bool kAddI, bool kAddJ>
 // 3-9 % faster); beyond that memory does (256²: no change). The forces are then added spring after
 // spring, in the order of the list. A pair with a spring of zero length (no direction) takes
 // springForce() itself.
+//
+// With `energy` not null, each spring's energy goes to energy[spring − first], in springEnergy()'s
+// operations (the stretch is the force's): the energy of the state costs no pass of its own.
 template <bool kAddI, bool kAddJ>
 [[gnu::always_inline]] inline void addRunForces(const Spring* first, const Spring* last, const double* xs,
-                                                const double* vs, double* fs)
+                                                const double* vs, double* fs, double* energy)
 {
   using Pair = Eigen::Array2d;
   const Spring* s = first;
@@ -61,8 +71,8 @@ template <bool kAddI, bool kAddJ>
     const Pair length = ((dx * dx + dy * dy) + dz * dz).sqrt();
     if (length(0) == 0.0 || length(1) == 0.0)
     {
-      addSpringForce<kAddI, kAddJ>(s, xs, vs, fs);
-      addSpringForce<kAddI, kAddJ>(s + 1, xs, vs, fs);
+      addSpringForce<kAddI, kAddJ>(s, xs, vs, fs, energy ? energy + (s - first) : nullptr);
+      addSpringForce<kAddI, kAddJ>(s + 1, xs, vs, fs, energy ? energy + (s + 1 - first) : nullptr);
       continue;
     }
     const Pair ux = dx / length, uy = dy / length, uz = dz / length;
@@ -70,8 +80,15 @@ template <bool kAddI, bool kAddJ>
     const double *const vbi = vs + 3 * b.i, *const vbj = vs + 3 * b.j;
     const Pair along = (Pair(vaj[0] - vai[0], vbj[0] - vbi[0]) * ux + Pair(vaj[1] - vai[1], vbj[1] - vbi[1]) * uy) +
                        Pair(vaj[2] - vai[2], vbj[2] - vbi[2]) * uz;
-    const Pair magnitude = Pair(a.stiffness, b.stiffness) * (length - Pair(a.rest_length, b.rest_length)) +
-                           Pair(a.damping, b.damping) * along;
+    const Pair stiffness(a.stiffness, b.stiffness);
+    const Pair stretch = length - Pair(a.rest_length, b.rest_length);
+    const Pair magnitude = stiffness * stretch + Pair(a.damping, b.damping) * along;
+    if (energy)
+    {
+      const Pair spring_energy = 0.5 * stiffness * stretch * stretch;
+      energy[s - first] = spring_energy(0);
+      energy[s + 1 - first] = spring_energy(1);
+    }
     const Pair fx = magnitude * ux, fy = magnitude * uy, fz = magnitude * uz;
     for (int lane = 0; lane < 2; ++lane)
     {
@@ -92,23 +109,53 @@ template <bool kAddI, bool kAddJ>
       }
     }
   }
-  if (s != last) addSpringForce<kAddI, kAddJ>(s, xs, vs, fs);
+  if (s != last) addSpringForce<kAddI, kAddJ>(s, xs, vs, fs, energy ? energy + (s - first) : nullptr);
 }
 }  // namespace
 
 void SpringForces::addForces(const ForceContext& context, const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v,
                              Eigen::Matrix3Xd& force) const
 {
-  if (context.workers && context.workers->threads() > 1 && static_cast<int>(springs_.size()) > kSpringsPerChunk)
+  energy_kept_ = false;
+  addForcesTo(context, x, v, force, nullptr);
+}
+
+void SpringForces::addForcesKeepingEnergy(const ForceContext& context, const Eigen::Matrix3Xd& x,
+                                          const Eigen::Matrix3Xd& v, Eigen::Matrix3Xd& force) const
+{
+  kept_energy_.resize(springs_.size());  // sized at construction: tears shrink it, mend() restores it
+  addForcesTo(context, x, v, force, kept_energy_.data());
+  energy_kept_ = true;
+}
+
+void SpringForces::addKeptEnergy(const ForceContext& context, const Eigen::Matrix3Xd& x, double& energy) const
+{
+  if (!energy_kept_ || kept_energy_.size() != springs_.size())
   {
-    addForcesShared(*context.workers, x, v, force);
+    addEnergy(context, x, energy);
     return;
   }
-  addRunForces<true, true>(springs_.data(), springs_.data() + springs_.size(), x.data(), v.data(), force.data());
+  energy_kept_ = false;
+  // addEnergy()'s sum, term by term: the same chunks in the same order, so the same bits.
+  const double* const kept = kept_energy_.data();
+  energy += sumByChunks(context.workers, static_cast<int>(springs_.size()), kSpringsPerChunk, chunk_energy_,
+                        [kept](int k) { return kept[k]; });
+}
+
+void SpringForces::addForcesTo(const ForceContext& context, const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v,
+                               Eigen::Matrix3Xd& force, double* energy) const
+{
+  if (context.workers && context.workers->threads() > 1 && static_cast<int>(springs_.size()) > kSpringsPerChunk)
+  {
+    addForcesShared(*context.workers, x, v, force, energy);
+    return;
+  }
+  addRunForces<true, true>(springs_.data(), springs_.data() + springs_.size(), x.data(), v.data(), force.data(),
+                           energy);
 }
 
 void SpringForces::addForcesShared(WorkerPool& workers, const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v,
-                                   Eigen::Matrix3Xd& force) const
+                                   Eigen::Matrix3Xd& force, double* energy) const
 {
   const int particles = static_cast<int>(x.cols());
   indexEnds(particles);
@@ -130,12 +177,14 @@ void SpringForces::addForcesShared(WorkerPool& workers, const Eigen::Matrix3Xd& 
           const PairChunks::Run run = runs[r];
           const Spring* const first = all + run.first;
           const Spring* const last = first + run.count;
+          // A spring's energy is written by the run that holds its end i (one writer a spring).
+          double* const run_energy = energy ? energy + run.first : nullptr;
           if (run.ends == PairChunks::kBothEnds)
-            addRunForces<true, true>(first, last, xs, vs, fs);
+            addRunForces<true, true>(first, last, xs, vs, fs, run_energy);
           else if (run.ends == PairChunks::kEndI)
-            addRunForces<true, false>(first, last, xs, vs, fs);
+            addRunForces<true, false>(first, last, xs, vs, fs, run_energy);
           else
-            addRunForces<false, true>(first, last, xs, vs, fs);
+            addRunForces<false, true>(first, last, xs, vs, fs, nullptr);
         }
       }
     });
@@ -148,6 +197,7 @@ void SpringForces::addForcesShared(WorkerPool& workers, const Eigen::Matrix3Xd& 
       const Spring& s = springs_[k];
       spring_force_[k] =
           springForce(x.col(s.i), x.col(s.j), v.col(s.i), v.col(s.j), s.rest_length, s.stiffness, s.damping);
+      if (energy) energy[k] = springEnergy(x.col(s.i), x.col(s.j), s.rest_length, s.stiffness);
     }
   });
   // Each particle adds +f at its ends i and −f at its ends j, springs ascending: the one-thread

@@ -82,6 +82,19 @@ public:
   // Energy --------------------------------------------------------------------------------------
   /// energy += the element's potential energy at x [J] (nothing for dissipative elements).
   virtual void addEnergy(const ForceContext& /*context*/, const Eigen::Matrix3Xd& /*x*/, double& /*energy*/) const {}
+  /// addForces() that may keep, on the way, what addKeptEnergy() then adds: an element whose energy
+  /// costs a pass of its own (springs) computes it with its forces. By default, addForces().
+  virtual void addForcesKeepingEnergy(const ForceContext& context, const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v,
+                                      Eigen::Matrix3Xd& force) const
+  {
+    addForces(context, x, v, force);
+  }
+  /// addEnergy() at the x of the last addForcesKeepingEnergy(), with the same bits; an element that
+  /// kept nothing since (the default) computes it now.
+  virtual void addKeptEnergy(const ForceContext& context, const Eigen::Matrix3Xd& x, double& energy) const
+  {
+    addEnergy(context, x, energy);
+  }
   /// True when the element can do work on the body from outside (wind), so that a step may
   /// rightly gain energy.
   virtual bool suppliesEnergy(const ForceContext& /*context*/) const { return false; }

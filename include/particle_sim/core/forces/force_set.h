@@ -36,6 +36,10 @@ public:
   double uniformDampingRate(const ForceContext& context) const;
   /// Σ potential energies at x [J].
   double energy(const ForceContext& context, const Eigen::Matrix3Xd& x) const;
+  /// computeForces(), returning energy(context, x) with the same bits: the springs' energy comes
+  /// out of their force pass (no pass of its own over the springs).
+  double computeForcesAndEnergy(const ForceContext& context, const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v,
+                                Eigen::Matrix3Xd& force) const;
   bool suppliesEnergy(const ForceContext& context) const;
   bool hasClass(SpringClass spring_class) const;
   void setClassConstants(std::optional<SpringClass> spring_class, double stiffness, double damping);

@@ -32,6 +32,10 @@ public:
   void addStabilityRows(const std::vector<Eigen::Vector3d>& rest, std::vector<double>& stiffness_rows,
                         std::vector<double>& damping_rows) const override;
   void addEnergy(const ForceContext& context, const Eigen::Matrix3Xd& x, double& energy) const override;
+  /// addForces() that also writes each spring's energy (kept_energy_), for addKeptEnergy().
+  void addForcesKeepingEnergy(const ForceContext& context, const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v,
+                              Eigen::Matrix3Xd& force) const override;
+  void addKeptEnergy(const ForceContext& context, const Eigen::Matrix3Xd& x, double& energy) const override;
   bool hasClass(SpringClass spring_class) const override;
   void setClassConstants(std::optional<SpringClass> spring_class, double stiffness, double damping) override;
   void resetConstants() override;
@@ -51,8 +55,12 @@ private:
   /// its bits). A spring across two chunks is computed twice; when that would be more than a
   /// quarter of the springs (a network numbered without locality), every spring's force goes into
   /// spring_force_ once and every particle then sums its springs' in spring order (PairChunks).
+  /// `energy`: null, or where each spring's energy goes (per spring of springs_).
   void addForcesShared(WorkerPool& workers, const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v,
-                       Eigen::Matrix3Xd& force) const;
+                       Eigen::Matrix3Xd& force, double* energy) const;
+  /// addForces(), with each spring's energy into `energy` unless it is null.
+  void addForcesTo(const ForceContext& context, const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v,
+                   Eigen::Matrix3Xd& force, double* energy) const;
   /// Rebuilds the chunks' spring lists (or ends_) for `particles` particles when the springs or
   /// the particle count changed.
   void indexEnds(int particles) const;
@@ -72,6 +80,8 @@ private:
   mutable bool mode_decided_ = false;
   mutable PairChunks chunks_;                 // the springs by chunks of particles (by_chunks_)
   mutable std::vector<double> chunk_energy_;  // addEnergy(): per chunk of springs, its energy
+  mutable std::vector<double> kept_energy_;   // addForcesKeepingEnergy(): per spring of springs_, its energy
+  mutable bool energy_kept_ = false;          // kept_energy_ is of the last addForcesKeepingEnergy()'s x
 };
 
 }  // namespace core

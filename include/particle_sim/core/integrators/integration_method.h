@@ -77,6 +77,10 @@ public:
   virtual void restart() {}
   /// True when it keeps something from earlier steps that restart() would forget.
   virtual bool hasHistory() const { return false; }
+  /// True when step() evaluates the forces first, at the state it starts from (positions() and
+  /// velocities() themselves, unchanged): the system may then hand it forces it already has for that
+  /// state (SpringNetworkBody carries those it measured the last step's energy with).
+  virtual bool evaluatesForcesFirst() const { return false; }
 };
 
 }  // namespace core

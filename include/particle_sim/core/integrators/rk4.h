@@ -19,6 +19,7 @@ public:
 
   explicit Rk4Method(int particles);
   SolverReport step(double h, DynamicSystem& system, const IntegratorDef& settings) override;
+  bool evaluatesForcesFirst() const override { return true; }
 
 private:
   Eigen::Matrix3Xd stage_x_, stage_v_, kx_[4], kv_[4];
