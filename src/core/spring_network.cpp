@@ -925,7 +925,7 @@ bool SpringNetworkBody::takeCarriedForces(const Eigen::Matrix3Xd& x, const Eigen
     carry_pause_ = kCarryPause;
     return false;
   }
-  copyShared(workers_, carried_force_, force);
+  force.swap(carried_force_);  // the arrays, not their numbers: the next carry overwrites the other
   ++carried_force_steps_;
   return true;
 }

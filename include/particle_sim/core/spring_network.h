@@ -337,7 +337,8 @@ private:
   // velocities (kept per pinned particle). When a carry goes unused (pins moving every step), the
   // energy is measured alone for kCarryPause steps.
   static constexpr int kCarryPause = 16;
-  Eigen::Matrix3Xd carried_force_, carried_pin_velocity_;
+  mutable Eigen::Matrix3Xd carried_force_;  // swapped into the evaluation that takes it
+  Eigen::Matrix3Xd carried_pin_velocity_;
   AirDef carried_air_;
   double carried_damping_ = 0.0;
   bool carried_valid_ = false;
