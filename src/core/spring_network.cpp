@@ -948,7 +948,8 @@ void SpringNetworkBody::updateStabilityBound(bool re_explain)
 {
   // Gershgorin: each element adds k |∂C/∂x_i| Σ_n |∂C/∂x_n| to row i (springs: 2 k at both ends),
   // alike for damping; the bound is the largest row over the mass of its (free) particle.
-  energy_after_valid_ = carried_valid_ = false;  // whatever changed the bound may have changed the energy
+  energy_after_valid_ = false;  // whatever changed the bound may have changed the energy
+  dropCarriedForces();          // and the forces
   const int n = particles_.size();
   std::vector<double>& stiffness_rows = stiffness_rows_;
   std::vector<double>& damping_rows = damping_rows_;

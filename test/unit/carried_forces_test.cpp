@@ -27,15 +27,15 @@ namespace
 constexpr int kSteps = 60;
 constexpr double kDt = 1.0 / 120.0;  // several substeps for every method (the guard splits the step)
 
-// A 12 x 12 spring cloth (stretch, shear, bend) hung by two corners, with `type`.
-core::SpringNetworkDef hangingCloth(core::IntegratorType type)
+// An n x n spring cloth (stretch, shear, bend) hung by two corners, with `type`.
+core::SpringNetworkDef hangingCloth(core::IntegratorType type, int n = 12)
 {
   core::ClothGridDef def(core::ClothModel::Springs);
   def.name = "cloth";
   def.origin = {0.0, 0.0, 1.0};
   def.edge_u = {0.3, 0.0, 0.0};
   def.edge_v = {0.0, 0.3, 0.0};
-  def.nu = def.nv = 12;
+  def.nu = def.nv = n;
   def.named_pins = {"corner_00", "corner_10"};
   def.integrator.type = type;
   return core::buildClothGrid(def);
@@ -57,7 +57,8 @@ struct RunResult
 
 // kSteps of `def` under air and gravity; `fresh`: the body is told after every step that its
 // particles moved, so that every force is evaluated afresh.
-RunResult run(const core::SpringNetworkDef& def, int threads, const Disturbance& disturbance, bool fresh)
+RunResult run(const core::SpringNetworkDef& def, int threads, const Disturbance& disturbance, bool fresh,
+              int steps = kSteps)
 {
   core::WorkerPool pool(threads);
   core::SpringNetworkBody body(def);
@@ -68,7 +69,7 @@ RunResult run(const core::SpringNetworkDef& def, int threads, const Disturbance&
   env.air.wind = {0.5, 0.0, 0.0};
   const int moving = def.pins.back();
   const Eigen::Vector3d start = def.positions[moving];
-  for (int step = 0; step < kSteps; ++step)
+  for (int step = 0; step < steps; ++step)
   {
     if (step == disturbance.wind_change_at) env.air.wind = {0.0, 1.0, 0.0};
     if (disturbance.move_pin)
@@ -123,5 +124,21 @@ TEST(CarriedForces, AChangedWindOrMovingPinIsEvaluatedAfresh)
     const RunResult pin_carried = run(def, threads, pin, false);
     EXPECT_TRUE(sameBits(pin_carried.state, run(def, threads, pin, true).state)) << threads << " threads";
     EXPECT_EQ(pin_carried.carried, 0);
+  }
+}
+
+TEST(CarriedForces, TwoThreadsOnTheChunkedSpringLoopGiveTheSameBits)
+{
+  // 48 x 48: more particles than a chunk of the shared spring loop (2048), so that two threads take
+  // its chunked path (springs across the chunks visited from both sides, each spring's energy kept by
+  // the run that holds its end i).
+  constexpr int kChunkedSteps = 12;
+  for (const core::IntegratorType type : {core::kSymplecticEulerIntegrator, core::kVerletIntegrator})
+  {
+    const core::SpringNetworkDef def = hangingCloth(type, 48);
+    const RunResult carried = run(def, 2, {}, false, kChunkedSteps);
+    EXPECT_TRUE(sameBits(carried.state, run(def, 2, {}, true, kChunkedSteps).state)) << core::toString(type);
+    EXPECT_TRUE(sameBits(carried.state, run(def, 1, {}, true, kChunkedSteps).state)) << core::toString(type);
+    EXPECT_EQ(carried.carried, kChunkedSteps - 1) << core::toString(type);
   }
 }

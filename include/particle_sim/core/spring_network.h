@@ -216,7 +216,11 @@ public:
   ParticlePool& particlesForContacts() { return particles_; }
   /// Says that something outside the step moved the particles (the energy the step measured after
   /// itself no longer holds).
-  void particlesMovedAfterStep() { energy_after_valid_ = carried_valid_ = false; }
+  void particlesMovedAfterStep()
+  {
+    energy_after_valid_ = false;
+    dropCarriedForces();
+  }
 
   // Measurements -------------------------------------------------------------------------------
   /// Largest (|x_j − x_i| − L) / L over the stretch and shear springs [-].
@@ -266,6 +270,14 @@ private:
   // were carried for (the body's own x and v, the pinned particles' velocities the same bits); false
   // (and nothing written) otherwise. Disarms either way.
   bool takeCarriedForces(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v, Eigen::Matrix3Xd& force) const;
+  // Forgets the carried forces (something changed the state or the forces after the step); a carry
+  // dropped unused pauses carrying, as one refused does (a cloth that self-collision moves every
+  // step would otherwise pay a force pass for each energy).
+  void dropCarriedForces()
+  {
+    if (carried_valid_) carry_pause_ = kCarryPause;
+    carried_valid_ = false;
+  }
   void accelerations(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v, Eigen::Matrix3Xd& a) const override;
   void addJacobians(const Eigen::Matrix3Xd& x, ImplicitEulerSolver& solver) const override;
   void coupledPairs(std::vector<std::pair<int, int>>& pairs) const override { forces_.coupledPairs(pairs); }
@@ -334,8 +346,8 @@ private:
   // pass over the springs for both), for the next step's first force evaluation: the same state,
   // unless something changed it, the pins, constants or springs (carried_valid_ falls with
   // energy_after_valid_), the air or the global damping (kept here), or the pinned particles'
-  // velocities (kept per pinned particle). When a carry goes unused (pins moving every step), the
-  // energy is measured alone for kCarryPause steps.
+  // velocities (kept per pinned particle). When a carry goes unused (pins moving every step, or
+  // self-collision moving particles), the energy is measured alone for kCarryPause steps.
   static constexpr int kCarryPause = 16;
   mutable Eigen::Matrix3Xd carried_force_;  // swapped into the evaluation that takes it
   Eigen::Matrix3Xd carried_pin_velocity_;
