@@ -495,7 +495,7 @@ void SpringNetworkBody::step(double dt, const Environment& env)
   carried_armed_ = carried_valid_ && energy_known && method(type).evaluatesForcesFirst() &&
                    env.air.drag == carried_air_.drag && env.air.wind == carried_air_.wind &&
                    env.damping == carried_damping_;
-  if (carried_valid_ && !carried_armed_) carry_pause_ = kCarryPause;
+  if (!carried_armed_) dropCarriedForces();  // one this step cannot take pauses carrying
   energy_after_valid_ = carried_valid_ = false;
   guard_.beginStep(explicit_method, energy_before, energy_scale_, env.gravity.norm());
   double energy_after = 0.0;
