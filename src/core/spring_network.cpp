@@ -20,27 +20,21 @@ namespace core
 {
 namespace
 {
-// to = from (same size), shared by chunks of particles (WorkerPool).
-void copyShared(WorkerPool* workers, const Eigen::Matrix3Xd& from, Eigen::Matrix3Xd& to)
+// to_a = from_a and to_b = from_b (four arrays of the same size), in one pass shared by chunks of
+// particles (WorkerPool).
+void copyBothShared(WorkerPool* workers, const Eigen::Matrix3Xd& from_a, Eigen::Matrix3Xd& to_a,
+                    const Eigen::Matrix3Xd& from_b, Eigen::Matrix3Xd& to_b)
 {
-  if (to.cols() != from.cols())
+  if (to_a.cols() != from_a.cols() || to_b.cols() != from_b.cols() || from_a.cols() != from_b.cols())
   {
-    to = from;
+    to_a = from_a;
+    to_b = from_b;
     return;
   }
-  shareLoop(workers, static_cast<int>(from.cols()), kParticlesPerVectorChunk,
-            [&](int begin, int end) { to.middleCols(begin, end - begin) = from.middleCols(begin, end - begin); });
-}
-
-// Whether every entry of `m` is finite, checked by chunks of particles (the answer does not depend
-// on the order).
-bool allFiniteShared(WorkerPool* workers, const Eigen::Matrix3Xd& m)
-{
-  std::atomic<bool> finite{true};
-  shareLoop(workers, static_cast<int>(m.cols()), kParticlesPerVectorChunk, [&](int begin, int end) {
-    if (!m.middleCols(begin, end - begin).allFinite()) finite.store(false, std::memory_order_relaxed);
+  shareLoop(workers, static_cast<int>(from_a.cols()), kParticlesPerVectorChunk, [&](int begin, int end) {
+    to_a.middleCols(begin, end - begin) = from_a.middleCols(begin, end - begin);
+    to_b.middleCols(begin, end - begin) = from_b.middleCols(begin, end - begin);
   });
-  return finite.load();
 }
 
 // (a, b) with the smaller first: a spring's or an edge's particle pair, whichever way it is given.
@@ -429,9 +423,37 @@ double SpringNetworkBody::maxStrain() const
 double SpringNetworkBody::kineticEnergy() const
 {
   // Summed in fixed chunks of particles, shared between threads: the same bits at any thread count.
-  return sumByChunks(workers_, particles_.size(), kParticlesPerVectorChunk, kinetic_energy_chunks_, [&](int i) {
-    return pinned_[i] ? 0.0 : 0.5 * mass_[i] * particles_.velocity.col(i).squaredNorm();
-  });
+  return sumByChunks(workers_, particles_.size(), kParticlesPerVectorChunk, kinetic_energy_chunks_,
+                     [&](int i) { return kineticEnergyOf(i); });
+}
+
+bool SpringNetworkBody::stateFinite(double* kinetic) const
+{
+  // One pass shared by the same fixed chunks of particles as kineticEnergy(), each chunk summed in
+  // the same order: its sum is kineticEnergy()'s bits. Finiteness is checked over every column (the
+  // pool's room beyond the live particles included, as a check of the whole arrays would).
+  const ParticlePool& p = particles_;
+  const int live = p.size();
+  if (kinetic) kinetic_energy_chunks_.resize((live + kParticlesPerVectorChunk - 1) / kParticlesPerVectorChunk);
+  std::atomic<bool> finite{true};
+  forEachFixedChunk(workers_, static_cast<int>(p.position.cols()), kParticlesPerVectorChunk,
+                    [&](int index, int first, int last) {
+                      if (!p.position.middleCols(first, last - first).allFinite() ||
+                          !p.velocity.middleCols(first, last - first).allFinite())
+                        finite.store(false, std::memory_order_relaxed);
+                      if (!kinetic || first >= live) return;
+                      double sum = 0.0;
+                      for (int i = first; i < std::min(last, live); ++i)
+                        sum += kineticEnergyOf(i);
+                      kinetic_energy_chunks_[index] = sum;
+                    });
+  if (kinetic)
+  {
+    *kinetic = 0.0;
+    for (int c = 0; c < static_cast<int>(kinetic_energy_chunks_.size()); ++c)
+      *kinetic += kinetic_energy_chunks_[c];
+  }
+  return finite.load();
 }
 
 double SpringNetworkBody::potentialEnergy(const Eigen::Vector3d& gravity) const
@@ -473,8 +495,7 @@ void SpringNetworkBody::step(double dt, const Environment& env)
   gravity_ = env.gravity;
   ParticlePool& p = particles_;
   const int n = p.size();
-  copyShared(workers_, p.position, saved_position_);
-  copyShared(workers_, p.velocity, saved_velocity_);
+  copyBothShared(workers_, p.position, saved_position_, p.velocity, saved_velocity_);
   // The pins' targets for the end of the step (only pinned columns are read or changed below).
   for (const int i : pinned_indices_)
     step_target_.col(i) = pin_target_.col(i);
@@ -521,16 +542,17 @@ void SpringNetworkBody::step(double dt, const Environment& env)
 
     // Blow-up of an explicit method: roll back and retry with more substeps, or freeze.
     carried_armed_ = false;
-    finite = allFiniteShared(workers_, p.position) && allFiniteShared(workers_, p.velocity);
     // The energy after an explicit step, with the forces of its end state when the next step may
     // take them (the springs' energy comes out of their force pass): kinetic + potential, as
-    // mechanicalEnergy() sums it, the same bits.
+    // mechanicalEnergy() sums it, the same bits. The kinetic part comes out of the finiteness check.
+    double kinetic = 0.0;
+    finite = stateFinite(explicit_method ? &kinetic : nullptr);
     carried = explicit_method && finite && carry_pause_ == 0;
     if (carried)
-      energy_after = kineticEnergy() +
-                     forces_.computeForcesAndEnergy(forceContext(env.gravity), p.position, p.velocity, carried_force_);
+      energy_after =
+          kinetic + forces_.computeForcesAndEnergy(forceContext(env.gravity), p.position, p.velocity, carried_force_);
     else
-      energy_after = explicit_method ? mechanicalEnergy(env.gravity) : 0.0;
+      energy_after = explicit_method ? kinetic + potentialEnergy(env.gravity) : 0.0;
     if (!guard_.blewUp(finite, energy_after)) break;
     p.position = saved_position_;
     p.velocity = saved_velocity_;

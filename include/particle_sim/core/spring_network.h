@@ -248,6 +248,14 @@ private:
   // the last step measured: whatever changes the bound may change the energy).
   // `re_explain`: have `auto` write its explanation anew at the next step.
   void updateStabilityBound(bool re_explain = true);
+  // A free particle's kinetic energy [J] (0 for a pinned one): kineticEnergy()'s term.
+  double kineticEnergyOf(int i) const
+  {
+    return pinned_[i] ? 0.0 : 0.5 * mass_[i] * particles_.velocity.col(i).squaredNorm();
+  }
+  // Whether every position and velocity is finite; with `kinetic`, also the kinetic energy, the bits
+  // of kineticEnergy(), from the same pass over the particles.
+  bool stateFinite(double* kinetic) const;
   // Kinetic plus potential energy of the current state [J].
   double mechanicalEnergy(const Eigen::Vector3d& gravity) const { return kineticEnergy() + potentialEnergy(gravity); }
   // The method of `type` (not auto).
