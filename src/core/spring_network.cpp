@@ -429,30 +429,19 @@ double SpringNetworkBody::kineticEnergy() const
 
 bool SpringNetworkBody::stateFinite(double* kinetic) const
 {
-  // One pass shared by the same fixed chunks of particles as kineticEnergy(), each chunk summed in
-  // the same order: its sum is kineticEnergy()'s bits. Finiteness is checked over every column (the
-  // pool's room beyond the live particles included, as a check of the whole arrays would).
+  // kineticEnergy()'s sum (sumByChunks, the same chunks and order, so the same bits) over every
+  // column of the pool, its room beyond the live particles adding +0, with the finiteness check in
+  // the same pass.
   const ParticlePool& p = particles_;
   const int live = p.size();
-  if (kinetic) kinetic_energy_chunks_.resize((live + kParticlesPerVectorChunk - 1) / kParticlesPerVectorChunk);
   std::atomic<bool> finite{true};
-  forEachFixedChunk(workers_, static_cast<int>(p.position.cols()), kParticlesPerVectorChunk,
-                    [&](int index, int first, int last) {
-                      if (!p.position.middleCols(first, last - first).allFinite() ||
-                          !p.velocity.middleCols(first, last - first).allFinite())
-                        finite.store(false, std::memory_order_relaxed);
-                      if (!kinetic || first >= live) return;
-                      double sum = 0.0;
-                      for (int i = first; i < std::min(last, live); ++i)
-                        sum += kineticEnergyOf(i);
-                      kinetic_energy_chunks_[index] = sum;
-                    });
-  if (kinetic)
-  {
-    *kinetic = 0.0;
-    for (int c = 0; c < static_cast<int>(kinetic_energy_chunks_.size()); ++c)
-      *kinetic += kinetic_energy_chunks_[c];
-  }
+  const double sum = sumByChunks(workers_, static_cast<int>(p.position.cols()), kParticlesPerVectorChunk,
+                                 kinetic_energy_chunks_, [&](int i) {
+                                   if (!p.position.col(i).allFinite() || !p.velocity.col(i).allFinite())
+                                     finite.store(false, std::memory_order_relaxed);
+                                   return kinetic && i < live ? kineticEnergyOf(i) : 0.0;
+                                 });
+  if (kinetic) *kinetic = sum;
   return finite.load();
 }
 
@@ -970,8 +959,7 @@ void SpringNetworkBody::updateStabilityBound(bool re_explain)
 {
   // Gershgorin: each element adds k |∂C/∂x_i| Σ_n |∂C/∂x_n| to row i (springs: 2 k at both ends),
   // alike for damping; the bound is the largest row over the mass of its (free) particle.
-  energy_after_valid_ = false;  // whatever changed the bound may have changed the energy
-  dropCarriedForces();          // and the forces
+  forgetEndState();  // whatever changed the bound may have changed the energy and the forces
   const int n = particles_.size();
   std::vector<double>& stiffness_rows = stiffness_rows_;
   std::vector<double>& damping_rows = damping_rows_;

@@ -216,11 +216,7 @@ public:
   ParticlePool& particlesForContacts() { return particles_; }
   /// Says that something outside the step moved the particles (the energy the step measured after
   /// itself no longer holds).
-  void particlesMovedAfterStep()
-  {
-    energy_after_valid_ = false;
-    dropCarriedForces();
-  }
+  void particlesMovedAfterStep() { forgetEndState(); }
 
   // Measurements -------------------------------------------------------------------------------
   /// Largest (|x_j − x_i| − L) / L over the stretch and shear springs [-].
@@ -285,6 +281,13 @@ private:
   {
     if (carried_valid_) carry_pause_ = kCarryPause;
     carried_valid_ = false;
+  }
+  // Forgets what the last step measured of its end state, its energy and its forces (something
+  // changed the state, the pins, constants or springs since).
+  void forgetEndState()
+  {
+    energy_after_valid_ = false;
+    dropCarriedForces();
   }
   void accelerations(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v, Eigen::Matrix3Xd& a) const override;
   void addJacobians(const Eigen::Matrix3Xd& x, ImplicitEulerSolver& solver) const override;
