@@ -20,7 +20,7 @@ inline void pause()
 }
 }  // namespace
 
-WorkerPool::WorkerPool(int threads) : threads_(std::max(1, threads)) {}
+WorkerPool::WorkerPool(int threads) : threads_(std::max(1, threads)), ranges_(threads_) {}
 
 WorkerPool::~WorkerPool()
 {
@@ -42,7 +42,7 @@ void WorkerPool::start()
 {
   workers_.reserve(threads_ - 1);
   for (int worker = 1; worker < threads_; ++worker)
-    workers_.emplace_back([this] { work(); });
+    workers_.emplace_back([this, worker] { work(worker); });
 }
 
 void WorkerPool::run(int items, int chunk, void* callable, Trampoline trampoline)
@@ -53,8 +53,12 @@ void WorkerPool::run(int items, int chunk, void* callable, Trampoline trampoline
   trampoline_ = trampoline;
   items_ = items;
   chunk_ = chunk;
-  chunks_ = (items + chunk - 1) / chunk;
-  next_chunk_.store(0, std::memory_order_relaxed);
+  const int chunks = (items + chunk - 1) / chunk;
+  for (int t = 0; t < threads_; ++t)
+  {
+    ranges_[t].next.store(static_cast<int>(static_cast<long long>(chunks) * t / threads_), std::memory_order_relaxed);
+    ranges_[t].end = static_cast<int>(static_cast<long long>(chunks) * (t + 1) / threads_);
+  }
   finished_workers_.store(0, std::memory_order_relaxed);
   open_places_.store(threads_ - 1, std::memory_order_release);  // publishes the loop to join()
   {
@@ -63,7 +67,7 @@ void WorkerPool::run(int items, int chunk, void* callable, Trampoline trampoline
     generation_.fetch_add(1, std::memory_order_release);
   }
   wake_.notify_all();
-  takeChunks();
+  takeChunks(0);
   // Every chunk is taken: close the loop, then wait for the workers that joined it to finish
   // theirs (each counts itself out once). A worker that wakes later skips this loop.
   const int joined = (threads_ - 1) - open_places_.exchange(0, std::memory_order_acq_rel);
@@ -87,18 +91,23 @@ bool WorkerPool::join()
   return false;
 }
 
-void WorkerPool::takeChunks()
+void WorkerPool::takeChunks(int thread)
 {
-  // Chunks go to whichever thread asks first: which thread runs a chunk never changes its result.
-  for (int c = next_chunk_.fetch_add(1, std::memory_order_relaxed); c < chunks_;
-       c = next_chunk_.fetch_add(1, std::memory_order_relaxed))
+  // The home range first, then the others' in turn: a range's chunks go to whichever thread takes
+  // them first, and which thread runs a chunk never changes its result.
+  for (int turn = 0; turn < threads_; ++turn)
   {
-    const int begin = c * chunk_;
-    trampoline_(callable_, begin, std::min(items_, begin + chunk_));
+    HomeRange& range = ranges_[(thread + turn) % threads_];
+    for (int c = range.next.fetch_add(1, std::memory_order_relaxed); c < range.end;
+         c = range.next.fetch_add(1, std::memory_order_relaxed))
+    {
+      const int begin = c * chunk_;
+      trampoline_(callable_, begin, std::min(items_, begin + chunk_));
+    }
   }
 }
 
-void WorkerPool::work()
+void WorkerPool::work(int thread)
 {
   std::uint64_t seen = 0;
   for (;;)
@@ -119,7 +128,7 @@ void WorkerPool::work()
     }
     seen = now;
     if (!join()) continue;
-    takeChunks();
+    takeChunks(thread);
     finished_workers_.fetch_add(1, std::memory_order_release);
   }
 }

@@ -1,8 +1,9 @@
 // WorkerPool shares loops between threads without changing a bit of their results: it covers
-// every item exactly once at any thread and chunk count; the spring forces it shares (each
-// spring's force, then each particle's sum in spring order) equal the one-thread loop's bit for
-// bit on a network in random order, also after a tear; and every method steps a cloth to the same
-// bits at two threads as at one.
+// every item exactly once at any thread and chunk count; a thread done with its own home range
+// takes the chunks left in another's; the spring forces it shares (each spring's force, then each
+// particle's sum in spring order) equal the one-thread loop's bit for bit on a network in random
+// order, also after a tear; and every method steps a cloth to the same bits at two threads as at
+// one.
 
 #include "particle_sim/core/worker_pool.h"
 
@@ -11,6 +12,7 @@
 #include <Eigen/Core>
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -85,6 +87,32 @@ TEST(WorkerPool, OtherThreadsDoShareTheWork)
     by_caller += id == std::this_thread::get_id() ? 1 : 0;
   EXPECT_LT(by_caller, items) << "the caller ran every chunk";
   EXPECT_GT(by_caller, 0) << "the caller ran no chunk";
+}
+
+TEST(WorkerPool, AThreadDoneWithItsHomeRangeTakesWhatIsLeftOfAnother)
+{
+  // Two threads, 64 chunks: the caller's home range is chunks 0-31, the worker's 32-63. The caller's
+  // first chunk holds it up until the other thread has run one of chunks 1-31 (or 10 s pass): the
+  // worker, done with its own range, must take them.
+  core::WorkerPool pool(2);
+  const int items = 64;
+  const std::thread::id caller = std::this_thread::get_id();
+  std::atomic<bool> caller_range_taken{false};
+  std::vector<std::atomic<int>> visits(items);
+  pool.forEachChunk(items, 1, [&](int begin, int end) {
+    for (int i = begin; i < end; ++i)
+    {
+      ++visits[i];
+      if (i > 0 && i < items / 2 && std::this_thread::get_id() != caller) caller_range_taken = true;
+      if (i != 0 || std::this_thread::get_id() != caller) continue;
+      const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+      while (!caller_range_taken && std::chrono::steady_clock::now() < give_up)
+        std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+  });
+  EXPECT_TRUE(caller_range_taken) << "no chunk of the held-up caller's range went to the free thread";
+  for (int i = 0; i < items; ++i)
+    EXPECT_EQ(visits[i].load(), 1) << "chunk " << i;
 }
 
 namespace

@@ -14,10 +14,13 @@ namespace particle_sim
 namespace core
 {
 /// Threads that share the loops of a step, deterministically. forEachChunk() cuts the items
-/// 0 … n−1 into chunks of a fixed size (set by the caller, never by the thread count) and hands
-/// the chunks to whichever thread is free. A loop may use it only when each item's result is
-/// computed alone and written to its own place (no sum across chunks): then the results are the
-/// same bits at any thread count, and one thread runs the whole range in a single call.
+/// 0 … n−1 into chunks of a fixed size (set by the caller, never by the thread count). Each thread
+/// has a home range of the chunks, the same one in every loop (thread t of T: the t-th of T equal
+/// runs), so that the particles a thread integrates are those whose forces it summed and stay in
+/// its core's cache from loop to loop; a thread done with its own range takes what is left of the
+/// others'. A loop may use it only when each item's result is computed alone and written to its own
+/// place (no sum across chunks): then the results are the same bits at any thread count, whichever
+/// thread runs a chunk, and one thread runs the whole range in a single call.
 ///
 /// The threads start at the first loop that has more than one chunk (a scene of small bodies never
 /// starts one) and then wait for work, spinning briefly before they sleep. Nothing allocates after
@@ -58,11 +61,12 @@ private:
   using Trampoline = void (*)(void*, int, int);
   void run(int items, int chunk, void* callable, Trampoline trampoline);
   void start();
-  void work();
+  void work(int thread);
   // Takes one of the current loop's open places; false when the loop is closed (its caller is done
   // with every chunk, or the other workers took the places).
   bool join();
-  void takeChunks();
+  // Runs the chunks of `thread`'s home range, then those left in the other threads' ranges.
+  void takeChunks(int thread);
 
   const int threads_;
   std::vector<std::thread> workers_;
@@ -73,8 +77,15 @@ private:
   Trampoline trampoline_ = nullptr;
   int items_ = 0;
   int chunk_ = 0;
-  int chunks_ = 0;
-  std::atomic<int> next_chunk_{0};
+  // Each thread's home range [next, end) of the loop's chunks; `next` is taken by fetch_add, by the
+  // owner and then by any thread done with its own. One cache line each, so that the owners' takes
+  // do not contend.
+  struct alignas(64) HomeRange
+  {
+    std::atomic<int> next{0};
+    int end = 0;
+  };
+  std::vector<HomeRange> ranges_;
   // Workers join a loop by taking one of its open places; the caller closes it when every chunk is
   // taken and waits only for those that joined, never for a worker that has not woken yet.
   std::atomic<int> open_places_{0};
