@@ -334,49 +334,43 @@ TEST(SparseBlockLdlt, AutoTurnsDirectWhenCgTakesMoreIterationsThanTheFactorizati
   EXPECT_FALSE(cg.lastSolve().converged) << "5 iterations were enough: the forced CG was not tested";
 }
 
-TEST(SparseBlockLdlt, AutoSolvesTheStepWhoseCgStopsAtItsCapDirectlyAndStaysDirect)
+TEST(SparseBlockLdlt, AutoGoesOnPastTheCapUntilCgHasSpentWhatTheDirectSolveCosts)
 {
-  // The same stiff 48 x 48 cloth with CG capped at 5 iterations: fewer than the factorization costs
-  // (the sheet starts with CG), so only a capped solve can hand it to the direct solver. A twin with
-  // CG forced at the same cap runs the same CG, bit for bit, until the first step where it stops
-  // short of the tolerance: `auto` solves that same step again directly and meets the tolerance,
-  // and every later step is direct. No step of `auto` ends unconverged.
+  // The same stiff 48 x 48 cloth, the relative rule alone (1e-8), CG capped at 5 iterations: far
+  // fewer than the factorization costs. A twin with CG forced at the same cap stops short of the
+  // tolerance. `auto` goes on past the cap while CG has spent less than the direct solve would
+  // cost, and meets the tolerance by CG; once CG needs more (the sheet stretches, its iterations
+  // grow), it turns direct for good, that step solved again directly. No step of `auto` ends
+  // unconverged.
   ClothGridDef def = stiffSheetOnAuto();
+  def.integrator.cg_velocity_tolerance = 0.0;
   def.integrator.cg_max_iterations = 5;
   SpringNetworkBody body(buildClothGrid(def));
   def.integrator.linear_solver = LinearSolverType::ConjugateGradient;
   SpringNetworkBody twin(buildClothGrid(def));
   Environment env;
   env.ground.enabled = false;
-  int first_direct = -1;
-  for (int step = 0; step < 30; ++step)
+  int first_direct = -1, twin_short = 0, past_the_cap = 0;
+  for (int step = 0; step < 60; ++step)
   {
-    const bool in_step = first_direct < 0;  // both ran the same CG up to here
-    if (in_step)
-    {
-      ASSERT_TRUE(body.particles().velocity == twin.particles().velocity) << "step " << step;
-      twin.step(1.0 / 60.0, env);
-    }
+    twin.step(1.0 / 60.0, env);
+    twin_short += twin.lastSolve().converged ? 0 : 1;
     body.step(1.0 / 60.0, env);
     const SolverReport report = body.lastSolve();
     EXPECT_TRUE(report.converged) << "step " << step;
     if (report.direct)
     {
-      if (first_direct < 0)
-      {
-        first_direct = step;
-        EXPECT_FALSE(twin.lastSolve().converged) << "the forced CG met the tolerance at step " << step;
-        EXPECT_GE(report.iterations, 5) << "the capped CG's iterations are counted";
-      }
+      if (first_direct < 0) first_direct = step;
     }
     else
     {
       EXPECT_LT(first_direct, 0) << "back to CG at step " << step;
-      EXPECT_LE(report.iterations, 5);
-      EXPECT_TRUE(twin.lastSolve().converged) << "step " << step;
+      past_the_cap += report.iterations > 5 ? 1 : 0;
     }
   }
-  ASSERT_GE(first_direct, 0) << "CG met the tolerance in 5 iterations: nothing was tested";
+  EXPECT_GT(twin_short, 0) << "CG met the tolerance in 5 iterations: the cap did not bind";
+  EXPECT_GT(past_the_cap, 0) << "auto stopped CG at the cap";
+  ASSERT_GE(first_direct, 0) << "auto never turned direct in 60 steps: CG never cost more than the direct solve";
 }
 
 // factorize() forms L_ij = W_i D_j⁻¹ with multiplyInline(), whose sums must round as Eigen's product

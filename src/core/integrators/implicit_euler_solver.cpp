@@ -444,10 +444,18 @@ SolverReport ImplicitEulerSolver::solveLinear(const std::vector<char>& pinned, c
   // to CG, from the last step's Δv); then CG, which stops at once when the residual is small enough.
   SolverReport report;
   report.direct = usesDirect(settings.linear_solver) && solveDirectly(pinned);
-  conjugateGradient(pinned, settings, report);
+  // Under `auto`, CG may go on past the cap until it has spent what the direct solve costs: until
+  // then, stopping for the direct solve would only add its cost to the iterations already spent.
+  // So a solve costs at most about twice the cheaper of the two (the rent-or-buy bound), and a
+  // body that CG solves in a few more iterations than the cap stays with CG.
+  int max_iterations = settings.cg_max_iterations;
+  if (settings.linear_solver == LinearSolverType::Auto && !report.direct && max_iterations > 0)
+    max_iterations = static_cast<int>(
+        std::min(1e9, std::max(static_cast<double>(max_iterations), std::ceil(direct_in_cg_iterations_))));
+  conjugateGradient(pinned, settings, max_iterations, report);
   // `auto` measured CG: when a solve took more iterations than the direct solve costs, or stopped
-  // at the iteration cap short of the tolerance (the direct solve is exact, however dear), the
-  // direct solver takes over from the next solve on (for good: no switching back and forth).
+  // at that many short of the tolerance (the direct solve is exact, however dear), the direct
+  // solver takes over from the next solve on (for good: no switching back and forth).
   if (settings.linear_solver == LinearSolverType::Auto && !report.direct &&
       (report.iterations > direct_in_cg_iterations_ || !report.converged))
   {
@@ -459,7 +467,7 @@ SolverReport ImplicitEulerSolver::solveLinear(const std::vector<char>& pinned, c
       const int capped_iterations = report.iterations;
       report = SolverReport{};
       report.direct = true;
-      conjugateGradient(pinned, settings, report);
+      conjugateGradient(pinned, settings, settings.cg_max_iterations, report);
       report.iterations += capped_iterations;  // the work done, the capped CG's included
     }
   }
@@ -477,7 +485,7 @@ bool ImplicitEulerSolver::solveDirectly(const std::vector<char>& pinned)
 }
 
 void ImplicitEulerSolver::conjugateGradient(const std::vector<char>& pinned, const IntegratorDef& settings,
-                                            SolverReport& report)
+                                            int max_iterations, SolverReport& report)
 {
   // Modified preconditioned CG (Baraff & Witkin 1998, section 5.3), started from delta_v_, with
   // pinned rows filtered out of the start, every residual and every direction. It stops when the
@@ -499,7 +507,7 @@ void ImplicitEulerSolver::conjugateGradient(const std::vector<char>& pinned, con
   auto within = [&](const ResidualNorms& n) {
     return n.euclidean <= settings.cg_tolerance * rhs_norm || n.velocity <= settings.cg_velocity_tolerance;
   };
-  if (!within(norms) && settings.cg_max_iterations > 0)
+  if (!within(norms) && max_iterations > 0)
   {
     for (int i = 0; i < static_cast<int>(diagonal_block_.size()); ++i)
       inverse_diagonal_[i] = blocks_[diagonal_block_[i]].inverse();
@@ -513,7 +521,7 @@ void ImplicitEulerSolver::conjugateGradient(const std::vector<char>& pinned, con
   // operations as on one thread, and every sum is taken in fixed chunks of rows and then chunk after
   // chunk (like sumByChunks()): the same bits at any thread count.
   const int rows = static_cast<int>(diagonal_block_.size());
-  while (!within(norms) && report.iterations < settings.cg_max_iterations)
+  while (!within(norms) && report.iterations < max_iterations)
   {
     forEachFixedChunk(workers_, rows, kRowsPerChunk, [&](int index, int first, int last) {
       if (pair_product)

@@ -159,8 +159,9 @@ private:
   // with E_i = A_ii + Σ C its diagonal block without the pairs' part (own_diagonal_).
   void multiplyPairRows(const Eigen::Matrix3Xd& p, Eigen::Matrix3Xd& out, int chunk, int first, int last) const;
   // CG iterations from delta_v_ until the filtered residual is within cg_tolerance |b|, or the
-  // velocity error it bounds within cg_velocity_tolerance, or the cap.
-  void conjugateGradient(const std::vector<char>& pinned, const IntegratorDef& settings, SolverReport& report);
+  // velocity error it bounds within cg_velocity_tolerance, or `max_iterations`.
+  void conjugateGradient(const std::vector<char>& pinned, const IntegratorDef& settings, int max_iterations,
+                         SolverReport& report);
   struct ResidualNorms
   {
     double euclidean;  // |r|
