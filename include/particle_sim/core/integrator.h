@@ -68,8 +68,9 @@ enum class LinearSolverType
 /// conjugate-gradient iterations, counted in floating-point operations from the pattern: true of
 /// ropes and chains (no fill) and of small sheets. Larger sheets and lattices start with CG, and
 /// switch to the direct solver for good once a CG solve takes more iterations than the direct solve
-/// costs, or ends at cg_max_iterations short of both tolerances (stiff sheets at large steps, and
-/// large sheets whose direct solve costs more than the iteration cap).
+/// costs (stiff sheets at large steps); under `auto` the cap cg_max_iterations stops CG only once it
+/// has spent that many too, and a solve stopped there short of both tolerances is solved again
+/// directly.
 inline constexpr double kDirectSolverCgIterations = 40.0;
 
 /// "auto", "cg", "direct".
@@ -93,8 +94,10 @@ struct IntegratorDef
   /// body comes to rest (as many iterations at rest as in motion), it does not depend on how large
   /// this step's change happens to be.
   double cg_velocity_tolerance = 1e-5;
-  int cg_max_iterations = 500;  ///< implicit Euler: iteration cap, >= 1
-  int max_substeps = 64;        ///< explicit methods: most substeps a step may be split into to stay stable, >= 1
+  /// Implicit Euler: iteration cap, >= 1 (under `auto`, CG may go past it up to as many iterations as
+  /// the direct solve costs).
+  int cg_max_iterations = 500;
+  int max_substeps = 64;  ///< explicit methods: most substeps a step may be split into to stay stable, >= 1
   LinearSolverType linear_solver = LinearSolverType::Auto;  ///< implicit methods: how each step's system is solved
 };
 
