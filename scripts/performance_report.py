@@ -535,8 +535,8 @@ def main():
                      'the warm start is nearly the answer. Each scene then runs the same steps again at every '
                      'default: the linear solver `auto` (direct from the start for a rope; for a cloth, CG, past the '
                      'cap of 500 if need be, until a solve costs more iterations than a factorization, and then '
-                     'direct, the step that CG gave up solved again directly and its iterations counted). The detail counts the steps that ended '
-                     'unconverged there and those solved directly.')
+                     'direct, the step that CG gave up solved again directly and its iterations counted). The '
+                     'detail counts the steps that ended unconverged there and those solved directly.')
         lines.append('')
         lines.append('| scene | size | particles | ms per step (one run) | CG iterations per step (mean) | detail |')
         lines.append('|---|---|---|---|---|---|')
