@@ -1,24 +1,24 @@
 #include "particle_sim/core/forces/springs.h"
 
 #include <algorithm>
+#include <array>
 #include <numeric>
 
 namespace particle_sim
 {
 namespace core
 {
-SpringForces::SpringForces(std::vector<Spring> springs)
-    : built_(springs), springs_(std::move(springs)), origin_(springs_.size()), kept_energy_(springs_.size())
-{
-  std::iota(origin_.begin(), origin_.end(), 0);
-}
-
 namespace
 {
 // Springs and particles per chunk of a shared loop: about 50 µs of work, so that a loop's handover
 // costs a few per cent of it.
 constexpr int kSpringsPerChunk = 2048;
 constexpr int kParticlesPerChunk = 2048;
+
+std::size_t chunksOf(std::size_t springs)
+{
+  return (springs + kSpringsPerChunk - 1) / kSpringsPerChunk;
+}
 
 // One spring's force (springForce()), added to its end i (if kAddI) and taken from its end j (if kAddJ);
 // its energy (springEnergy()) into *energy when that is not null.
@@ -113,6 +113,18 @@ template <bool kAddI, bool kAddJ>
 }
 }  // namespace
 
+SpringForces::SpringForces(std::vector<Spring> springs)
+    : built_(springs), springs_(std::move(springs)), origin_(springs_.size()), kept_energy_(springs_.size())
+{
+  kept_chunk_energy_.reserve(chunksOf(springs_.size()));
+  std::iota(origin_.begin(), origin_.end(), 0);
+}
+
+bool SpringForces::sharesForces(const ForceContext& context) const
+{
+  return context.workers && context.workers->threads() > 1 && static_cast<int>(springs_.size()) > kSpringsPerChunk;
+}
+
 void SpringForces::addForces(const ForceContext& context, const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v,
                              Eigen::Matrix3Xd& force) const
 {
@@ -123,19 +135,51 @@ void SpringForces::addForces(const ForceContext& context, const Eigen::Matrix3Xd
 void SpringForces::addForcesKeepingEnergy(const ForceContext& context, const Eigen::Matrix3Xd& x,
                                           const Eigen::Matrix3Xd& v, Eigen::Matrix3Xd& force) const
 {
-  kept_energy_.resize(springs_.size());  // sized at construction: tears shrink it, mend() restores it
-  addForcesTo(context, x, v, force, kept_energy_.data());
   energy_kept_ = true;
+  energy_kept_by_chunks_ = !sharesForces(context);
+  if (!energy_kept_by_chunks_)
+  {
+    kept_energy_.resize(springs_.size());  // sized at construction: tears shrink it, mend() restores it
+    addForcesShared(*context.workers, x, v, force, kept_energy_.data());
+    return;
+  }
+  // One thread: addEnergy()'s chunks of springs, each chunk's energies written to a buffer that
+  // stays in the first-level cache and summed in order at once (addEnergy()'s sums, so the same
+  // bits), instead of a store a spring and a pass of their own over the springs afterwards.
+  const int springs = static_cast<int>(springs_.size());
+  kept_chunk_energy_.resize(chunksOf(springs_.size()));  // reserved at construction: never larger
+  std::array<double, kSpringsPerChunk> chunk_energy;
+  for (int first = 0, chunk = 0; first < springs; first += kSpringsPerChunk, ++chunk)
+  {
+    const int count = std::min(kSpringsPerChunk, springs - first);
+    addRunForces<true, true>(springs_.data() + first, springs_.data() + first + count, x.data(), v.data(), force.data(),
+                             chunk_energy.data());
+    double sum = 0.0;
+    for (int k = 0; k < count; ++k)
+      sum += chunk_energy[k];
+    kept_chunk_energy_[chunk] = sum;
+  }
 }
 
 void SpringForces::addKeptEnergy(const ForceContext& context, const Eigen::Matrix3Xd& x, double& energy) const
 {
-  if (!energy_kept_ || kept_energy_.size() != springs_.size())
+  const bool kept_whole = energy_kept_by_chunks_ ? kept_chunk_energy_.size() == chunksOf(springs_.size())
+                                                 : kept_energy_.size() == springs_.size();
+  if (!energy_kept_ || !kept_whole)
   {
     addEnergy(context, x, energy);
     return;
   }
   energy_kept_ = false;
+  if (energy_kept_by_chunks_)
+  {
+    // sumByChunks()'s last sum: chunk after chunk.
+    double total = 0.0;
+    for (const double chunk : kept_chunk_energy_)
+      total += chunk;
+    energy += total;
+    return;
+  }
   // addEnergy()'s sum, term by term: the same chunks in the same order, so the same bits.
   const double* const kept = kept_energy_.data();
   energy += sumByChunks(context.workers, static_cast<int>(springs_.size()), kSpringsPerChunk, chunk_energy_,
@@ -145,7 +189,7 @@ void SpringForces::addKeptEnergy(const ForceContext& context, const Eigen::Matri
 void SpringForces::addForcesTo(const ForceContext& context, const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v,
                                Eigen::Matrix3Xd& force, double* energy) const
 {
-  if (context.workers && context.workers->threads() > 1 && static_cast<int>(springs_.size()) > kSpringsPerChunk)
+  if (sharesForces(context))
   {
     addForcesShared(*context.workers, x, v, force, energy);
     return;
@@ -369,7 +413,7 @@ void SpringForces::tear(const Eigen::Matrix3Xd& x, double tear_strain, TearRecor
     if (!blocks_.empty()) blocks_[kept] = blocks_[s];
     ++kept;
   }
-  if (kept != springs_.size()) ends_valid_ = false;
+  if (kept != springs_.size()) ends_valid_ = energy_kept_ = false;
   springs_.resize(kept);
   origin_.resize(kept);
   if (!blocks_.empty()) blocks_.resize(kept);
@@ -378,7 +422,7 @@ void SpringForces::tear(const Eigen::Matrix3Xd& x, double tear_strain, TearRecor
 void SpringForces::mend()
 {
   springs_ = built_;  // with the built constants too (resetConstants() would put them back anyway)
-  ends_valid_ = false;
+  ends_valid_ = energy_kept_ = false;
   blocks_ = built_blocks_;
   origin_.resize(built_.size());
   std::iota(origin_.begin(), origin_.end(), 0);

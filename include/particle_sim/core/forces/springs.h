@@ -32,7 +32,8 @@ public:
   void addStabilityRows(const std::vector<Eigen::Vector3d>& rest, std::vector<double>& stiffness_rows,
                         std::vector<double>& damping_rows) const override;
   void addEnergy(const ForceContext& context, const Eigen::Matrix3Xd& x, double& energy) const override;
-  /// addForces() that also writes each spring's energy (kept_energy_), for addKeptEnergy().
+  /// addForces() that also keeps the springs' energy, for addKeptEnergy(): each spring's (kept_energy_)
+  /// when shared between threads, else each chunk's sum as addEnergy() takes it (kept_chunk_energy_).
   void addForcesKeepingEnergy(const ForceContext& context, const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v,
                               Eigen::Matrix3Xd& force) const override;
   void addKeptEnergy(const ForceContext& context, const Eigen::Matrix3Xd& x, double& energy) const override;
@@ -58,6 +59,8 @@ private:
   /// `energy`: null, or where each spring's energy goes (per spring of springs_).
   void addForcesShared(WorkerPool& workers, const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v,
                        Eigen::Matrix3Xd& force, double* energy) const;
+  /// Whether addForces() is shared between `context`'s threads (addForcesShared()).
+  bool sharesForces(const ForceContext& context) const;
   /// addForces(), with each spring's energy into `energy` unless it is null.
   void addForcesTo(const ForceContext& context, const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v,
                    Eigen::Matrix3Xd& force, double* energy) const;
@@ -81,7 +84,10 @@ private:
   mutable PairChunks chunks_;                 // the springs by chunks of particles (by_chunks_)
   mutable std::vector<double> chunk_energy_;  // addEnergy(): per chunk of springs, its energy
   mutable std::vector<double> kept_energy_;   // addForcesKeepingEnergy(): per spring of springs_, its energy
-  mutable bool energy_kept_ = false;          // kept_energy_ is of the last addForcesKeepingEnergy()'s x
+  mutable bool energy_kept_ = false;          // the kept energy is of the last addForcesKeepingEnergy()'s x
+  // One thread's addForcesKeepingEnergy() keeps each chunk's sum of addEnergy() instead of each spring's.
+  mutable std::vector<double> kept_chunk_energy_;
+  mutable bool energy_kept_by_chunks_ = false;
 };
 
 }  // namespace core
