@@ -552,7 +552,8 @@ def main():
     lines.append('A symplectic Euler step of an n × n spring cloth at half its stability limit, one force pass a '
                  'step: the blow-up guard\'s energy after the step comes out of the pass that evaluates the end '
                  'state\'s forces, which the next step takes (README, "Stability on hard cases"), so no pass over '
-                 'the springs is the guard\'s alone. The floor is the 40-byte spring record read once at the triad '
+                 'the springs is the guard\'s alone; on one thread that pass also sums the springs\' energies, chunk '
+                 'by chunk, and stores none of them. The floor is the 40-byte spring record read once at the triad '
                  'bandwidth; the step also integrates, applies the pins, copies the state it may roll back to and '
                  'sums the kinetic and gravity energies (passes over the particles), so it is further from the '
                  'floor than the force pass alone.')
