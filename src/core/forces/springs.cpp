@@ -146,26 +146,22 @@ void SpringForces::addForcesKeepingEnergy(const ForceContext& context, const Eig
   // One thread: addEnergy()'s chunks of springs, each chunk's energies written to a buffer that
   // stays in the first-level cache and summed in order at once (addEnergy()'s sums, so the same
   // bits), instead of a store a spring and a pass of their own over the springs afterwards.
-  const int springs = static_cast<int>(springs_.size());
   kept_chunk_energy_.resize(chunksOf(springs_.size()));  // reserved at construction: never larger
   std::array<double, kSpringsPerChunk> chunk_energy;
-  for (int first = 0, chunk = 0; first < springs; first += kSpringsPerChunk, ++chunk)
-  {
-    const int count = std::min(kSpringsPerChunk, springs - first);
-    addRunForces<true, true>(springs_.data() + first, springs_.data() + first + count, x.data(), v.data(), force.data(),
+  forEachFixedChunk(nullptr, static_cast<int>(springs_.size()), kSpringsPerChunk, [&](int chunk, int first, int last) {
+    addRunForces<true, true>(springs_.data() + first, springs_.data() + last, x.data(), v.data(), force.data(),
                              chunk_energy.data());
     double sum = 0.0;
-    for (int k = 0; k < count; ++k)
+    for (int k = 0; k < last - first; ++k)
       sum += chunk_energy[k];
     kept_chunk_energy_[chunk] = sum;
-  }
+  });
 }
 
 void SpringForces::addKeptEnergy(const ForceContext& context, const Eigen::Matrix3Xd& x, double& energy) const
 {
-  const bool kept_whole = energy_kept_by_chunks_ ? kept_chunk_energy_.size() == chunksOf(springs_.size())
-                                                 : kept_energy_.size() == springs_.size();
-  if (!energy_kept_ || !kept_whole)
+  // tear() and mend(), the only changes of the list, forget what was kept.
+  if (!energy_kept_)
   {
     addEnergy(context, x, energy);
     return;
