@@ -2,7 +2,8 @@
 // code at a sweep of sizes and writes one CSV row per case and size: ropes and cloths solved
 // implicitly (both linear solvers), Bullet's test cloth ("hang64"), the implicit solve's stopping
 // rule on each of them, explicit springs against the machine's memory bandwidth (a STREAM-like
-// triad), emitters, and the self-collision pass beside the rest of the step. scripts/bench
+// triad), the direct solve's flops against the machine's arithmetic roof, emitters, and the self-collision pass beside
+// the rest of the step. scripts/bench
 // --performance runs it and scripts/performance_report.py turns the CSV into docs/performance.md
 // and its plots.
 //
@@ -240,8 +241,60 @@ std::string stretchAndSag(core::SpringNetworkDef def, double dt, double seconds)
   return text.str();
 }
 
+// The arithmetic roof of this build: the most double-precision multiplies and adds one core retires
+// a second in the instructions the engine's code is compiled to (Eigen's packets of two doubles: the
+// x86-64 baseline, SSE2, with no fused multiply-add). Six chains of multiplies and six of adds,
+// independent of each other and held in registers; flop/s, the best of repeats.
+double arithmeticRoof(bool quick)
+{
+  volatile double factor_source = 1.0, term_source = 1e-300;  // unknown to the compiler: nothing folds
+  const Eigen::Array2d factor = Eigen::Array2d::Constant(static_cast<double>(factor_source));
+  const Eigen::Array2d term = Eigen::Array2d::Constant(static_cast<double>(term_source));
+  const long iterations = quick ? 2000000 : 20000000;
+  double best = 0.0;
+  for (int r = 0; r < (quick ? 3 : 10); ++r)
+  {
+    Eigen::Array2d m0 = Eigen::Array2d::Constant(1.0 + r), m1 = m0 + 1.0, m2 = m0 + 2.0, m3 = m0 + 3.0, m4 = m0 + 4.0,
+                   m5 = m0 + 5.0;
+    Eigen::Array2d a0 = m0 + 6.0, a1 = m0 + 7.0, a2 = m0 + 8.0, a3 = m0 + 9.0, a4 = m0 + 10.0, a5 = m0 + 11.0;
+    const auto start = Clock::now();
+    for (long i = 0; i < iterations; ++i)
+    {
+      m0 *= factor;
+      a0 += term;
+      m1 *= factor;
+      a1 += term;
+      m2 *= factor;
+      a2 += term;
+      m3 *= factor;
+      a3 += term;
+      m4 *= factor;
+      a4 += term;
+      m5 *= factor;
+      a5 += term;
+    }
+    const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
+    best = std::max(best, 24.0 * static_cast<double>(iterations) / seconds);  // 12 operations on 2 lanes
+    volatile double sink = (m0 + m1 + m2 + m3 + m4 + m5 + a0 + a1 + a2 + a3 + a4 + a5).sum();  // keep the chains
+    (void)sink;
+  }
+  return best;
+}
+
 void hang(std::ostream& out, bool quick)
 {
+  // The roof the direct solve's flops are measured against (goal 1).
+  const double flops = arithmeticRoof(quick);
+  Row roof;
+  roof.case_name = "roof";
+  roof.variant = "arithmetic";
+  roof.size = 0;
+  roof.elements = 0;
+  roof.timing = {flops / 1e9, flops / 1e9, flops / 1e9};
+  roof.detail =
+      "GFlop/s (best of repeats), one core: independent double multiplies and adds on pairs of lanes "
+      "(Eigen's packets in this build, no fused multiply-add)";
+  writeRow(out, roof);
   struct Variant
   {
     std::string name;
