@@ -17,6 +17,7 @@
 #include "particle_sim/core/integrators/symplectic_euler.h"
 #include "particle_sim/core/integrators/verlet.h"
 #include "particle_sim/core/spring_network.h"
+#include "particle_sim/core/worker_pool.h"
 #include "test_helpers.h"
 
 using namespace particle_sim::core;
@@ -592,6 +593,38 @@ TEST(Integrator, ImplicitEulerKeepsAStiffRopeSwingingWithoutEnergyCorrections)
 // (stiffer springs, a released pin, another gravity) is a change of energy, not a blow-up: each
 // here multiplies the energy by far more than the check's allowance of 100 times, and the step
 // after it runs as usual, with no stability event.
+TEST(Integrator, NonFiniteStateIsRolledBackAndFrozenInAnyChunkAtAnyThreadCount)
+{
+  // A chain of 0.1 m springs whose last particle is 1e300 m away: that spring's length overflows,
+  // its force is NaN (∞ · 0), and so is the state of its two particles after an explicit step, the
+  // only non-finite ones, in the third chunk of particles. The energy is NaN too, which no
+  // comparison with the energy before calls a blow-up: only the finiteness check sees it. The step
+  // must be rolled back, retried and the body frozen at its last good state.
+  const int particles = 2 * kParticlesPerVectorChunk + 10;
+  SpringNetworkDef def;
+  def.name = "chain";
+  for (int i = 0; i < particles; ++i)
+    def.positions.emplace_back(i + 1 < particles ? 0.1 * i : 1e300, 0.0, 1.0);
+  def.masses.assign(particles, 1.0);
+  for (int i = 0; i + 1 < particles; ++i)
+    def.springs.push_back(Spring{i, i + 1, 0.1, 10.0, 0.0, SpringClass::Stretch});
+  def.integrator.type = kSymplecticEulerIntegrator;
+  for (const int threads : {1, 2})
+  {
+    SCOPED_TRACE(testing::Message() << threads << " threads");
+    SpringNetworkBody body(def);
+    WorkerPool workers(threads);
+    body.setWorkers(&workers);
+    body.step(0.01, noGravity());
+    EXPECT_TRUE(body.frozen());
+    EXPECT_NE(body.frozenReason().find("blew up"), std::string::npos) << body.frozenReason();
+    const ParticlePool& p = body.particles();
+    EXPECT_TRUE(p.position.leftCols(p.size()).allFinite());
+    EXPECT_TRUE(p.velocity.leftCols(p.size()).allFinite());
+    EXPECT_EQ(p.position(0, particles - 1), 1e300);  // the last good state: the start
+  }
+}
+
 TEST(Integrator, EnergyChangedBetweenStepsIsNoBlowUp)
 {
   auto stretchedPair = [] {
