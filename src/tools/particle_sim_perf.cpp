@@ -1,11 +1,10 @@
 // particle_sim_perf: the performance bench of issue 13. Times the core's step on bodies built in
 // code at a sweep of sizes and writes one CSV row per case and size: ropes and cloths solved
 // implicitly (both linear solvers), Bullet's test cloth ("hang64"), the implicit solve's stopping
-// rule on each of them, explicit springs against the machine's memory bandwidth (a STREAM-like
-// triad), the direct solve's flops against the machine's arithmetic roof, emitters, and the self-collision pass beside
-// the rest of the step. scripts/bench
-// --performance runs it and scripts/performance_report.py turns the CSV into docs/performance.md
-// and its plots.
+// rule on each of them, the direct solve's flops against the machine's arithmetic roof, explicit
+// springs against its memory bandwidth (a STREAM-like triad), emitters, and the self-collision pass
+// beside the rest of the step. scripts/bench --performance runs it and
+// scripts/performance_report.py turns the CSV into docs/performance.md and its plots.
 //
 //   particle_sim_perf [--out FILE] [--quick] [--only CASE,...]
 //

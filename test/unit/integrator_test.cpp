@@ -588,11 +588,6 @@ TEST(Integrator, ImplicitEulerKeepsAStiffRopeSwingingWithoutEnergyCorrections)
   EXPECT_LT(body.particles().position(2, 300), -5.0);
 }
 
-// The blow-up check of an explicit step weighs the energy after the step against the energy before
-// it, which it takes from the last step while nothing has changed it. A change between two steps
-// (stiffer springs, a released pin, another gravity) is a change of energy, not a blow-up: each
-// here multiplies the energy by far more than the check's allowance of 100 times, and the step
-// after it runs as usual, with no stability event.
 TEST(Integrator, NonFiniteStateIsRolledBackAndFrozenInAnyChunkAtAnyThreadCount)
 {
   // A chain of 0.1 m springs whose last particle is 1e300 m away: that spring's length overflows,
@@ -625,6 +620,11 @@ TEST(Integrator, NonFiniteStateIsRolledBackAndFrozenInAnyChunkAtAnyThreadCount)
   }
 }
 
+// The blow-up check of an explicit step weighs the energy after the step against the energy before
+// it, which it takes from the last step while nothing has changed it. A change between two steps
+// (stiffer springs, a released pin, another gravity) is a change of energy, not a blow-up: each
+// here multiplies the energy by far more than the check's allowance of 100 times, and the step
+// after it runs as usual, with no stability event.
 TEST(Integrator, EnergyChangedBetweenStepsIsNoBlowUp)
 {
   auto stretchedPair = [] {
