@@ -240,6 +240,21 @@ std::string stretchAndSag(core::SpringNetworkDef def, double dt, double seconds)
   return text.str();
 }
 
+// A machine roof as a row: its value in the three time columns (the report reads ms_min), its unit
+// in the detail.
+void writeRoofRow(std::ostream& out, const std::string& case_name, const std::string& variant, double value,
+                  const std::string& detail)
+{
+  Row roof;
+  roof.case_name = case_name;
+  roof.variant = variant;
+  roof.size = 0;
+  roof.elements = 0;
+  roof.timing = {value, value, value};
+  roof.detail = detail;
+  writeRow(out, roof);
+}
+
 // The arithmetic roof of this build: the most double-precision multiplies and adds one core retires
 // a second in the instructions the engine's code is compiled to (Eigen's packets of two doubles: the
 // x86-64 baseline, SSE2, with no fused multiply-add). Six chains of multiplies and six of adds,
@@ -283,17 +298,9 @@ double arithmeticRoof(bool quick)
 void hang(std::ostream& out, bool quick)
 {
   // The roof the direct solve's flops are measured against (goal 1).
-  const double flops = arithmeticRoof(quick);
-  Row roof;
-  roof.case_name = "roof";
-  roof.variant = "arithmetic";
-  roof.size = 0;
-  roof.elements = 0;
-  roof.timing = {flops / 1e9, flops / 1e9, flops / 1e9};
-  roof.detail =
-      "GFlop/s (best of repeats), one core: independent double multiplies and adds on pairs of lanes "
-      "(Eigen's packets in this build, no fused multiply-add)";
-  writeRow(out, roof);
+  writeRoofRow(out, "roof", "arithmetic", arithmeticRoof(quick) / 1e9,
+               "GFlop/s (best of repeats), one core: independent double multiplies and adds on pairs of lanes "
+               "(Eigen's packets in this build, no fused multiply-add)");
   struct Variant
   {
     std::string name;
@@ -477,16 +484,9 @@ double triadBandwidth(bool quick)
 
 void explicitSprings(std::ostream& out, bool quick)
 {
-  const double bandwidth = triadBandwidth(quick);
-  Row roof;
-  roof.case_name = "springs";
-  roof.variant = "triad bandwidth";
-  roof.size = 0;
-  roof.elements = 0;
-  roof.timing = {bandwidth / 1e9, bandwidth / 1e9, bandwidth / 1e9};
-  roof.detail =
-      "GB/s (best of repeats), a[i] = b[i] + s c[i] over 3 arrays of " + std::to_string(quick ? 32 : 128) + " MB";
-  writeRow(out, roof);
+  writeRoofRow(
+      out, "springs", "triad bandwidth", triadBandwidth(quick) / 1e9,
+      "GB/s (best of repeats), a[i] = b[i] + s c[i] over 3 arrays of " + std::to_string(quick ? 32 : 128) + " MB");
   for (int n : quick ? std::vector<int>{64} : std::vector<int>{64, 128, 256})
   {
     core::ClothGridDef def = squareCloth(n, core::LinearSolverType::Auto);
