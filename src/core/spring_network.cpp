@@ -429,20 +429,18 @@ double SpringNetworkBody::kineticEnergy() const
 
 bool SpringNetworkBody::stateFinite(double* kinetic) const
 {
-  // kineticEnergy()'s sum (sumByChunks() written out: the same chunks and order, so the same bits)
-  // over every column of the pool, its room beyond the live particles adding +0, with the finiteness
-  // check in the same pass. A coordinate c is finite exactly when c − c is 0 (NaN otherwise): each
-  // particle's six differences are summed, the sum compared with itself and the results and-ed over
-  // the chunk, a few independent operations a particle with no branch and no call.
+  // kineticEnergy()'s sum (the same chunks and order, so the same bits) over every column of the
+  // pool, its room beyond the live particles adding +0, with the finiteness check in the same pass.
+  // A coordinate c is finite exactly when c − c is 0 (NaN otherwise): each particle's six
+  // differences are summed, the sum compared with itself and the results and-ed over the chunk, a
+  // few independent operations a particle with no branch and no call.
   const ParticlePool& p = particles_;
   const int live = p.size();
-  const int columns = static_cast<int>(p.position.cols());
   std::atomic<bool> finite{true};
   const double* const xs = p.position.data();
   const double* const vs = p.velocity.data();
-  kinetic_energy_chunks_.resize((columns + kParticlesPerVectorChunk - 1) / kParticlesPerVectorChunk);
-  forEachFixedChunk(workers_, columns, kParticlesPerVectorChunk, [&](int index, int first, int last) {
-    double chunk_sum = 0.0;
+  auto chunk_sum = [&](int first, int last) {
+    double sum = 0.0;
     bool chunk_finite = true;
     for (int i = first; i < last; ++i)
     {
@@ -451,14 +449,13 @@ bool SpringNetworkBody::stateFinite(double* kinetic) const
       const double zero =
           ((x[0] - x[0]) + (x[1] - x[1])) + ((x[2] - x[2]) + (v[0] - v[0])) + ((v[1] - v[1]) + (v[2] - v[2]));
       chunk_finite &= zero == zero;
-      chunk_sum += kinetic && i < live ? kineticEnergyOf(i) : 0.0;
+      sum += kinetic && i < live ? kineticEnergyOf(i) : 0.0;
     }
-    kinetic_energy_chunks_[index] = chunk_sum;
     if (!chunk_finite) finite.store(false, std::memory_order_relaxed);
-  });
-  double sum = 0.0;
-  for (const double chunk_sum : kinetic_energy_chunks_)
-    sum += chunk_sum;
+    return sum;
+  };
+  const double sum = sumChunks(workers_, static_cast<int>(p.position.cols()), kParticlesPerVectorChunk,
+                               kinetic_energy_chunks_, chunk_sum);
   if (kinetic) *kinetic = sum;
   return finite.load();
 }

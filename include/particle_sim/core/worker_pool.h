@@ -123,25 +123,34 @@ void forEachFixedChunk(WorkerPool* workers, int items, int chunk, Body&& body)
   });
 }
 
-/// Σ term(i) over [0, items): summed in order within fixed chunks of `chunk` items (shared with
-/// `workers`), then chunk after chunk on the calling thread. The same bits at any thread count, one
-/// included, since the chunks never depend on it. `partial` holds each chunk's sum; it allocates
-/// only when it grows.
-template <class Term>
-double sumByChunks(WorkerPool* workers, int items, int chunk, std::vector<double>& partial, Term&& term)
+/// Σ chunk_sum(first, last) over the fixed chunks [first, last) of `chunk` items that cover
+/// [0, items) (shared with `workers`), summed chunk after chunk on the calling thread: the same bits
+/// at any thread count, one included, since the chunks never depend on it. For a chunk's sum that
+/// does more on its way (sumByChunks() is the plain one). `partial` holds each chunk's sum; it
+/// allocates only when it grows.
+template <class ChunkSum>
+double sumChunks(WorkerPool* workers, int items, int chunk, std::vector<double>& partial, ChunkSum&& chunk_sum)
 {
   if (items <= 0) return 0.0;
   partial.resize((items + chunk - 1) / chunk);
-  forEachFixedChunk(workers, items, chunk, [&](int index, int first, int last) {
-    double sum = 0.0;
-    for (int i = first; i < last; ++i)
-      sum += term(i);
-    partial[index] = sum;
-  });
+  forEachFixedChunk(workers, items, chunk,
+                    [&](int index, int first, int last) { partial[index] = chunk_sum(first, last); });
   double total = 0.0;
   for (const double sum : partial)
     total += sum;
   return total;
+}
+
+/// Σ term(i) over [0, items): summed in order within fixed chunks of `chunk` items (sumChunks()).
+template <class Term>
+double sumByChunks(WorkerPool* workers, int items, int chunk, std::vector<double>& partial, Term&& term)
+{
+  return sumChunks(workers, items, chunk, partial, [&](int first, int last) {
+    double sum = 0.0;
+    for (int i = first; i < last; ++i)
+      sum += term(i);
+    return sum;
+  });
 }
 
 }  // namespace core
