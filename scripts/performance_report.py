@@ -614,8 +614,9 @@ def main():
                  'state\'s forces, which the next step takes (README, "Stability on hard cases"), so no pass over '
                  'the springs is the guard\'s alone; on one thread that pass also sums the springs\' energies, chunk '
                  'by chunk, and stores none of them. The floor is the 40-byte spring record read once at the triad '
-                 'bandwidth; the step also integrates, applies the pins, copies the state it may roll back to and '
-                 'sums the kinetic and gravity energies (passes over the particles), so it is further from the '
+                 'bandwidth; the step also integrates (into the arrays of the state it may roll back to, which are then '
+                 'swapped with the state: no pass to save it), applies the pins and sums the kinetic and gravity '
+                 'energies (passes over the particles), so it is further from the '
                  'floor than the force pass alone, which the bench times on its own as well (the force evaluation '
                  'of gravity and every spring on the state the steps left, without the energy the step\'s pass '
                  'also sums).')

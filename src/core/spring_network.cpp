@@ -191,6 +191,7 @@ SpringNetworkBody::SpringNetworkBody(const SpringNetworkDef& def, const Integrat
   substep_start_.setZero(3, n);
   carried_force_.setZero(3, n);
   carried_pin_velocity_.setZero(3, n);
+  start_pin_velocity_.setZero(3, n);
   resting_contacts_.reserve(n);
   if (def_.tear_strain > 0.0)
   {
@@ -267,6 +268,7 @@ void SpringNetworkBody::reset()
     step_target_.setZero(3, n);
     carried_force_.setZero(3, n);
     carried_pin_velocity_.setZero(3, n);
+    start_pin_velocity_.setZero(3, n);
   }
   rest_positions_ = def_.positions;
   origin_of_.resize(n);
@@ -499,7 +501,6 @@ void SpringNetworkBody::step(double dt, const Environment& env)
   gravity_ = env.gravity;
   ParticlePool& p = particles_;
   const int n = p.size();
-  copyBothShared(workers_, p.position, saved_position_, p.velocity, saved_velocity_);
   // The pins' targets for the end of the step (only pinned columns are read or changed below).
   for (const int i : pinned_indices_)
     step_target_.col(i) = pin_target_.col(i);
@@ -507,6 +508,24 @@ void SpringNetworkBody::step(double dt, const Environment& env)
   const IntegratorType type = guard_.resolve(integrator_.type, dt, omega_bound_, dampingBound(), implicit_step_cost_,
                                              integrator_.max_substeps, last_integrator_, switched);
   if (switched) restartMethods();
+  // The state the step starts from, for a roll-back: copied, or, when the method writes its state
+  // where it is told, left where it is while the first substep writes the new one into the saved
+  // arrays, which are then swapped with it (one pass over the particles fewer). The pinned
+  // particles' are kept now: the substeps read their positions first, and set their velocities.
+  start_kept_by_swap_ = method(type).writesNextState() && saved_position_.cols() == p.position.cols() &&
+                        saved_velocity_.cols() == p.velocity.cols();
+  if (start_kept_by_swap_)
+  {
+    for (const int i : pinned_indices_)
+    {
+      saved_position_.col(i) = p.position.col(i);
+      start_pin_velocity_.col(i) = p.velocity.col(i);
+    }
+  }
+  else
+  {
+    copyBothShared(workers_, p.position, saved_position_, p.velocity, saved_velocity_);
+  }
   const bool explicit_method = !isImplicit(type);
   const bool had_history = method(type).hasHistory();
   int substeps = guard_.substeps(type, dt, omega_bound_, dampingBound(), integrator_.max_substeps, last_substeps_);
@@ -835,6 +854,7 @@ void SpringNetworkBody::appendCopies(const std::vector<int>& sources)
   grow(step_target_);
   grow(carried_force_);
   grow(carried_pin_velocity_);
+  grow(start_pin_velocity_);
   pinned_.resize(n, 0);
   pinned_indices_.reserve(n);
   resting_contacts_.reserve(n);
@@ -917,6 +937,22 @@ void SpringNetworkBody::substep(double h, IntegratorType type, const Environment
     strain_limit_.apply(h, p);
     resolveCollisions(env, p, &saved_velocity_, path_start, def_.contact_thickness, h, workers_);
   }
+}
+
+DynamicSystem::StateArrays SpringNetworkBody::nextState()
+{
+  if (start_kept_by_swap_) return {&saved_position_, &saved_velocity_};
+  return {&particles_.position, &particles_.velocity};
+}
+
+void SpringNetworkBody::stateWritten()
+{
+  if (!start_kept_by_swap_) return;
+  start_kept_by_swap_ = false;
+  particles_.position.swap(saved_position_);
+  particles_.velocity.swap(saved_velocity_);
+  for (const int i : pinned_indices_)
+    saved_velocity_.col(i) = start_pin_velocity_.col(i);
 }
 
 IntegrationMethod& SpringNetworkBody::method(IntegratorType type)

@@ -620,6 +620,60 @@ TEST(Integrator, NonFiniteStateIsRolledBackAndFrozenInAnyChunkAtAnyThreadCount)
   }
 }
 
+TEST(Integrator, AnExplicitStepKeepsTheStateItStartedFrom)
+{
+  // Symplectic Euler and Verlet write the new state beside the old one, which the body keeps as the
+  // start of the step. Each step of a chain whose pinned end is lifted with constant acceleration
+  // (so its velocity differs from step to step) must leave: the positions it started from as
+  // stepStartPositions(), bit for bit; the pin moved along the straight line from where it started
+  // (its velocity (target − x0) / dt, whatever the substeps); and the pin's reaction
+  // m (v1 − v0) / dt − f(x1, v1) with the velocity v0 the pin had before the step, not the one the
+  // substep gave it. With one substep a step and with several, on one thread and two, over three
+  // chunks of particles.
+  const int particles = 2 * kParticlesPerVectorChunk + 10;
+  SpringNetworkDef def;
+  def.name = "chain";
+  for (int i = 0; i < particles; ++i)
+    def.positions.emplace_back(0.01 * i, 0.0, 1.0);
+  def.masses.assign(particles, 0.001);
+  for (int i = 0; i + 1 < particles; ++i)
+    def.springs.push_back(Spring{i, i + 1, 0.01, 10.0, 0.001, SpringClass::Stretch});
+  def.pins = {0};
+  const Environment env = gravityOnly();
+  for (const IntegratorType type : {kSymplecticEulerIntegrator, kVerletIntegrator})
+    for (const double dt : {1e-3, 1e-2})  // ω_max ≈ 200 1/s: one substep, then several
+      for (const int threads : {1, 2})
+      {
+        SCOPED_TRACE(testing::Message() << toString(type) << ", dt " << dt << ", " << threads << " threads");
+        def.integrator.type = type;
+        SpringNetworkBody body(def);
+        WorkerPool workers(threads);
+        body.setWorkers(&workers);
+        const Eigen::Vector3d top = body.particles().position.col(0);
+        Eigen::Matrix3Xd force(3, particles), reactions(3, particles);
+        int substeps = 0;
+        for (int n = 1; n <= 5; ++n)
+        {
+          const Eigen::Matrix3Xd x0 = body.particles().position.leftCols(particles);
+          const Eigen::Vector3d v0 = body.particles().velocity.col(0);
+          const double t = n * dt;
+          const Eigen::Vector3d target = top + Eigen::Vector3d(0.0, 0.0, 0.5 * 3.0 * t * t);
+          ASSERT_TRUE(body.setPinTarget(0, target).ok);
+          body.step(dt, env);
+          ASSERT_FALSE(body.frozen()) << body.frozenReason();
+          substeps = std::max(substeps, body.lastSubsteps());
+          EXPECT_TRUE((body.stepStartPositions().leftCols(particles).array() == x0.array()).all()) << "step " << n;
+          const ParticlePool& p = body.particles();
+          EXPECT_LT((p.velocity.col(0) - (target - x0.col(0)) / dt).norm(), 1e-12) << "step " << n;
+          body.computeForces(p.position.leftCols(particles), p.velocity.leftCols(particles), env.gravity, force);
+          body.pinReactions(reactions);
+          const Eigen::Vector3d expected = 0.001 * Eigen::Vector3d((p.velocity.col(0) - v0) / dt) - force.col(0);
+          EXPECT_EQ(reactions.col(0), expected) << "step " << n;
+        }
+        EXPECT_EQ(substeps > 1, dt == 1e-2) << substeps << " substeps";
+      }
+}
+
 // The blow-up check of an explicit step weighs the energy after the step against the energy before
 // it, which it takes from the last step while nothing has changed it. A change between two steps
 // (stiffer springs, a released pin, another gravity) is a change of energy, not a blow-up: each

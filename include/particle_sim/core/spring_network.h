@@ -295,6 +295,10 @@ private:
   bool suppliesEnergy() const override { return forces_.suppliesEnergy(forceContext(gravity_)); }
   double mechanicalEnergy() const override { return mechanicalEnergy(gravity_); }
   void recordEvent(std::string_view event) override { guard_.record(event); }
+  // The step's first substep, when its method writes its state (start_kept_by_swap_): the saved
+  // arrays, which then hold the start of the step after the swap in stateWritten().
+  StateArrays nextState() override;
+  void stateWritten() override;
   // What the force elements read besides the state, with `gravity` [m/s²].
   ForceContext forceContext(const Eigen::Vector3d& gravity) const
   {
@@ -338,8 +342,13 @@ private:
 
   // Work arrays, sized once.
   std::vector<std::pair<IntegratorType, std::unique_ptr<IntegrationMethod>>> methods_;  // one per registered integrator
-  StrainLimit strain_limit_;  // Provot's constraint, applied after the integrator
-  Eigen::Matrix3Xd saved_position_, saved_velocity_;
+  StrainLimit strain_limit_;                          // Provot's constraint, applied after the integrator
+  Eigen::Matrix3Xd saved_position_, saved_velocity_;  // the state the step started from
+  // The first substep's method writes the new state into the saved arrays, which are then swapped
+  // with the state (nextState(), stateWritten()); the pinned particles' velocities at the start,
+  // which the substep sets before its method runs, are kept in start_pin_velocity_.
+  bool start_kept_by_swap_ = false;
+  Eigen::Matrix3Xd start_pin_velocity_;
   Eigen::Matrix3Xd substep_start_;                // positions at the start of a substep, when boxes or capsules sweep
   std::vector<RestingContact> resting_contacts_;  // implicit methods: found before each substep
   double last_dt_ = 0.0;                  // [s] of the last step (pinReactions' accelerations); 0 before the first

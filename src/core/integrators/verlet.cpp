@@ -13,17 +13,22 @@ SolverReport VerletMethod::step(double h, DynamicSystem& system, const Integrato
   const bool start = !started_;
   started_ = true;
   // Per particle alone, so shared between threads by chunks of particles: a = f/m (0 for pinned
-  // particles), the second-order start on the first step, then the update.
+  // particles), the second-order start on the first step, then the update, into the arrays the
+  // system gives (x and u themselves, or others).
   const double damping = settings.verlet_damping;
+  const DynamicSystem::StateArrays next = system.nextState();
+  Eigen::Matrix3Xd& next_x = *next.positions;
+  Eigen::Matrix3Xd& next_u = *next.velocities;
   shareLoop(system.workers(), static_cast<int>(x.cols()), kParticlesPerVectorChunk, [&](int begin, int end) {
     for (int i = begin; i < end; ++i)
     {
       const Eigen::Vector3d a = force_.col(i) * inverse_mass[i];
-      if (start) u.col(i) -= 0.5 * h * a;
-      u.col(i) = damping * u.col(i) + h * a;
-      x.col(i) += h * u.col(i);
+      const Eigen::Vector3d u0 = start ? Eigen::Vector3d(u.col(i) - 0.5 * h * a) : Eigen::Vector3d(u.col(i));
+      next_u.col(i) = damping * u0 + h * a;
+      next_x.col(i) = x.col(i) + h * next_u.col(i);
     }
   });
+  system.stateWritten();
   return SolverReport{};
 }
 

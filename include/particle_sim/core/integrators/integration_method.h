@@ -62,6 +62,20 @@ public:
   virtual double mechanicalEnergy() const = 0;  ///< [J] kinetic + potential of the current state
   /// Counts and describes a stability event (e.g. energy taken out by the implicit step).
   virtual void recordEvent(std::string_view event) = 0;
+
+  /// Where the new positions and velocities go.
+  struct StateArrays
+  {
+    Eigen::Matrix3Xd* positions;
+    Eigen::Matrix3Xd* velocities;
+  };
+  /// Where a method that writes its state (IntegrationMethod::writesNextState()) puts the new x and
+  /// v: positions() and velocities() themselves by default; a system may give arrays of their size
+  /// whose contents it does not need, and take them as its state at stateWritten() (by a swap of the
+  /// storage, no copy), keeping the old one (for a roll-back) without a pass of its own.
+  virtual StateArrays nextState() { return {&positions(), &velocities()}; }
+  /// The method has written every particle's new x and v where nextState() said.
+  virtual void stateWritten() {}
 };
 
 /// One time integrator. Its identity, order, stability limit and whether it is implicit are
@@ -81,6 +95,10 @@ public:
   /// velocities() themselves, unchanged): the system may then hand it forces it already has for that
   /// state (SpringNetworkBody carries those it measured the last step's energy with).
   virtual bool evaluatesForcesFirst() const { return false; }
+  /// True when step() computes each particle's new x and v from its old ones alone and writes them
+  /// only where DynamicSystem::nextState() says, then calls DynamicSystem::stateWritten(); it reads
+  /// positions() and velocities() (the old state) until then and changes them nowhere else.
+  virtual bool writesNextState() const { return false; }
 };
 
 }  // namespace core

@@ -19,6 +19,7 @@ public:
   explicit SymplecticEulerMethod(int particles) : force_(Eigen::Matrix3Xd::Zero(3, particles)) {}
   SolverReport step(double h, DynamicSystem& system, const IntegratorDef& settings) override;
   bool evaluatesForcesFirst() const override { return true; }
+  bool writesNextState() const override { return true; }
 
 private:
   Eigen::Matrix3Xd force_;  // f(x, v) [N]; the update takes a = f/m particle by particle

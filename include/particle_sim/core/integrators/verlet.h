@@ -23,6 +23,7 @@ public:
   explicit VerletMethod(int particles) : force_(Eigen::Matrix3Xd::Zero(3, particles)) {}
   SolverReport step(double h, DynamicSystem& system, const IntegratorDef& settings) override;
   bool evaluatesForcesFirst() const override { return true; }
+  bool writesNextState() const override { return true; }
   void restart() override { started_ = false; }
   bool hasHistory() const override { return started_; }
 
