@@ -11,7 +11,9 @@ namespace core
 /// whole attribute can be viewed as one flat vector of 3n doubles by the implicit solver.
 ///
 /// Only the first `size()` columns are live. The capacity is fixed when the body is built;
-/// nothing here allocates after `resize()`.
+/// nothing here allocates after `resize()`. A step may swap an array's storage with another of the
+/// body's (the state a step starts from is kept that way): hold the matrices by reference, never a
+/// pointer into their data, from one step to the next.
 struct ParticlePool
 {
   Eigen::Matrix3Xd position;           ///< [m]
