@@ -40,28 +40,29 @@ def direct_megaflops(direct):
     return float(factor.group(1)) + float(solve.group(1)) if factor and solve else None
 
 
-def roof_text(rows, direct):
-    """What goal 1's 3 ms would ask of the direct step against the build's arithmetic roof, to follow
-    "the direct step" or "the step": '' without the roof row or the direct row's flops."""
+def roof_text(rows, direct, subject):
+    """What goal 1's 3 ms would ask of the direct step against the build's arithmetic roof, as a clause
+    about `subject` (the step as the sentence names it): '' without the roof row or the direct row's
+    flops."""
     roof = [r for r in rows if r['case'] == 'roof' and r['variant'] == 'arithmetic']
     megaflops = direct_megaflops(direct)
     if not roof or megaflops is None or direct['ms_min'] <= 0:
         return ''
     peak = roof[0]['ms_min']  # GFlop/s (the bench stores it in the time columns)
     needed, today = megaflops / 3.0, megaflops / direct['ms_min']  # Mflop per ms = GFlop/s
-    return ('\'s %.1f Mflop (factorization and solve) in 3 ms would take %.1f GFlop/s, %.0f %% '
+    return ('%s\'s %.1f Mflop (factorization and solve) in 3 ms would take %.1f GFlop/s, %.0f %% '
             'of this build\'s arithmetic roof of %.1f GFlop/s (it runs at %.1f GFlop/s, %.0f %%)'
-            % (megaflops, needed, 100 * needed / peak, peak, today, 100 * today / peak))
+            % (subject, megaflops, needed, 100 * needed / peak, peak, today, 100 * today / peak))
 
 
 def roof_sentence(rows, direct):
     """Goal 1's 3 ms for the direct step against the build's arithmetic roof, as a sentence."""
-    text = roof_text(rows, direct)
+    text = roof_text(rows, direct, 'the step')
     if not text:
         return ('the bench measures this build\'s arithmetic roof beside the direct step (independent multiplies '
                 'and adds on Eigen\'s packets of two doubles), and this run has no such row, so no share is given '
                 'here.')
-    return ('the step%s. The roof is independent multiplies and adds on Eigen\'s packets of two doubles: SSE2, the '
+    return ('%s. The roof is independent multiplies and adds on Eigen\'s packets of two doubles: SSE2, the '
             'x86-64 baseline that every x86-64 machine runs, with no fused multiply-add.'
             % text)
 
@@ -260,12 +261,11 @@ def main():
     implicit60 = {v: r for v, r in ours.items() if v.startswith('implicit_euler') and step_of(v) == 1.0 / 60.0}
     if implicit60:
         best = min(implicit60.values(), key=lambda r: r['ms_min'])
-        roof_clause = roof_text(rows, ours.get('implicit_euler direct'))
-        roof_clause = '; the direct step' + roof_clause if roof_clause else ''
+        roof_clause = roof_text(rows, ours.get('implicit_euler direct'), 'the direct step')
         goals.append(('1', 'hang64, implicit Euler at h = 1/60, converged', '≤ 3 ms per step',
                       '%s ms (%s; %s)%s' % (ms(best['ms_min']), best['variant'], '; '.join(
                           '%s %s ms' % (v, ms(r['ms_min'])) for v, r in implicit60.items() if r is not best),
-                          roof_clause),
+                          '; ' + roof_clause if roof_clause else ''),
                       'yes' if best['ms_min'] <= 3 else 'no'))
     cg64, cg128 = find(rows, 'cloth', 'implicit_euler cg', 64), find(rows, 'cloth', 'implicit_euler cg', 128)
     if cg64 and cg128:
