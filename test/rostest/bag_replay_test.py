@@ -12,6 +12,7 @@ Every wait is on wall time: ROS time is the node's /clock, then the bag's.
 """
 import io
 import os
+import shutil
 import signal
 import subprocess
 import sys
@@ -116,6 +117,7 @@ class BagReplayTest(unittest.TestCase):
 
         # Record, as the README says: the node's topics, not /clock.
         directory = tempfile.mkdtemp(prefix="particle_sim_bag_")
+        self.addCleanup(shutil.rmtree, directory, ignore_errors=True)  # the bag is about 1.4 MB a run
         bag_path = os.path.join(directory, "sim.bag")
         recorder = subprocess.Popen(["rosbag", "record", "--output-name=" + bag_path, "__name:=bag_recorder"] + TOPICS,
                                     stdout=subprocess.DEVNULL, stderr=subprocess.STDOUT)

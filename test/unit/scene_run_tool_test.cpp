@@ -46,6 +46,7 @@ TEST(SceneRunTool, IntegratorOptionReachesEverySpringBody)
   int exit_code = -1;
   const std::string output =
       run(std::string(PARTICLE_SIM_RUN) + " " + scene + " --duration 0.002 --integrator auto", exit_code);
+  std::remove(scene.c_str());
   EXPECT_EQ(exit_code, 0) << output;
   // `auto` reports its choice for each body that runs it, and only for those.
   for (const char* body : {"r", "n", "g", "m", "j"})
@@ -69,6 +70,7 @@ TEST(SceneRunTool, SummaryShowsCollisionCountsOnlyForBodiesThatEnableSelfCollisi
          "     edge_v: [0, 0.2, 0], self_collision: {enabled: true, thickness: 0.01}}\n";
   int exit_code = -1;
   const std::string output = run(std::string(PARTICLE_SIM_RUN) + " " + scene + " --duration 0.003", exit_code);
+  std::remove(scene.c_str());
   EXPECT_EQ(exit_code, 0) << output;
   // The summary line of each body that says what its collision passes found, or empty.
   auto contactLine = [&output](const std::string& body) {
