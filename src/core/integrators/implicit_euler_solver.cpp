@@ -103,6 +103,7 @@ void ImplicitEulerSolver::setPattern(int particles, const std::vector<std::pair<
   kept_pairs_ = 0;
   pairs_in_blocks_ = true;
   own_diagonal_.assign(particles, Eigen::Matrix3d::Zero());
+  own_scale_.assign(particles, 0.0);
   transpose_block_.resize(block_row_.size());
   for (std::size_t k = 0; k < block_row_.size(); ++k)
     transpose_block_[k] = blockIndex(block_column_[k], block_row_[k]);
@@ -162,8 +163,10 @@ void ImplicitEulerSolver::begin(double h, const Eigen::VectorXd& mass, const Eig
   {
     blocks_[diagonal_block_[i]] = mass[i] * Eigen::Matrix3d::Identity();
     own_diagonal_[i] = blocks_[diagonal_block_[i]];
+    own_scale_[i] = mass[i];
     inverse_mass_[i] = mass[i] > 0.0 ? 1.0 / mass[i] : 0.0;
   }
+  own_isotropic_ = true;
   rhs_ = h * force;
 }
 
@@ -209,8 +212,19 @@ bool ImplicitEulerSolver::preparePairProduct()
 void ImplicitEulerSolver::multiplyPairRows(const Eigen::Matrix3Xd& p, Eigen::Matrix3Xd& out, int chunk, int first,
                                            int last) const
 {
-  for (int i = first; i < last; ++i)
-    out.col(i).noalias() = own_diagonal_[i] * p.col(i);
+  // E_i p_i, from e_i alone while E_i = e_i I: row r of E_i p_i is (e_i p_r + 0 p_s) + 0 p_t, which
+  // is e_i p_r but for the sign of a zero (and where p_s or p_t is not finite, which the pairs' terms
+  // of any particle with a spring carry into its row anyway).
+  if (own_isotropic_)
+  {
+    for (int i = first; i < last; ++i)
+      out.col(i) = own_scale_[i] * p.col(i);
+  }
+  else
+  {
+    for (int i = first; i < last; ++i)
+      out.col(i).noalias() = own_diagonal_[i] * p.col(i);
+  }
   const std::array<int, 2>* const ends = pair_ends_.data();
   const std::array<double, 6>* const cs = pair_c_.data();
   const double* const ps = p.data();
