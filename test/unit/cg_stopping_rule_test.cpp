@@ -350,13 +350,24 @@ TEST(ImplicitEulerSolver, ThePairProductTakesWhatIsAddedToTheDiagonal)
 {
   // addToDiagonal() beside kept pairs: a global damping's c m I keeps every particle's own diagonal
   // a multiple of the identity, which the product reads as one number a particle; any other block
-  // makes it read the whole 3x3. Either way the conjugate gradient, multiplying by the kept pairs,
-  // solves A = M + K + D: it agrees with the dense LU of that system to 1e-9 m/s.
+  // (a general one, or equal diagonal entries with off-diagonal ones) makes it read the whole 3x3.
+  // Either way the conjugate gradient, multiplying by the kept pairs, solves A = M + K + D: it agrees
+  // with the dense LU of that system to 1e-9 m/s. One solver takes the three in turn, step after
+  // step, so a step whose diagonal is a multiple of the identity follows one whose diagonal is not.
   const RandomSystem system = randomSystem(10, 41);
   std::mt19937_64 random(42);
   std::uniform_real_distribution<double> uniform(-1.0, 1.0);
-  for (const bool isotropic : {true, false})
+  ImplicitEulerSolver solver;
+  solver.setPattern(system.particles, system.pairs);
+  enum class Kind
   {
+    General,
+    EqualDiagonal,
+    Isotropic
+  };
+  for (const Kind kind : {Kind::General, Kind::EqualDiagonal, Kind::Isotropic})
+  {
+    const int label = static_cast<int>(kind);
     std::vector<Eigen::Matrix3d> diagonal(system.particles);  // D_i = −h ∂f_i/∂v_i, h = 1
     for (int i = 0; i < system.particles; ++i)
     {
@@ -364,11 +375,14 @@ TEST(ImplicitEulerSolver, ThePairProductTakesWhatIsAddedToTheDiagonal)
       for (int r = 0; r < 3; ++r)
         for (int c = 0; c < 3; ++c)
           g(r, c) = uniform(random);
-      diagonal[i] = isotropic ? Eigen::Matrix3d(3.0 * system.mass[i] * Eigen::Matrix3d::Identity())
-                              : Eigen::Matrix3d(50.0 * g * g.transpose() + Eigen::Matrix3d::Identity());
+      const Eigen::Matrix3d identity = Eigen::Matrix3d::Identity();
+      if (kind == Kind::General)
+        diagonal[i] = 50.0 * g * g.transpose() + identity;
+      else if (kind == Kind::EqualDiagonal)  // 30 I plus a symmetric part of zero diagonal, |entries| ≤ 10
+        diagonal[i] = 30.0 * identity + 5.0 * (g + g.transpose() - Eigen::Matrix3d(g.diagonal().asDiagonal()) * 2.0);
+      else
+        diagonal[i] = 3.0 * system.mass[i] * identity;
     }
-    ImplicitEulerSolver solver;
-    solver.setPattern(system.particles, system.pairs);
     solver.begin(1.0, system.mass, system.rhs, nullptr);
     for (std::size_t p = 0; p < system.pairs.size(); ++p)
     {
@@ -383,10 +397,10 @@ TEST(ImplicitEulerSolver, ThePairProductTakesWhatIsAddedToTheDiagonal)
     Eigen::Matrix3Xd x = Eigen::Matrix3Xd::Zero(3, system.particles);
     Eigen::Matrix3Xd v = Eigen::Matrix3Xd::Zero(3, system.particles);
     const SolverReport report = solver.solve(system.pinned, contacts, cgSettings(1e-12, 0.0), x, v);
-    ASSERT_TRUE(report.converged) << "isotropic " << isotropic;
+    ASSERT_TRUE(report.converged) << "kind " << label;
     EXPECT_EQ(solver.keptPairs(), static_cast<int>(system.pairs.size()));
     const Eigen::Matrix3Xd exact = solveDense(system, &diagonal);
-    EXPECT_LT(massWeightedRms(system, v - exact), 1e-9) << "isotropic " << isotropic;
+    EXPECT_LT(massWeightedRms(system, v - exact), 1e-9) << "kind " << label;
     EXPECT_GT(massWeightedRms(system, exact), 1e-4);  // [m/s]: an answer far above that error
   }
 }

@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <array>
 #include <cstdio>
@@ -31,7 +32,7 @@ TEST(SceneRunTool, IntegratorOptionReachesEverySpringBody)
 {
   // Every spring body sets its own integrator, unlike the world's default: the option must replace
   // each of them, not only the default.
-  const std::string scene = ::testing::TempDir() + "scene_run_tool_test.yaml";
+  const std::string scene = ::testing::TempDir() + "scene_run_tool_test_" + std::to_string(getpid()) + ".yaml";
   std::ofstream(scene) << "world: {integrator: implicit_euler}\n"
                           "bodies:\n"
                           "  - {name: f, kind: emitter, type: fountain}\n"
@@ -58,7 +59,8 @@ TEST(SceneRunTool, SummaryShowsCollisionCountsOnlyForBodiesThatEnableSelfCollisi
 {
   // Two cloths that collide with themselves and each other, 5 mm apart (closer than their thickness),
   // and a rope and a cloth that do not.
-  const std::string scene = ::testing::TempDir() + "scene_run_tool_self_collision_test.yaml";
+  const std::string scene =
+      ::testing::TempDir() + "scene_run_tool_self_collision_test_" + std::to_string(getpid()) + ".yaml";
   std::ofstream(scene)
       << "world: {ground: {enabled: false}}\n"
          "bodies:\n"

@@ -213,8 +213,8 @@ void ImplicitEulerSolver::multiplyPairRows(const Eigen::Matrix3Xd& p, Eigen::Mat
                                            int last) const
 {
   // E_i p_i, from e_i alone while E_i = e_i I: row r of E_i p_i is (e_i p_r + 0 p_s) + 0 p_t, which
-  // is e_i p_r but for the sign of a zero (and where p_s or p_t is not finite, which the pairs' terms
-  // of any particle with a spring carry into its row anyway).
+  // is e_i p_r but for the sign of a zero (where p_s or p_t is not finite, the row is not finite
+  // either way: a NaN there, an infinity or a NaN here).
   if (own_isotropic_)
   {
     for (int i = first; i < last; ++i)
