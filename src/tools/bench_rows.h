@@ -40,13 +40,18 @@ inline double timeRepeat(const std::function<void()>& step, int steps)
 }
 
 // Runs `warmup` steps, then `repeats` times `steps` steps; the time per step of each repeat.
-inline Timing timeSteps(const std::function<void()>& step, int warmup, int steps, int repeats)
+// `before_repeat`, if given, runs before each repeat, outside its time.
+inline Timing timeSteps(const std::function<void()>& step, int warmup, int steps, int repeats,
+                        const std::function<void()>& before_repeat = {})
 {
   for (int i = 0; i < warmup; ++i)
     step();
   std::vector<double> per_step;
   for (int r = 0; r < repeats; ++r)
+  {
+    if (before_repeat) before_repeat();
     per_step.push_back(timeRepeat(step, steps));
+  }
   return summarize(per_step);
 }
 

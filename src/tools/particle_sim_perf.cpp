@@ -63,7 +63,8 @@ core::Environment noGround()
 }
 
 // Steps a body `warmup` + `repeats` × `steps` times at dt; mean CG iterations over the timed steps.
-Row timeBody(core::SpringNetworkBody& body, double dt, int warmup, int steps, int repeats)
+Row timeBody(core::SpringNetworkBody& body, double dt, int warmup, int steps, int repeats,
+             const std::function<void()>& before_repeat = {})
 {
   const core::Environment env = noGround();
   long long iterations = 0, counted = 0;
@@ -74,7 +75,7 @@ Row timeBody(core::SpringNetworkBody& body, double dt, int warmup, int steps, in
         iterations += body.lastSolve().iterations;
         ++counted;
       },
-      warmup, steps, repeats);
+      warmup, steps, repeats, before_repeat);
   row.iterations = counted > 0 ? static_cast<double>(iterations) / counted : 0.0;
   if (body.frozen()) row.detail = "FROZE: " + body.frozenReason();
   return row;
@@ -470,8 +471,8 @@ class Triad
 {
 public:
   explicit Triad(bool quick) : n_(quick ? (1u << 22) : (1u << 24)), a_(n_, 0.0), b_(n_, 1.0), c_(n_, 2.0) {}
-  // One more pass; returns the best rate of all passes so far [bytes/s] (best()).
-  double pass()
+  // One more pass; best() is the best rate of all passes so far [bytes/s].
+  void pass()
   {
     const auto start = Clock::now();
     for (std::size_t i = 0; i < n_; ++i)
@@ -480,7 +481,6 @@ public:
     b_[passes_ % n_] += a_[(passes_ * 7919) % n_];  // keep the loop's result alive
     ++passes_;
     best_ = std::max(best_, 3.0 * sizeof(double) * n_ / seconds);
-    return best_;
   }
   double best() const { return best_; }
   int passes() const { return passes_; }
@@ -506,22 +506,12 @@ void explicitSprings(std::ostream& out, bool quick)
     core::SpringNetworkBody body(core::buildClothGrid(def));
     const double dt = 0.5 * 2.0 / body.frequencyBound();  // half the explicit limit: one force pass a step
     const int steps = quick ? 5 : std::max(10, 2000000 / (n * n));
-    const core::Environment env = noGround();
-    auto step = [&] { body.step(dt, env); };
-    for (int i = 0; i < 5; ++i)
-      step();
     // A triad pass before each repeat, and one untimed step after it, which brings back into the
     // caches what the triad took out of them: the repeat times steps as they follow each other.
-    std::vector<double> per_step;
-    for (int r = 0; r < (quick ? 2 : 5); ++r)
-    {
+    Row row = timeBody(body, dt, 5, steps, quick ? 2 : 5, [&] {
       triad.pass();
-      step();
-      per_step.push_back(timeRepeat(step, steps));
-    }
-    Row row;
-    row.timing = summarize(per_step);
-    if (body.frozen()) row.detail = "FROZE: " + body.frozenReason();
+      body.step(dt, noGround());
+    });
     const double springs = static_cast<double>(body.springs().size());
     row.case_name = "springs";
     row.variant = "symplectic_euler";
