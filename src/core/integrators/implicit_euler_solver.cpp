@@ -27,9 +27,10 @@ template <bool kAddI, bool kAddJ>
 {
   // Consecutive pairs that share end i (a cloth's springs come two or three a particle) read p_i
   // once and add to out_i in registers, stored once when the next pair's end i differs: the same
-  // additions in the same order, so the same bits, without each sum waiting for the last one's
-  // store to come back from memory (hang64 at dt 1/1000: a tenth of the step). A pair with j = i
-  // (no element makes one) would take its part from the registers too.
+  // additions in the same order, so the same bits (but for which NaN an add of two NaNs keeps),
+  // without each sum waiting for the last one's store to come back from memory (hang64 at dt
+  // 1/1000: a tenth of the step). A pair with j = i (no element makes one) would take its part from
+  // the registers too.
   int held = -1;
   double h0 = 0.0, h1 = 0.0, h2 = 0.0, q0 = 0.0, q1 = 0.0, q2 = 0.0;
   for (int k = first; k < last; ++k)
