@@ -33,19 +33,20 @@ template <bool kAddI, bool kAddJ>
   // the registers too.
   int held = -1;
   double h0 = 0.0, h1 = 0.0, h2 = 0.0, q0 = 0.0, q1 = 0.0, q2 = 0.0;
+  auto storeHeld = [&] {
+    if (!kAddI || held < 0) return;
+    double* const oh = out + 3 * held;
+    oh[0] = h0;
+    oh[1] = h1;
+    oh[2] = h2;
+  };
   for (int k = first; k < last; ++k)
   {
     const int i = ends[k][0];
     const int j = ends[k][1];
     if (i != held)
     {
-      if (kAddI && held >= 0)
-      {
-        double* const oh = out + 3 * held;
-        oh[0] = h0;
-        oh[1] = h1;
-        oh[2] = h2;
-      }
+      storeHeld();
       held = i;
       const double* const pi = p + 3 * i;
       q0 = pi[0];
@@ -88,13 +89,7 @@ template <bool kAddI, bool kAddJ>
       }
     }
   }
-  if (kAddI && held >= 0)
-  {
-    double* const oh = out + 3 * held;
-    oh[0] = h0;
-    oh[1] = h1;
-    oh[2] = h2;
-  }
+  storeHeld();
 }
 
 // A kept pair's C as a full block.
