@@ -459,6 +459,11 @@ def main():
     lines.append('Run: %s. Machine: %s. Build: %s.' % (args.date or 'unknown date', args.machine or 'unknown machine',
                                                      args.build or 'unknown build'))
     lines.append('')
+    pages = [r for r in rows if r['case'] == 'memory']
+    if pages:
+        lines.append('Pages of the heap (README "Huge pages"; every program of the package and the Bullet peer alike): %s.'
+                     % '; '.join('`%s`, %s' % (r['variant'], r['detail']) for r in pages))
+        lines.append('')
     lines.append('## Goals of issue 13')
     lines.append('')
     lines.append('| goal | what | target | measured | met |')

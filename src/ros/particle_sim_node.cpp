@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <cstring>
 
+#include "particle_sim/process/huge_pages.h"
 #include "particle_sim/ros/sim_node.h"
 
 namespace
@@ -38,6 +39,7 @@ void endOnSignal(int /*signal*/)
 
 int main(int argc, char** argv)
 {
+  particle_sim::process::restartWithHugePagesIfAdvised(argv);
   for (int i = 1; i < argc; ++i)
   {
     if (std::strcmp(argv[i], "--help") == 0 || std::strcmp(argv[i], "-h") == 0)

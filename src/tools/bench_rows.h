@@ -79,6 +79,17 @@ inline void writeRow(std::ostream& out, const Row& r)
                r.detail.c_str());
 }
 
+// The row that says how the program's heap is paged (particle_sim::process::hugePagesReport()): each
+// program's times depend on it, so the report prints it beside the machine.
+inline void writePagesRow(std::ostream& out, const std::string& program, const std::string& report)
+{
+  Row row;
+  row.case_name = "memory";
+  row.variant = program;
+  row.detail = report;
+  writeRow(out, row);
+}
+
 // The command line both share: --out FILE, --quick, --only CASE,... and --help.
 struct Options
 {

@@ -42,6 +42,7 @@
 
 #include "particle_sim/core/integrators/registry.h"
 #include "particle_sim/core/integrators/verlet.h"
+#include "particle_sim/process/huge_pages.h"
 #include "particle_sim/scene/scene.h"
 
 namespace
@@ -982,6 +983,7 @@ bool splitList(const std::string& text, std::vector<std::string>& out)
 
 int main(int argc, char** argv)
 {
+  particle_sim::process::restartWithHugePagesIfAdvised(argv);
   std::string scenes_dir, out_dir = "bench_results", tables_path;
   std::vector<std::string> only;
   bool with_stability = true, quick = false;

@@ -39,8 +39,8 @@
 //
 // Built by the package's CMakeLists.txt when libbullet-dev is found (scripts/bench --performance runs
 // it after particle_sim_perf and appends its rows to the same CSV); standalone:
-//   g++ -O2 -g -std=c++17 -Wall -Wextra -Werror -I/usr/include/bullet particle_sim_bullet_peer.cpp
-//       -lBulletSoftBody -lBulletDynamics -lBulletCollision -lLinearMath -o bullet_peer
+//   g++ -O2 -g -std=c++17 -Wall -Wextra -Werror -I/usr/include/bullet -I../../include particle_sim_bullet_peer.cpp
+//       ../process/huge_pages.cpp -lBulletSoftBody -lBulletDynamics -lBulletCollision -lLinearMath -o bullet_peer
 // for Bullet's float build; with -DBT_USE_DOUBLE_PRECISION and the -float64 libraries for its double
 // build. The detail column says which.
 //
@@ -110,6 +110,7 @@
 #include <vector>
 
 #include "bench_rows.h"
+#include "particle_sim/process/huge_pages.h"
 
 using particle_sim_bench::Row;
 using particle_sim_bench::timeSteps;
@@ -596,6 +597,7 @@ void ropes(std::ostream& out, bool quick)
 
 int main(int argc, char** argv)
 {
+  particle_sim::process::restartWithHugePagesIfAdvised(argv);
   particle_sim_bench::Options options;
   options.out_path = "bullet.csv";
   if (const int code = particle_sim_bench::parseOptions(argc, argv, kUsage, options); code >= 0) return code;
@@ -618,6 +620,7 @@ int main(int argc, char** argv)
     return 1;
   }
   out << particle_sim_bench::kCsvHeader;
+  particle_sim_bench::writePagesRow(out, "particle_sim_bullet_peer", particle_sim::process::hugePagesReport());
   if (options.wanted("rope")) ropes(out, quick);
   if (options.wanted("hang64")) hang(out, quick);
   return 0;

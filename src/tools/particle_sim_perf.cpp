@@ -37,6 +37,7 @@
 #include "particle_sim/core/integrators/verlet.h"
 #include "particle_sim/core/spring_network.h"
 #include "particle_sim/core/world.h"
+#include "particle_sim/process/huge_pages.h"
 
 namespace core = particle_sim::core;
 using particle_sim_bench::Row;
@@ -787,6 +788,7 @@ void emitters(std::ostream& out, bool quick)
 
 int main(int argc, char** argv)
 {
+  particle_sim::process::restartWithHugePagesIfAdvised(argv);
   particle_sim_bench::Options options;
   options.out_path = "performance.csv";
   if (const int code = particle_sim_bench::parseOptions(argc, argv, kUsage, options); code >= 0) return code;
@@ -799,6 +801,7 @@ int main(int argc, char** argv)
     return 1;
   }
   out << particle_sim_bench::kCsvHeader;
+  particle_sim_bench::writePagesRow(out, "particle_sim_perf", particle_sim::process::hugePagesReport());
   auto wanted = [&options](const char* name) { return options.wanted(name); };
   if (wanted("rope")) ropes(out, quick);
   if (wanted("cloth")) cloths(out, quick);

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "particle_sim/core/limits.h"
+#include "particle_sim/process/huge_pages.h"
 #include "particle_sim/scene/scene.h"
 
 namespace
@@ -88,6 +89,7 @@ void writeStates(std::ostream& out, const particle_sim::core::World& world)
 
 int main(int argc, char** argv)
 {
+  particle_sim::process::restartWithHugePagesIfAdvised(argv);
   std::string scene_path, output_path, integrator_name, pin_forces_path;
   double duration = -1.0, dt = 0.0, every = 1.0, threads = -1.0;  // threads < 0: the scene's
   for (int i = 1; i < argc; ++i)
