@@ -90,8 +90,10 @@ std::string hugePagesReport()
     report = "4 KiB pages (PARTICLE_SIM_HUGE_PAGES=0)";
   else if (!glibcKnowsTheTunable())
     report = std::string("4 KiB pages (glibc ") + gnu_get_libc_version() + " has no glibc.malloc.hugetlb)";
+  else if (mode == "always")
+    report = "huge pages wherever the kernel finds them (it gives them to all memory)";
   else
-    report = "4 KiB pages unless the kernel gives huge pages to all memory";
+    report = "4 KiB pages";
   return report + "; kernel transparent huge pages: " + mode;
 }
 }  // namespace process

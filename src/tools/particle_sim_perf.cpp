@@ -11,8 +11,12 @@
 // Every time is wall time of the step alone (steady_clock), after warm-up steps, over `repeats`
 // runs of `steps` steps: the CSV gives the minimum, median and maximum per step over the repeats.
 
+#include <pthread.h>
+#include <sched.h>
+
 #include <Eigen/Core>
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -20,9 +24,11 @@
 #include <fstream>
 #include <functional>
 #include <iostream>
+#include <limits>
 #include <memory>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "../../test/unit/folded_cloth.h"  // the self-collision tests' folded cloth and pile, timed here
@@ -261,14 +267,11 @@ void writeRoofRow(std::ostream& out, const std::string& case_name, const std::st
 // a second in the instructions the engine's code is compiled to (Eigen's packets of two doubles: the
 // x86-64 baseline, SSE2, with no fused multiply-add). Six chains of multiplies and six of adds,
 // independent of each other and held in registers; flop/s, the best of repeats.
-double arithmeticRoof(bool quick)
+double arithmeticPass(long iterations, int r)
 {
   volatile double factor_source = 1.0, term_source = 1e-300;  // unknown to the compiler: nothing folds
   const Eigen::Array2d factor = Eigen::Array2d::Constant(static_cast<double>(factor_source));
   const Eigen::Array2d term = Eigen::Array2d::Constant(static_cast<double>(term_source));
-  const long iterations = quick ? 2000000 : 20000000;
-  double best = 0.0;
-  for (int r = 0; r < (quick ? 3 : 10); ++r)
   {
     Eigen::Array2d m0 = Eigen::Array2d::Constant(1.0 + r), m1 = m0 + 1.0, m2 = m0 + 2.0, m3 = m0 + 3.0, m4 = m0 + 4.0,
                    m5 = m0 + 5.0;
@@ -290,10 +293,17 @@ double arithmeticRoof(bool quick)
       a5 += term;
     }
     const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
-    best = std::max(best, 24.0 * static_cast<double>(iterations) / seconds);  // 12 operations on 2 lanes
     volatile double sink = (m0 + m1 + m2 + m3 + m4 + m5 + a0 + a1 + a2 + a3 + a4 + a5).sum();  // keep the chains
     (void)sink;
+    return 24.0 * static_cast<double>(iterations) / seconds;  // 12 operations on 2 lanes
   }
+}
+
+double arithmeticRoof(bool quick)
+{
+  double best = 0.0;
+  for (int r = 0; r < (quick ? 3 : 10); ++r)
+    best = std::max(best, arithmeticPass(quick ? 2000000 : 20000000, r));
   return best;
 }
 
@@ -472,8 +482,8 @@ class Triad
 {
 public:
   explicit Triad(bool quick) : n_(quick ? (1u << 22) : (1u << 24)), a_(n_, 0.0), b_(n_, 1.0), c_(n_, 2.0) {}
-  // One more pass; best() is the best rate of all passes so far [bytes/s].
-  void pass()
+  // One more pass; returns its rate [bytes/s]; best() is the best rate of all passes so far.
+  double pass()
   {
     const auto start = Clock::now();
     for (std::size_t i = 0; i < n_; ++i)
@@ -481,7 +491,9 @@ public:
     const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
     b_[passes_ % n_] += a_[(passes_ * 7919) % n_];  // keep the loop's result alive
     ++passes_;
-    best_ = std::max(best_, 3.0 * sizeof(double) * n_ / seconds);
+    const double rate = 3.0 * sizeof(double) * n_ / seconds;
+    best_ = std::max(best_, rate);
+    return rate;
   }
   double best() const { return best_; }
   int passes() const { return passes_; }
@@ -537,6 +549,93 @@ void explicitSprings(std::ostream& out, bool quick)
                    std::to_string(triad.megabytes()) + " MB, before the springs' repeats and between them");
 }
 
+// What two threads can get from this machine at the time: the rate of a kernel run on two threads
+// at once against one thread running it alone (2: two whole cores). A virtual machine's two vCPUs
+// may share a physical core, or wait for the host, at some hours and not at others; then no
+// program's two threads do better than this. Best of `repeats`, one thread and two in turn.
+template <class Pass>  // double pass(int thread): one pass of the kernel on that thread's data, its rate
+double twoThreadRatio(int repeats, Pass pass)
+{
+  double one = 0.0, two = 0.0;
+  for (int r = 0; r < repeats; ++r)
+  {
+    one = std::max(one, pass(0));
+    double other_rate = 0.0;
+    std::thread other([&] { other_rate = pass(1); });
+    const double rate = pass(0);
+    other.join();
+    two = std::max(two, rate + other_rate);
+  }
+  return two / one;
+}
+
+// How long a write on one thread takes to be seen by another and answered [ns]: a cache line passed
+// back and forth between two threads, the mean round trip. Between two cores that share a cache it
+// is some 100 ns; it grows when the host puts the two vCPUs farther apart, and with it the cost of
+// every loop the threads share. Each thread is held on a CPU of its own (the first two the process
+// may use), so that the scheduler cannot put them on one CPU; the caller's CPUs are given back after.
+// NaN with fewer than two CPUs.
+double roundTripNanoseconds(int round_trips)
+{
+  cpu_set_t allowed;
+  if (pthread_getaffinity_np(pthread_self(), sizeof(allowed), &allowed) != 0 || CPU_COUNT(&allowed) < 2)
+    return std::numeric_limits<double>::quiet_NaN();
+  int cpus[2] = {-1, -1};
+  for (int cpu = 0, found = 0; cpu < CPU_SETSIZE && found < 2; ++cpu)
+    if (CPU_ISSET(cpu, &allowed)) cpus[found++] = cpu;
+  auto holdOn = [](int cpu) {
+    cpu_set_t one;
+    CPU_ZERO(&one);
+    CPU_SET(cpu, &one);
+    pthread_setaffinity_np(pthread_self(), sizeof(one), &one);
+  };
+  holdOn(cpus[0]);
+  alignas(64) std::atomic<int> turn{0};
+  std::thread other([&] {
+    holdOn(cpus[1]);
+    for (int i = 0; i < round_trips; ++i)
+    {
+      while (turn.load(std::memory_order_acquire) != 2 * i + 1)
+      {}
+      turn.store(2 * i + 2, std::memory_order_release);
+    }
+  });
+  const auto start = Clock::now();
+  for (int i = 0; i < round_trips; ++i)
+  {
+    turn.store(2 * i + 1, std::memory_order_release);
+    while (turn.load(std::memory_order_acquire) != 2 * i + 2)
+    {}
+  }
+  const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  other.join();
+  pthread_setaffinity_np(pthread_self(), sizeof(allowed), &allowed);
+  return seconds * 1e9 / round_trips;
+}
+
+// The ceiling's kernels: the arithmetic roof's chains (the cores' own arithmetic), the triad over
+// arrays of their own per thread (memory), and the round trip between the threads, as rows of case
+// "ceiling".
+void writeTwoThreadCeiling(std::ostream& out, bool quick, const char* when)
+{
+  const int repeats = quick ? 2 : 5;
+  const double arithmetic =
+      twoThreadRatio(repeats, [quick](int thread) { return arithmeticPass(quick ? 1000000 : 5000000, thread); });
+  Triad triads[2] = {Triad(true), Triad(true)};
+  const double memory = twoThreadRatio(repeats, [&triads](int thread) { return triads[thread].pass(); });
+  const std::string detail = std::string("two threads at once against one alone, ") + when +
+                             " the threads case (2 = two whole cores), the best of " + std::to_string(repeats);
+  writeRoofRow(out, "ceiling", std::string("arithmetic ") + when, arithmetic, detail);
+  writeRoofRow(out, "ceiling", std::string("triad ") + when, memory,
+               detail + "; " + std::to_string(triads[0].megabytes()) + " MB arrays");
+  double round_trip = roundTripNanoseconds(quick ? 20000 : 200000);
+  for (int r = 1; r < repeats; ++r)
+    round_trip = std::min(round_trip, roundTripNanoseconds(quick ? 20000 : 200000));
+  writeRoofRow(out, "ceiling", std::string("round trip ") + when, round_trip,
+               std::string("ns for a cache line to go from one thread to the other and back, ") + when +
+                   " the threads case, the least of " + std::to_string(repeats));
+}
+
 // --- Two threads (goal 6): squareCloth at 128² and 256² stepped by one thread and by two
 // (WorkerPool), each method from rest over the same steps; the two runs must end in the same bits.
 // Implicit Euler with CG (relative tolerance 1e-6, as in "Cloth") at 128² only: seconds a step at 256².
@@ -545,6 +644,7 @@ void explicitSprings(std::ostream& out, bool quick)
 // pass a step, like the explicit springs' case).
 void threads(std::ostream& out, bool quick)
 {
+  writeTwoThreadCeiling(out, quick, "before");
   struct Method
   {
     const char* name;
@@ -629,6 +729,7 @@ void threads(std::ostream& out, bool quick)
       writeRow(out, rows[1]);
     }
   }
+  writeTwoThreadCeiling(out, quick, "after");
 }
 
 // --- Self-collision (issue 15): what the collision pass costs beside the rest of the step. The
