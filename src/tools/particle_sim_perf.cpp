@@ -266,37 +266,36 @@ void writeRoofRow(std::ostream& out, const std::string& case_name, const std::st
 // The arithmetic roof of this build: the most double-precision multiplies and adds one core retires
 // a second in the instructions the engine's code is compiled to (Eigen's packets of two doubles: the
 // x86-64 baseline, SSE2, with no fused multiply-add). Six chains of multiplies and six of adds,
-// independent of each other and held in registers; flop/s, the best of repeats.
+// independent of each other and held in registers. arithmeticPass() is one pass of `iterations`
+// (chains seeded by r), its flop/s; arithmeticRoof() the best of repeats.
 double arithmeticPass(long iterations, int r)
 {
   volatile double factor_source = 1.0, term_source = 1e-300;  // unknown to the compiler: nothing folds
   const Eigen::Array2d factor = Eigen::Array2d::Constant(static_cast<double>(factor_source));
   const Eigen::Array2d term = Eigen::Array2d::Constant(static_cast<double>(term_source));
+  Eigen::Array2d m0 = Eigen::Array2d::Constant(1.0 + r), m1 = m0 + 1.0, m2 = m0 + 2.0, m3 = m0 + 3.0, m4 = m0 + 4.0,
+                 m5 = m0 + 5.0;
+  Eigen::Array2d a0 = m0 + 6.0, a1 = m0 + 7.0, a2 = m0 + 8.0, a3 = m0 + 9.0, a4 = m0 + 10.0, a5 = m0 + 11.0;
+  const auto start = Clock::now();
+  for (long i = 0; i < iterations; ++i)
   {
-    Eigen::Array2d m0 = Eigen::Array2d::Constant(1.0 + r), m1 = m0 + 1.0, m2 = m0 + 2.0, m3 = m0 + 3.0, m4 = m0 + 4.0,
-                   m5 = m0 + 5.0;
-    Eigen::Array2d a0 = m0 + 6.0, a1 = m0 + 7.0, a2 = m0 + 8.0, a3 = m0 + 9.0, a4 = m0 + 10.0, a5 = m0 + 11.0;
-    const auto start = Clock::now();
-    for (long i = 0; i < iterations; ++i)
-    {
-      m0 *= factor;
-      a0 += term;
-      m1 *= factor;
-      a1 += term;
-      m2 *= factor;
-      a2 += term;
-      m3 *= factor;
-      a3 += term;
-      m4 *= factor;
-      a4 += term;
-      m5 *= factor;
-      a5 += term;
-    }
-    const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
-    volatile double sink = (m0 + m1 + m2 + m3 + m4 + m5 + a0 + a1 + a2 + a3 + a4 + a5).sum();  // keep the chains
-    (void)sink;
-    return 24.0 * static_cast<double>(iterations) / seconds;  // 12 operations on 2 lanes
+    m0 *= factor;
+    a0 += term;
+    m1 *= factor;
+    a1 += term;
+    m2 *= factor;
+    a2 += term;
+    m3 *= factor;
+    a3 += term;
+    m4 *= factor;
+    a4 += term;
+    m5 *= factor;
+    a5 += term;
   }
+  const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  volatile double sink = (m0 + m1 + m2 + m3 + m4 + m5 + a0 + a1 + a2 + a3 + a4 + a5).sum();  // keep the chains
+  (void)sink;
+  return 24.0 * static_cast<double>(iterations) / seconds;  // 12 operations on 2 lanes
 }
 
 double arithmeticRoof(bool quick)
@@ -552,7 +551,9 @@ void explicitSprings(std::ostream& out, bool quick)
 // What two threads can get from this machine at the time: the rate of a kernel run on two threads
 // at once against one thread running it alone (2: two whole cores). A virtual machine's two vCPUs
 // may share a physical core, or wait for the host, at some hours and not at others; then no
-// program's two threads do better than this. Best of `repeats`, one thread and two in turn.
+// program's two threads do better than this. The two threads start their passes together (the
+// other thread signals that it runs, then both go), and two threads' rate is twice the slower one's:
+// the work of both over the time both took. Best of `repeats`, one thread and two in turn.
 template <class Pass>  // double pass(int thread): one pass of the kernel on that thread's data, its rate
 double twoThreadRatio(int repeats, Pass pass)
 {
@@ -561,10 +562,19 @@ double twoThreadRatio(int repeats, Pass pass)
   {
     one = std::max(one, pass(0));
     double other_rate = 0.0;
-    std::thread other([&] { other_rate = pass(1); });
+    std::atomic<bool> other_running{false}, go{false};
+    std::thread other([&] {
+      other_running.store(true, std::memory_order_release);
+      while (!go.load(std::memory_order_acquire))
+      {}
+      other_rate = pass(1);
+    });
+    while (!other_running.load(std::memory_order_acquire))
+      std::this_thread::yield();
+    go.store(true, std::memory_order_release);
     const double rate = pass(0);
     other.join();
-    two = std::max(two, rate + other_rate);
+    two = std::max(two, 2.0 * std::min(rate, other_rate));
   }
   return two / one;
 }
@@ -574,7 +584,8 @@ double twoThreadRatio(int repeats, Pass pass)
 // is some 100 ns; it grows when the host puts the two vCPUs farther apart, and with it the cost of
 // every loop the threads share. Each thread is held on a CPU of its own (the first two the process
 // may use), so that the scheduler cannot put them on one CPU; the caller's CPUs are given back after.
-// NaN with fewer than two CPUs.
+// The clock starts after the other thread is held and one round trip has gone by. NaN with fewer
+// than two CPUs, or when a thread cannot be held on its CPU.
 double roundTripNanoseconds(int round_trips)
 {
   cpu_set_t allowed;
@@ -587,27 +598,41 @@ double roundTripNanoseconds(int round_trips)
     cpu_set_t one;
     CPU_ZERO(&one);
     CPU_SET(cpu, &one);
-    pthread_setaffinity_np(pthread_self(), sizeof(one), &one);
+    return pthread_setaffinity_np(pthread_self(), sizeof(one), &one) == 0;
   };
-  holdOn(cpus[0]);
+  const double not_measured = std::numeric_limits<double>::quiet_NaN();
+  if (!holdOn(cpus[0]))
+  {
+    pthread_setaffinity_np(pthread_self(), sizeof(allowed), &allowed);
+    return not_measured;
+  }
   alignas(64) std::atomic<int> turn{0};
+  std::atomic<int> held{0};  // the other thread: 1 once held on its CPU, -1 if it cannot be
   std::thread other([&] {
-    holdOn(cpus[1]);
-    for (int i = 0; i < round_trips; ++i)
+    held.store(holdOn(cpus[1]) ? 1 : -1, std::memory_order_release);
+    if (held.load(std::memory_order_relaxed) != 1) return;
+    for (int i = 0; i <= round_trips; ++i)
     {
       while (turn.load(std::memory_order_acquire) != 2 * i + 1)
       {}
       turn.store(2 * i + 2, std::memory_order_release);
     }
   });
-  const auto start = Clock::now();
-  for (int i = 0; i < round_trips; ++i)
+  while (held.load(std::memory_order_acquire) == 0)
+    std::this_thread::yield();  // the other thread starts on this CPU, until it holds on to its own
+  double seconds = not_measured;
+  if (held.load(std::memory_order_relaxed) == 1)
   {
-    turn.store(2 * i + 1, std::memory_order_release);
-    while (turn.load(std::memory_order_acquire) != 2 * i + 2)
-    {}
+    auto start = Clock::now();
+    for (int i = 0; i <= round_trips; ++i)
+    {
+      if (i == 1) start = Clock::now();  // round trip 0 is the warm-up
+      turn.store(2 * i + 1, std::memory_order_release);
+      while (turn.load(std::memory_order_acquire) != 2 * i + 2)
+      {}
+    }
+    seconds = std::chrono::duration<double>(Clock::now() - start).count();
   }
-  const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
   other.join();
   pthread_setaffinity_np(pthread_self(), sizeof(allowed), &allowed);
   return seconds * 1e9 / round_trips;

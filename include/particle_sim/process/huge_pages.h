@@ -19,11 +19,14 @@ namespace process
 ///    (/sys/kernel/mm/transparent_hugepage/enabled reads "[madvise]"),
 ///  - glibc is 2.35 or later,
 ///  - GLIBC_TUNABLES does not already set glibc.malloc.hugetlb, and
-///  - PARTICLE_SIM_HUGE_PAGES is not "0",
-/// this starts the program again, the same executable (/proc/self/exe) with the same arguments and
-/// process id, with glibc.malloc.hugetlb=1 added to GLIBC_TUNABLES. It returns when none of that
-/// applies, or when the new start failed (the program then runs with 4 KiB pages). Call it first
-/// in main(), before any thread starts.
+///  - PARTICLE_SIM_HUGE_PAGES is not "0", and
+///  - the kernel started the program itself (not valgrind, not ld.so) and without raised privileges
+///    (setuid, file capabilities: glibc would drop the tunable),
+/// this starts the program again, the same executable (the target of /proc/self/exe) with the same
+/// arguments and process id, with glibc.malloc.hugetlb=1 added to GLIBC_TUNABLES and a marker
+/// (PARTICLE_SIM_HUGE_PAGES_RESTARTED, removed by the new start) that keeps it from starting a third
+/// time. It returns when none of that applies, or when the new start failed (the program then runs
+/// with 4 KiB pages). Call it first in main(), before any thread starts.
 void restartWithHugePagesIfAdvised(char** argv);
 
 /// One line for reports: whether this process's heap asks for huge pages, and why or why not.
