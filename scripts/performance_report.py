@@ -389,6 +389,7 @@ def main():
                       '; '.join(parts), 'yes' if parts and worst <= 1.2 else 'no'))
     # Goal 6: each method and size at two threads against one (min against min), and the same end state.
     pairs = thread_pairs(rows)
+    ceiling = ceiling_text(rows)
     if pairs:
         worst = min(ratio for _, _, ratio, _ in pairs)
         identical = all(same for _, _, _, same in pairs)
@@ -396,7 +397,7 @@ def main():
                       '; '.join('%s %d²: %.2f×%s' % (method, size, ratio, '' if same else ' (END STATE DIFFERS)')
                                 for method, size, ratio, same in pairs) +
                       ('; every end state bit-identical to one thread' if identical else '') +
-                      ('; ' + ceiling_text(rows) if ceiling_text(rows) else ''),
+                      ('; ' + ceiling if ceiling else ''),
                       'yes' if worst >= 1.6 and identical else 'no'))
     # Goals 3 and 4: the node measured through ROS (scripts/node_bench.py), real-time factor from /clock.
     node = {r['variant']: node_figures(r) for r in rows if r['case'] == 'node'}
@@ -698,11 +699,11 @@ def main():
                      'raised symplectic Euler at 128² from 1.53–1.57× to 1.80–1.88× and Verlet from 1.55–1.74× to '
                      '1.99–2.02× (two runs of each build in turn, 2026-11-28).')
         lines.append('')
-        if ceiling_text(rows):
+        if ceiling:
             lines.append('Before and after the cloths, the bench measures %s. On this virtual machine the '
                          'round trip has been 100 ns at some hours and 1100 ns at others (2026-11-29), and two '
                          'threads of the cloth step ran from 1.7× as fast as one to slower than one with it: the '
-                         'host decides where the two vCPUs run.' % ceiling_text(rows))
+                         'host decides where the two vCPUs run.' % ceiling)
             lines.append('')
         lines.append('| method | n | ms per step at 1 thread, min (median–max) | at 2 threads | speed-up, end state |')
         lines.append('|---|---|---|---|---|')

@@ -87,31 +87,37 @@ sample() {
   read_and_stop "$background_pid" "$*"
 }
 
+# The last sample ($1 names it) started with the tunable where the kernel mode asks for it, and
+# its heap asked for huge pages; under any other mode, it did not start again.
+expect_restarted() {
+  if [ "$advised" = true ]; then
+    [ "$tunables" = glibc.malloc.hugetlb=1 ] || fail "$1: GLIBC_TUNABLES is '$tunables', expected glibc.malloc.hugetlb=1"
+    if [ "$sanitized" = false ] && ! [ "${asked:-0}" -gt 0 ]; then fail "$1: no mapping asked for huge pages"; fi
+  else
+    [ -z "$tunables" ] || fail "$1: the kernel mode is '${mode:-absent}' (glibc $glibc), yet GLIBC_TUNABLES became '$tunables'"
+  fi
+}
+
+# The last sample ($1 says why it must not ask) kept GLIBC_TUNABLES as $2, no mapping asked for huge
+# pages, and under '[madvise]' it has none.
+expect_not_asked() {
+  [ "$tunables" = "$2" ] || fail "$1, yet GLIBC_TUNABLES became '$tunables'"
+  if [ "${asked:-0}" != 0 ]; then fail "$1, yet $asked mappings asked for huge pages"; fi
+  if [ "$mode" = madvise ] && [ "$huge" != 0 ]; then fail "$1 under '[madvise]', yet the process has $huge kB of huge pages"; fi
+}
+
 echo "default environment:"
 sample -u GLIBC_TUNABLES -u PARTICLE_SIM_HUGE_PAGES
 [ "$name" = "$(basename "$run" | cut -c1-15)" ] || fail "the process is named '$name' (the kernel names it after the path started)"
-if [ "$advised" = true ]; then
-  [ "$tunables" = glibc.malloc.hugetlb=1 ] || fail "GLIBC_TUNABLES is '$tunables', expected glibc.malloc.hugetlb=1"
-  if [ "$sanitized" = false ] && ! [ "${asked:-0}" -gt 0 ]; then fail "no mapping of the process asked for huge pages"; fi
-else
-  [ -z "$tunables" ] || fail "the kernel mode is '${mode:-absent}' (glibc $glibc), yet GLIBC_TUNABLES became '$tunables'"
-fi
+expect_restarted particle_sim_run
 
 echo "opted out:"
 sample -u GLIBC_TUNABLES PARTICLE_SIM_HUGE_PAGES=0
-[ -z "$tunables" ] || fail "PARTICLE_SIM_HUGE_PAGES=0, yet GLIBC_TUNABLES became '$tunables'"
-if [ "${asked:-0}" != 0 ]; then fail "PARTICLE_SIM_HUGE_PAGES=0, yet $asked mappings asked for huge pages"; fi
-if [ "$mode" = madvise ] && [ "$huge" != 0 ]; then
-  fail "PARTICLE_SIM_HUGE_PAGES=0 under '[madvise]', yet the process has $huge kB of huge pages"
-fi
+expect_not_asked "PARTICLE_SIM_HUGE_PAGES=0" ""
 
 echo "the user's own hugetlb setting:"
 sample -u PARTICLE_SIM_HUGE_PAGES GLIBC_TUNABLES=glibc.malloc.hugetlb=0
-[ "$tunables" = glibc.malloc.hugetlb=0 ] || fail "GLIBC_TUNABLES glibc.malloc.hugetlb=0 became '$tunables'"
-if [ "${asked:-0}" != 0 ]; then fail "glibc.malloc.hugetlb=0, yet $asked mappings asked for huge pages"; fi
-if [ "$mode" = madvise ] && [ "$huge" != 0 ]; then
-  fail "glibc.malloc.hugetlb=0 under '[madvise]', yet the process has $huge kB of huge pages"
-fi
+expect_not_asked "GLIBC_TUNABLES glibc.malloc.hugetlb=0" glibc.malloc.hugetlb=0
 
 echo "the user's other tunables:"
 sample -u PARTICLE_SIM_HUGE_PAGES GLIBC_TUNABLES=glibc.malloc.tcache_count=0
@@ -137,11 +143,6 @@ background env -u GLIBC_TUNABLES -u PARTICLE_SIM_HUGE_PAGES "$node_binary" \
   _scene:="$PARTICLE_SIM_ROOT/config/scenes/cloth_hanging.yaml" > "$work/node.log" 2>&1
 wait_for_service /particle_sim/reset 60 || fail "the node did not offer its services"
 read_and_stop "$background_pid" "particle_sim_node"
-if [ "$advised" = true ]; then
-  [ "$tunables" = glibc.malloc.hugetlb=1 ] || fail "the node's GLIBC_TUNABLES is '$tunables', expected glibc.malloc.hugetlb=1"
-  if [ "$sanitized" = false ] && ! [ "${asked:-0}" -gt 0 ]; then fail "no mapping of the node asked for huge pages"; fi
-else
-  [ -z "$tunables" ] || fail "the kernel mode is '${mode:-absent}', yet the node's GLIBC_TUNABLES became '$tunables'"
-fi
+expect_restarted particle_sim_node
 
 echo "huge_pages: passed"
