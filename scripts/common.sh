@@ -64,9 +64,13 @@ ensure_packages() {
 
 # Configures (once) and builds the package with catkin's CMake into the workspace: CMake build
 # folder <ws>/build, devel space <ws>/devel, install prefix <ws>/install. Extra arguments go to make.
+# PARTICLE_SIM_CMAKE_ARGS (the sanitizer build's flags) are applied to a workspace configured before
+# too, so that it builds with the flags of this checkout.
 build_package() {
   mkdir -p "$PARTICLE_SIM_CMAKE_BUILD"
-  if [ ! -f "$PARTICLE_SIM_CMAKE_BUILD/CMakeCache.txt" ]; then
+  if [ -f "$PARTICLE_SIM_CMAKE_BUILD/CMakeCache.txt" ] && [ ${#PARTICLE_SIM_CMAKE_ARGS[@]} -gt 0 ]; then
+    cmake -B "$PARTICLE_SIM_CMAKE_BUILD" "${PARTICLE_SIM_CMAKE_ARGS[@]}" >/dev/null
+  elif [ ! -f "$PARTICLE_SIM_CMAKE_BUILD/CMakeCache.txt" ]; then
     log "configuring into $PARTICLE_SIM_BUILD"
     cmake -S "$PARTICLE_SIM_ROOT" -B "$PARTICLE_SIM_CMAKE_BUILD" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
       -DPYTHON_EXECUTABLE=/usr/bin/python3 -DPython3_EXECUTABLE=/usr/bin/python3 \
