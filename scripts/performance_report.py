@@ -603,7 +603,13 @@ def main():
                  'estimate is met), an iteration cost 1.8 to 2 of block Jacobi\'s in that prototype, so the solve '
                  'was only 1.0 to 1.5 times faster: in two halves 1.04× at h = 1/1000 and 1.22× at 1/60 (1.21× '
                  'and 1.32× at 128²), swept whole 1.36× and 1.51×. That is not enough for goals 1 and 3, and '
-                 'enough for goal 7 only with whole sweeps, which two threads cannot share; so it is not built.'
+                 'enough for goal 7 only with whole sweeps, which two threads cannot share; so it is not built. '
+                 'Nor does a better start help CG: tried in the engine on 2026-11-29 on hang64 (relative 1e-6), '
+                 'starting from the combination of the last two steps\' Δv that is best in the norm of A (a '
+                 'Galerkin step on the two, one more product a step) instead of the last Δv took 27.6 iterations '
+                 'a step against 29.6 at h = 1/1000 and 354 against 357 at 1/60, and the last Δv scaled alone '
+                 'the same way 29.7 and 393: each step brings a new elastic response that no extrapolation '
+                 'of the last ones foresees, so it is not kept.'
                  % (direct64['detail'].split(';')[0] if direct64 and direct64['detail'] else 'see the table',
                     factorization_rate(direct64), roof_sentence(rows, direct64),
                     ' (%.0f iterations a step at 1e-6)' % cg_tol['cg_iterations'] if cg_tol else ''))
