@@ -321,6 +321,67 @@ TEST(ImplicitEulerSolver, PairBlocksAreTheSameBitsAsFourSingleBlocksForTheDirect
   EXPECT_TRUE(sameBits(pairs.x, singles.x));
 }
 
+TEST(ImplicitEulerSolver, SpringPartsMakeTheSystemOfTheFullBlocks)
+{
+  // addAlongPairBlocks() builds C and b's v0 term from a spring's parts (dfdx = a_x d dᵀ + b_x I,
+  // dfdv = a_v d dᵀ) instead of the full blocks: the same step as addPairBlocks() with those blocks,
+  // to rounding, through the direct solver (the pairs moved into A) and through the conjugate
+  // gradient's pair product.
+  const RandomSystem system = randomSystem(8, 9);
+  std::mt19937_64 random(10);
+  std::uniform_real_distribution<double> uniform(-1.0, 1.0);
+  struct Parts
+  {
+    Eigen::Vector3d d;
+    double along_x, isotropic_x, along_v;
+  };
+  std::vector<Parts> parts;
+  for (std::size_t p = 0; p < system.pairs.size(); ++p)
+  {
+    const Eigen::Vector3d d = Eigen::Vector3d(uniform(random), uniform(random), uniform(random)).normalized();
+    // A spring of up to 1e4 N/m with its transverse factor in [0, 0.5], damping up to 5 N·s/m.
+    const double stiffness = 1e4 * (1.0 + uniform(random)) / 2.0, transverse = 0.25 * (1.0 + uniform(random));
+    parts.push_back({d, -stiffness * (1.0 - transverse), -stiffness * transverse, -2.5 * (1.0 + uniform(random))});
+  }
+  Eigen::Matrix3Xd v0(3, system.particles);
+  for (int i = 0; i < system.particles; ++i)
+    v0.col(i) = Eigen::Vector3d(uniform(random), uniform(random), uniform(random));
+  auto step = [&](bool from_parts, LinearSolverType linear_solver) {
+    const double h = 1.0 / 60.0;
+    ImplicitEulerSolver solver;
+    solver.setPattern(system.particles, system.pairs);
+    solver.begin(h, system.mass, system.rhs, &v0);
+    for (std::size_t p = 0; p < system.pairs.size(); ++p)
+    {
+      const auto [i, j] = system.pairs[p];
+      const std::array<int, 4> blocks = {solver.blockIndex(i, i), solver.blockIndex(i, j), solver.blockIndex(j, i),
+                                         solver.blockIndex(j, j)};
+      const Parts& q = parts[p];
+      if (from_parts)
+      {
+        solver.addAlongPairBlocks(blocks, q.d, q.along_x, q.isotropic_x, q.along_v);
+        continue;
+      }
+      const Eigen::Matrix3d along = q.d * q.d.transpose();
+      solver.addPairBlocks(blocks, q.along_x * along + q.isotropic_x * Eigen::Matrix3d::Identity(), q.along_v * along);
+    }
+    IntegratorDef settings = cgSettings(1e-13, 0.0);
+    settings.linear_solver = linear_solver;
+    std::vector<RestingContact> contacts;
+    Eigen::Matrix3Xd x = Eigen::Matrix3Xd::Zero(3, system.particles), v = v0;
+    const SolverReport report = solver.solve(system.pinned, contacts, settings, x, v);
+    EXPECT_TRUE(report.converged);
+    return v;
+  };
+  for (LinearSolverType linear_solver : {LinearSolverType::Direct, LinearSolverType::ConjugateGradient})
+  {
+    const Eigen::Matrix3Xd from_parts = step(true, linear_solver), from_blocks = step(false, linear_solver);
+    const double change = massWeightedRms(system, from_blocks - v0);
+    EXPECT_GT(change, 1e-3);  // [m/s]: the step changed the velocities
+    EXPECT_LT(massWeightedRms(system, from_parts - from_blocks), 1e-10 * change);
+  }
+}
+
 TEST(ImplicitEulerSolver, ThePairProductSolvesTheSystemOfTheBlocks)
 {
   // The conjugate gradient multiplies by the kept pairs (C (p_j − p_i) at i, its negative at j)

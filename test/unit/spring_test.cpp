@@ -207,6 +207,34 @@ TEST(Spring, DefiniteJacobianIsNegativeSemiDefiniteAndExactWhenStretched)
   }
 }
 
+TEST(Spring, JacobianPartsMakeTheDefiniteJacobian)
+{
+  // along_x d dᵀ + isotropic_x I and along_v d dᵀ are the definite blocks, compressed or stretched,
+  // to rounding; coincident ends have no direction and no parts.
+  std::mt19937_64 rng(45);
+  for (double stretch : kStretches)
+  {
+    for (int trial = 0; trial < 20; ++trial)
+    {
+      const Config c = randomConfig(rng, stretch);
+      Eigen::Matrix3d dfdx, dfdv;
+      springJacobians(c.xi, c.xj, c.rest_length, c.stiffness, c.damping, true, dfdx, dfdv);
+      Eigen::Vector3d d;
+      double along_x = 0.0, isotropic_x = 0.0, along_v = 0.0;
+      ASSERT_TRUE(
+          springJacobianParts(c.xi, c.xj, c.rest_length, c.stiffness, c.damping, d, along_x, isotropic_x, along_v));
+      EXPECT_NEAR(d.norm(), 1.0, 1e-15);
+      const Eigen::Matrix3d parts_dfdx = along_x * d * d.transpose() + isotropic_x * Eigen::Matrix3d::Identity();
+      EXPECT_LE((parts_dfdx - dfdx).norm(), 1e-14 * c.stiffness) << "stretch " << stretch;
+      EXPECT_LE((along_v * d * d.transpose() - dfdv).norm(), 1e-14 * c.damping) << "stretch " << stretch;
+    }
+  }
+  Eigen::Vector3d d;
+  double along_x = 0.0, isotropic_x = 0.0, along_v = 0.0;
+  const Eigen::Vector3d x(0.25, -1.0, 2.0);
+  EXPECT_FALSE(springJacobianParts(x, x, 1.0, 10.0, 1.0, d, along_x, isotropic_x, along_v));
+}
+
 TEST(Spring, EnergyNegativeGradientIsTheElasticForce)
 {
   // Hand case: stretched by 3 with k = 10 stores 10 * 9 / 2 = 45 J.

@@ -355,10 +355,19 @@ void SpringForces::splitParticle(int original, int copy, const std::vector<int>&
 void SpringForces::addJacobians(const ForceContext& /*context*/, const Eigen::Matrix3Xd& x,
                                 ImplicitEulerSolver& solver) const
 {
-  // ∂f_i/∂x_i = ∂f_j/∂x_j = −∂f_i/∂x_j = −∂f_j/∂x_i (definite form), alike for v.
+  // ∂f_i/∂x_i = ∂f_j/∂x_j = −∂f_i/∂x_j = −∂f_j/∂x_i (definite form), alike for v: by their parts
+  // along the spring and across it, but for coincident ends (no direction).
   for (std::size_t s = 0; s < springs_.size(); ++s)
   {
     const Spring& spring = springs_[s];
+    Eigen::Vector3d d;
+    double along_x, isotropic_x, along_v;
+    if (springJacobianParts(x.col(spring.i), x.col(spring.j), spring.rest_length, spring.stiffness, spring.damping, d,
+                            along_x, isotropic_x, along_v))
+    {
+      solver.addAlongPairBlocks(blocks_[s], d, along_x, isotropic_x, along_v);
+      continue;
+    }
     Eigen::Matrix3d dfdx, dfdv;
     springJacobians(x.col(spring.i), x.col(spring.j), spring.rest_length, spring.stiffness, spring.damping, true, dfdx,
                     dfdv);
