@@ -270,6 +270,14 @@ private:
   {
     if (!takeCarriedForces(x, v, force)) computeForces(x, v, gravity_, force);
   }
+  // The springs' energies from the pass that computes their forces (ForceSet::computeForcesAndEnergy(),
+  // the same bits as mechanicalEnergy()), but for forces carried from the last step.
+  double computeForcesAndEnergy(Eigen::Matrix3Xd& force) override
+  {
+    if (takeCarriedForces(particles_.position, particles_.velocity, force)) return mechanicalEnergy();
+    return kineticEnergy() +
+           forces_.computeForcesAndEnergy(forceContext(gravity_), particles_.position, particles_.velocity, force);
+  }
   // force = carried_force_ when this is the step's first evaluation, armed, of the state the forces
   // were carried for (the body's own x and v, the pinned particles' velocities the same bits); false
   // (and nothing written) otherwise. Disarms either way.

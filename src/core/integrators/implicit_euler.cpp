@@ -31,14 +31,18 @@ SolverReport ImplicitEulerMethod::step(double h, DynamicSystem& system, const In
   const std::vector<char>& pinned = system.pinned();
   const int n = static_cast<int>(x.cols());
 
-  // Without moving pins or wind nothing does work on the body, so its energy must not grow.
+  // Without moving pins or wind nothing does work on the body, so its energy must not grow: its
+  // energy at (x0, v0) comes from the pass that computes the forces there.
   const bool conservative = system.nothingDoesWork();
-  const double energy_before = conservative ? system.mechanicalEnergy() : 0.0;
+  double energy_before = 0.0;
+  if (conservative)
+    energy_before = system.computeForcesAndEnergy(force_);
+  else
+    system.computeForces(x, v, force_);
   x0_ = x;
   v0_ = v;
 
   // 1. Baraff & Witkin's step: one linearisation at (x0, v0).
-  system.computeForces(x, v, force_);
   solver_.begin(h, mass, force_, &v0_);
   system.addJacobians(x, solver_);
   SolverReport report = solver_.solve(pinned, system.restingContacts(), settings, x, v);

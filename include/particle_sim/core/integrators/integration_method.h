@@ -34,6 +34,13 @@ public:
 
   /// force = f(x, v) [N] on every particle.
   virtual void computeForces(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v, Eigen::Matrix3Xd& force) const = 0;
+  /// computeForces() of the current state (positions(), velocities()) and its mechanicalEnergy() [J],
+  /// the same numbers; a system may take both from one pass over its force elements.
+  virtual double computeForcesAndEnergy(Eigen::Matrix3Xd& force)
+  {
+    computeForces(positions(), velocities(), force);
+    return mechanicalEnergy();
+  }
   /// a = f(x, v) / m for free particles, 0 for pinned ones [m/s²].
   virtual void accelerations(const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v, Eigen::Matrix3Xd& a) const = 0;
   /// Adds the blocks ∂f/∂x, ∂f/∂v at x to `solver` (whose pattern is the system's couplings).
