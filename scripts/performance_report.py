@@ -609,7 +609,14 @@ def main():
                  'Galerkin step on the two, one more product a step) instead of the last Δv took 27.6 iterations '
                  'a step against 29.6 at h = 1/1000 and 354 against 357 at 1/60, and the last Δv scaled alone '
                  'the same way 29.7 and 393: each step brings a new elastic response that no extrapolation '
-                 'of the last ones foresees, so it is not kept.'
+                 'of the last ones foresees, so it is not kept. At h = 1/1000, where CG needs a few dozen '
+                 'iterations a step, the rest of the step weighs more: since 2026-11-29 (evening) each spring\'s '
+                 'blocks are built from its parts (a d dᵀ + b I for ∂f/∂x, a\' d dᵀ for ∂f/∂v; far less '
+                 'arithmetic than the full 3×3 blocks, a change of rounding only), and the step takes the energy it '
+                 'starts from out of its force pass (one pass over the springs fewer, the same bits): side by side '
+                 'on hang64 at h = 1/1000, the step went from 2.22 to 2.12 ms with CG to 1e-6 and from 1.35 to 1.20 '
+                 'ms with CG to Bullet\'s default of 3.45e-4 (the fastest of eight runs of each library, taken in '
+                 'turn, on a noisy host).'
                  % (direct64['detail'].split(';')[0] if direct64 and direct64['detail'] else 'see the table',
                     factorization_rate(direct64), roof_sentence(rows, direct64),
                     ' (%.0f iterations a step at 1e-6)' % cg_tol['cg_iterations'] if cg_tol else ''))
