@@ -30,8 +30,9 @@ namespace core
 /// The matrix is block-sparse with 3x3 blocks. Its pattern (which particle pairs are coupled) is
 /// set once per body by setPattern(); each step the force elements add their Jacobian blocks with
 /// addBlock(), by the block index they looked up once with blockIndex(), and springs theirs with
-/// addPairBlocks(), which keeps one symmetric block a spring for the conjugate gradient's product
-/// instead of writing four (see there). Nothing allocates after the first steps.
+/// addPairBlocks() (or addAlongPairBlocks(), from a spring's parts), which keeps one symmetric
+/// block a spring for the conjugate gradient's product instead of writing four (see there).
+/// Nothing allocates after the first steps.
 ///
 /// Use per step: begin(), addBlock() for every element block, solve().
 class ImplicitEulerSolver
@@ -96,8 +97,8 @@ public:
   /// addPairBlocks() for Jacobians of a spring's form along the unit vector d: dfdx = along_x d dᵀ +
   /// isotropic_x I, dfdv = along_v d dᵀ (springJacobianParts()). Then C = (h along_v + h² along_x)
   /// d dᵀ + h² isotropic_x I, symmetric bit for bit, and b's term h² dfdx (v0_i − v0_j) =
-  /// h² (along_x (d·u) d + isotropic_x u) with u = v0_i − v0_j: about a fifth of the arithmetic of
-  /// the full blocks, the same system but for rounding.
+  /// h² (along_x (d·u) d + isotropic_x u) with u = v0_i − v0_j: about half the arithmetic of the
+  /// full blocks, the same system but for rounding.
   [[gnu::always_inline]] void addAlongPairBlocks(const std::array<int, 4>& blocks, const Eigen::Vector3d& d,
                                                  double along_x, double isotropic_x, double along_v)
   {
