@@ -235,15 +235,23 @@ namespace
 // Δv and x of one step at h = 1/60 from v0 of the system whose pairs are elements with
 // ∂f/∂x = −terms[p] and ∂f/∂v = damping[p], added with addPairBlocks() (as_pairs) or with addBlock()
 // on (i, i), (i, j), (j, i) and (j, j) with ±dfdx and ±dfdv, solved by `settings` with `threads`
-// threads. `kept` is how many pairs the solver still kept aside after the solve.
+// threads. `kept` is how many pairs the solver still kept aside after the solve. With `parts`, the
+// pairs are a spring's instead (addAlongPairBlocks(); terms and damping are not read).
 struct PairSolve
 {
   Eigen::Matrix3Xd v, x;
   SolverReport report;
   int kept = 0;
 };
+// A spring's Jacobians by their parts: ∂f/∂x = along_x d dᵀ + isotropic_x I, ∂f/∂v = along_v d dᵀ.
+struct SpringParts
+{
+  Eigen::Vector3d d;
+  double along_x, isotropic_x, along_v;
+};
 PairSolve solvePairs(const RandomSystem& system, const std::vector<Eigen::Matrix3d>& damping,
-                     const Eigen::Matrix3Xd& v0, bool as_pairs, const IntegratorDef& settings, int threads = 1)
+                     const Eigen::Matrix3Xd& v0, bool as_pairs, const IntegratorDef& settings, int threads = 1,
+                     const std::vector<SpringParts>* parts = nullptr)
 {
   const double h = 1.0 / 60.0;
   WorkerPool workers(threads);
@@ -254,10 +262,16 @@ PairSolve solvePairs(const RandomSystem& system, const std::vector<Eigen::Matrix
   for (std::size_t p = 0; p < system.pairs.size(); ++p)
   {
     const auto [i, j] = system.pairs[p];
-    const Eigen::Matrix3d dfdx = -system.terms[p];
-    const Eigen::Matrix3d& dfdv = damping[p];
     const std::array<int, 4> blocks = {solver.blockIndex(i, i), solver.blockIndex(i, j), solver.blockIndex(j, i),
                                        solver.blockIndex(j, j)};
+    if (parts)
+    {
+      const SpringParts& q = (*parts)[p];
+      solver.addAlongPairBlocks(blocks, q.d, q.along_x, q.isotropic_x, q.along_v);
+      continue;
+    }
+    const Eigen::Matrix3d dfdx = -system.terms[p];
+    const Eigen::Matrix3d& dfdv = damping[p];
     if (as_pairs)
     {
       solver.addPairBlocks(blocks, dfdx, dfdv);
@@ -330,55 +344,34 @@ TEST(ImplicitEulerSolver, SpringPartsMakeTheSystemOfTheFullBlocks)
   const RandomSystem system = randomSystem(8, 9);
   std::mt19937_64 random(10);
   std::uniform_real_distribution<double> uniform(-1.0, 1.0);
-  struct Parts
-  {
-    Eigen::Vector3d d;
-    double along_x, isotropic_x, along_v;
-  };
-  std::vector<Parts> parts;
+  std::vector<SpringParts> parts;
+  RandomSystem full = system;  // the same springs by their full blocks
+  std::vector<Eigen::Matrix3d> damping;
   for (std::size_t p = 0; p < system.pairs.size(); ++p)
   {
     const Eigen::Vector3d d = Eigen::Vector3d(uniform(random), uniform(random), uniform(random)).normalized();
     // A spring of up to 1e4 N/m with its transverse factor in [0, 0.5], damping up to 5 N·s/m.
     const double stiffness = 1e4 * (1.0 + uniform(random)) / 2.0, transverse = 0.25 * (1.0 + uniform(random));
     parts.push_back({d, -stiffness * (1.0 - transverse), -stiffness * transverse, -2.5 * (1.0 + uniform(random))});
+    const SpringParts& q = parts.back();
+    const Eigen::Matrix3d along = q.d * q.d.transpose();
+    full.terms[p] = -(q.along_x * along + q.isotropic_x * Eigen::Matrix3d::Identity());
+    damping.push_back(q.along_v * along);
   }
   Eigen::Matrix3Xd v0(3, system.particles);
   for (int i = 0; i < system.particles; ++i)
     v0.col(i) = Eigen::Vector3d(uniform(random), uniform(random), uniform(random));
-  auto step = [&](bool from_parts, LinearSolverType linear_solver) {
-    const double h = 1.0 / 60.0;
-    ImplicitEulerSolver solver;
-    solver.setPattern(system.particles, system.pairs);
-    solver.begin(h, system.mass, system.rhs, &v0);
-    for (std::size_t p = 0; p < system.pairs.size(); ++p)
-    {
-      const auto [i, j] = system.pairs[p];
-      const std::array<int, 4> blocks = {solver.blockIndex(i, i), solver.blockIndex(i, j), solver.blockIndex(j, i),
-                                         solver.blockIndex(j, j)};
-      const Parts& q = parts[p];
-      if (from_parts)
-      {
-        solver.addAlongPairBlocks(blocks, q.d, q.along_x, q.isotropic_x, q.along_v);
-        continue;
-      }
-      const Eigen::Matrix3d along = q.d * q.d.transpose();
-      solver.addPairBlocks(blocks, q.along_x * along + q.isotropic_x * Eigen::Matrix3d::Identity(), q.along_v * along);
-    }
-    IntegratorDef settings = cgSettings(1e-13, 0.0);
-    settings.linear_solver = linear_solver;
-    std::vector<RestingContact> contacts;
-    Eigen::Matrix3Xd x = Eigen::Matrix3Xd::Zero(3, system.particles), v = v0;
-    const SolverReport report = solver.solve(system.pinned, contacts, settings, x, v);
-    EXPECT_TRUE(report.converged);
-    return v;
-  };
   for (LinearSolverType linear_solver : {LinearSolverType::Direct, LinearSolverType::ConjugateGradient})
   {
-    const Eigen::Matrix3Xd from_parts = step(true, linear_solver), from_blocks = step(false, linear_solver);
-    const double change = massWeightedRms(system, from_blocks - v0);
+    IntegratorDef settings = cgSettings(1e-13, 0.0);
+    settings.linear_solver = linear_solver;
+    const PairSolve from_parts = solvePairs(system, {}, v0, true, settings, 1, &parts);
+    const PairSolve from_blocks = solvePairs(full, damping, v0, true, settings);
+    EXPECT_TRUE(from_parts.report.converged);
+    EXPECT_TRUE(from_blocks.report.converged);
+    const double change = massWeightedRms(system, from_blocks.v - v0);
     EXPECT_GT(change, 1e-3);  // [m/s]: the step changed the velocities
-    EXPECT_LT(massWeightedRms(system, from_parts - from_blocks), 1e-10 * change);
+    EXPECT_LT(massWeightedRms(system, from_parts.v - from_blocks.v), 1e-10 * change);
   }
 }
 
