@@ -33,6 +33,7 @@
 
 #include "../../test/unit/folded_cloth.h"  // the self-collision tests' folded cloth and pile, timed here
 #include "bench_rows.h"
+#include "hang64.h"
 #include "particle_sim/core/builders/cloth_grid.h"
 #include "particle_sim/core/builders/rope.h"
 #include "particle_sim/core/constraints/self_collision.h"
@@ -46,6 +47,7 @@
 #include "particle_sim/process/huge_pages.h"
 
 namespace core = particle_sim::core;
+using particle_sim_bench::hang64;
 using particle_sim_bench::Row;
 using particle_sim_bench::summarize;
 using particle_sim_bench::timeRepeat;
@@ -180,48 +182,6 @@ void cloths(std::ostream& out, bool quick)
       writeRow(out, row);
     }
   }
-}
-
-// --- hang64: Bullet's soft-body test cloth, rebuilt exactly: 64 x 64 particles on a 1 m square,
-// horizontal, two adjacent corners pinned, 1 kg; structural springs and one shear diagonal per
-// quad, alternating like btSoftBodyHelpers::CreatePatch; k = 1000 N/m, damping 0.01 N·s/m.
-core::SpringNetworkDef hang64(int n)
-{
-  core::SpringNetworkDef def;
-  def.name = "hang64";
-  def.shape = core::NetworkShape::Cloth;
-  auto index = [n](int a, int b) { return b * n + a; };
-  for (int b = 0; b < n; ++b)
-    for (int a = 0; a < n; ++a)
-      def.positions.emplace_back(static_cast<double>(a) / (n - 1), static_cast<double>(b) / (n - 1), 2.0);
-  def.masses.assign(static_cast<std::size_t>(n) * n, 1.0 / (n * n));
-  auto spring = [&](int i, int j, core::SpringClass spring_class) {
-    core::Spring s;
-    s.i = i;
-    s.j = j;
-    s.rest_length = (def.positions[i] - def.positions[j]).norm();
-    s.stiffness = 1000.0;
-    s.damping = 0.01;
-    s.spring_class = spring_class;
-    def.springs.push_back(s);
-  };
-  for (int b = 0; b < n; ++b)
-    for (int a = 0; a < n; ++a)
-    {
-      if (a + 1 < n) spring(index(a, b), index(a + 1, b), core::SpringClass::Stretch);
-      if (b + 1 < n) spring(index(a, b), index(a, b + 1), core::SpringClass::Stretch);
-      if (a + 1 < n && b + 1 < n)
-      {
-        if ((a + b) % 2 == 0)
-          spring(index(a, b), index(a + 1, b + 1), core::SpringClass::Shear);
-        else
-          spring(index(a + 1, b), index(a, b + 1), core::SpringClass::Shear);
-        def.triangles.emplace_back(index(a, b), index(a + 1, b), index(a + 1, b + 1));
-        def.triangles.emplace_back(index(a, b), index(a + 1, b + 1), index(a, b + 1));
-      }
-    }
-  def.pins = {index(0, 0), index(n - 1, 0)};
-  return def;
 }
 
 // How far hang64 stretches and sags under a method: simulated for `seconds` from rest, the peak
