@@ -322,12 +322,33 @@ def main():
     # stretches no more than Bullet's. Bullet rows marked BROKEN (link strain past 10, or a time taken
     # on such a body) are left out: their times are those of solves that gave up.
     working = OrderedDict((v, r) for v, r in bullet.items() if 'BROKEN' not in r['detail'])
+    # The same-dt ratios timed side by side in one process (particle_sim_bullet_peer's paired case:
+    # alternating rounds, Bullet's time over particle_sim's round by round, min, median and max in
+    # the time columns). When the run has them the goal is judged on their medians: the hang64 rows
+    # of the two programs are timed minutes apart, and the machine's load moves each on its own.
+    paired = OrderedDict((r['variant'], r) for r in rows if r['case'] == 'paired')
+    paired_ratios = [(v, r) for v, r in paired.items() if v.startswith('ratio')]
     if bullet:
         # Each working Bullet implicit row against particle_sim's fastest implicit row at the same dt
         # solved at least as tightly. The goal is judged at equal tolerance; a Bullet row at its own
         # looser default is shown beside it, against particle_sim held to its tighter one.
         same_dt, ratios = [], []
-        for bv, br in working.items():
+        for v, r in paired_ratios:
+            tolerance = tolerance_of(v)
+            theirs = next((p for pv, p in paired.items() if pv.startswith('bullet')
+                           and step_of(pv) == step_of(v) and tolerance_of(pv) == tolerance), None)
+            mine = next((p for pv, p in paired.items() if pv.startswith('implicit_euler')
+                         and step_of(pv) == step_of(v) and tolerance_of(pv) == tolerance), None)
+            ratios.append(r['ms_median'])
+            rounds = re.search(r'(\d+) rounds of (\d+) steps', r['detail'])
+            same_dt.append('dt 1/%d, both to a relative residual of %g, side by side (%s, alternating in one '
+                           'process): %.1f× (median of the rounds\' ratios; %.1f–%.1f%s)' % (
+                               round(1 / step_of(v)), tolerance,
+                               '%s rounds of %s steps' % rounds.groups() if rounds else 'rounds',
+                               r['ms_median'], r['ms_min'], r['ms_max'],
+                               '; medians %s ms against %s ms' % (ms(theirs['ms_median']), ms(mine['ms_median']))
+                               if theirs and mine else ''))
+        for bv, br in ([] if paired_ratios else working.items()):
             if 'implicit' not in bv:
                 continue
             mine = [r for v, r in ours.items() if v.startswith('implicit_euler') and step_of(v) == step_of(bv)
@@ -533,7 +554,7 @@ def main():
             v, round(1 / step_of(v)), spread(r), per_simulated_second(r),
             '%.0f' % r['cg_iterations'] if r['cg_iterations'] > 0 else '—', r['detail']))
     lines.append('')
-    bullet_rows = [r for r in rows if r['variant'].startswith('bullet')]
+    bullet_rows = [r for r in rows if r['variant'].startswith('bullet') and r['case'] != 'paired']
     if bullet_rows:
         lines.append('Bullet 3.24 (Debian\'s libbullet-dev, float build) on the same cloth and on the ropes of the '
                      'next section, from `particle_sim_bullet_peer` in the same run (its source comment says how '
@@ -551,6 +572,22 @@ def main():
             lines.append('| %s | %d | %s | %s | %.3g | %s | %s |' % (
                 r['case'], r['size'], r['variant'], spread(r), per_simulated_second(r),
                 '%.0f' % r['cg_iterations'] if r['cg_iterations'] > 0 else '—', r['detail']))
+        lines.append('')
+    if paired:
+        lines.append('Side by side: hang64 at dt = 1/1000 in Bullet\'s implicit world and in particle_sim\'s implicit '
+                     'Euler (CG) to the same relative residual, built and warmed up in one process '
+                     '(`particle_sim_bullet_peer`\'s paired case), then timed in rounds, one engine after the '
+                     'other, which goes first alternating: a spell of load on the virtual machine slows both alike. '
+                     'Each round gives Bullet\'s time over particle_sim\'s; goal 7\'s same-dt figure is the median '
+                     'of those ratios. The hang64 rows above are timed by two programs minutes apart, so their '
+                     'ratios also carry how the machine\'s load moved in between.')
+        lines.append('')
+        lines.append('| row | ms per step (or ratio), min (median–max) | CG iterations per step | detail |')
+        lines.append('|---|---|---|---|')
+        for v, r in paired.items():
+            lines.append('| %s | %s | %s | %s |' % (
+                v, ('%.2f× (%.2f–%.2f)' % (r['ms_min'], r['ms_median'], r['ms_max'])) if v.startswith('ratio')
+                else spread(r), '%.0f' % r['cg_iterations'] if r['cg_iterations'] > 0 else '—', r['detail']))
         lines.append('')
     lines.append('Where the time goes: the direct step is one factorization of the implicit system a step (%s) '
                  'and a solve; assembly and forces are a few per cent. The factorization runs at %s '
