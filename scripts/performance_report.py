@@ -678,8 +678,13 @@ def main():
                  'and bend springs): 1.13 million entries in the factor (69 a row), factored in 105 ms; one '
                  'local-global iteration (every projection, then the three solves) 5.5 ms, and 1.3 ms at 64². '
                  'So three iterations fit in a tick at 60 Hz on one thread, about five on two (the three solves '
-                 'are independent): a stable cloth, though not backward Euler converged to a tolerance, and damping '
-                 'and pins need their own treatment. Not built.')
+                 'are independent). But so few leave the step far from the backward Euler it converges to: on the '
+                 '64² cloth released from horizontal (pins as attachments of '
+                 'weight 1e8, no damping), after 1 s, 3, 5 and 10 iterations a step gave a sag of 0.63, 0.46 and '
+                 '0.35 m against 0.37 m with 400, and peak strains of 0.35, 0.31 and 0.26 against 0.32; '
+                 'Chebyshev acceleration (Wang 2015, ρ from 0.99 to 0.9999 from the first iteration) blew up at '
+                 '3 to 10 iterations. Real time that way would cost accuracy that the page would have to report '
+                 'beside it; not built.')
     lines.append('')
     if stopping:
         lines.append('## The stopping rule')
