@@ -658,7 +658,7 @@ def main():
                  'whole, the true residual checked once the estimate was met) on hang64 at h = 1/1000: 6.2 '
                  'iterations a step against block Jacobi\'s 15.5 at a relative 3.45e-4, and 11.8 against 30.1 at '
                  '1e-6, but each iteration cost about three of block Jacobi\'s, so the step was slower (2.07 against '
-                 '1.46 ms, 3.78 against 3.16 ms, side by side). Tighter code would bring that towards the two of '
+                 '1.46 ms, 3.78 against 3.16 ms, one run after the other). Tighter code would bring that towards the two of '
                  'the prototype outside the engine, not further: each row of a sweep needs the row before it '
                  '(a chain of dependent 3×3 products, where the product\'s rows are independent), so the solve '
                  'would gain about 1.3×, the step at most about 1.2×, short of goal 7\'s 5× from 4.2×; not kept.'
