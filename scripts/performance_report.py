@@ -328,17 +328,16 @@ def main():
     # of the two programs are timed minutes apart, and the machine's load moves each on its own.
     paired = OrderedDict((r['variant'], r) for r in rows if r['case'] == 'paired')
     paired_ratios = [(v, r) for v, r in paired.items() if v.startswith('ratio')]
+    def paired_engine_row(engine, ratio_variant):
+        """The paired row of one engine ('bullet' or 'implicit_euler') behind a row of ratios."""
+        return next((p for pv, p in paired.items() if pv.startswith(engine) and step_of(pv) == step_of(ratio_variant)
+                     and tolerance_of(pv) == tolerance_of(ratio_variant)), None)
+
     if bullet:
-        # Each working Bullet implicit row against particle_sim's fastest implicit row at the same dt
-        # solved at least as tightly. The goal is judged at equal tolerance; a Bullet row at its own
-        # looser default is shown beside it, against particle_sim held to its tighter one.
         same_dt, ratios = [], []
         for v, r in paired_ratios:
             tolerance = tolerance_of(v)
-            theirs = next((p for pv, p in paired.items() if pv.startswith('bullet')
-                           and step_of(pv) == step_of(v) and tolerance_of(pv) == tolerance), None)
-            mine = next((p for pv, p in paired.items() if pv.startswith('implicit_euler')
-                         and step_of(pv) == step_of(v) and tolerance_of(pv) == tolerance), None)
+            theirs, mine = paired_engine_row('bullet', v), paired_engine_row('implicit_euler', v)
             ratios.append(r['ms_median'])
             rounds = re.search(r'(\d+) rounds of (\d+) steps', r['detail'])
             same_dt.append('dt 1/%d, both to a relative residual of %g, side by side (%s, alternating in one '
@@ -348,7 +347,11 @@ def main():
                                r['ms_median'], r['ms_min'], r['ms_max'],
                                '; medians %s ms against %s ms' % (ms(theirs['ms_median']), ms(mine['ms_median']))
                                if theirs and mine else ''))
-        for bv, br in ([] if paired_ratios else working.items()):
+        # Without paired rows: each working Bullet implicit row against particle_sim's fastest implicit
+        # row at the same dt solved at least as tightly. The goal is judged at equal tolerance; a Bullet
+        # row at its own looser default is shown beside it, against particle_sim held to its tighter one.
+        separate_rows = OrderedDict() if paired_ratios else working
+        for bv, br in separate_rows.items():
             if 'implicit' not in bv:
                 continue
             mine = [r for v, r in ours.items() if v.startswith('implicit_euler') and step_of(v) == step_of(bv)
