@@ -2,7 +2,10 @@
 
 #include <Eigen/LU>
 #include <algorithm>
+#include <atomic>
 #include <cmath>
+
+#include "particle_sim/core/integrators/cg_avx2.h"
 
 namespace particle_sim
 {
@@ -35,7 +38,7 @@ template <bool kAddI, bool kAddJ>
   double h0 = 0.0, h1 = 0.0, h2 = 0.0, q0 = 0.0, q1 = 0.0, q2 = 0.0;
   auto storeHeld = [&] {
     if (!kAddI || held < 0) return;
-    double* const oh = out + 3 * held;
+    double* const oh = out + PaddedVectors::kStride * held;
     oh[0] = h0;
     oh[1] = h1;
     oh[2] = h2;
@@ -48,19 +51,19 @@ template <bool kAddI, bool kAddJ>
     {
       storeHeld();
       held = i;
-      const double* const pi = p + 3 * i;
+      const double* const pi = p + PaddedVectors::kStride * i;
       q0 = pi[0];
       q1 = pi[1];
       q2 = pi[2];
       if (kAddI)
       {
-        const double* const oi = out + 3 * i;
+        const double* const oi = out + PaddedVectors::kStride * i;
         h0 = oi[0];
         h1 = oi[1];
         h2 = oi[2];
       }
     }
-    const double* const pj = p + 3 * j;
+    const double* const pj = p + PaddedVectors::kStride * j;
     const double* const c = cs[k].data();
     const double d0 = pj[0] - q0, d1 = pj[1] - q1, d2 = pj[2] - q2;
     const double w0 = (c[0] * d0 + c[1] * d1) + c[2] * d2;
@@ -82,7 +85,7 @@ template <bool kAddI, bool kAddJ>
       }
       else
       {
-        double* const oj = out + 3 * j;
+        double* const oj = out + PaddedVectors::kStride * j;
         oj[0] -= w0;
         oj[1] -= w1;
         oj[2] -= w2;
@@ -90,6 +93,13 @@ template <bool kAddI, bool kAddJ>
     }
   }
   storeHeld();
+}
+
+// Whether the conjugate gradient takes the AVX2 passes (ImplicitEulerSolver::setUseAvx2()).
+std::atomic<bool>& useAvx2Flag()
+{
+  static std::atomic<bool> use(cg_avx2::available());
+  return use;
 }
 
 // A kept pair's C as a full block.
@@ -100,6 +110,16 @@ Eigen::Matrix3d pairBlock(const std::array<double, 6>& c)
   return block;
 }
 }  // namespace
+
+bool ImplicitEulerSolver::useAvx2()
+{
+  return useAvx2Flag().load(std::memory_order_relaxed);
+}
+
+void ImplicitEulerSolver::setUseAvx2(bool use)
+{
+  useAvx2Flag().store(use && cg_avx2::available(), std::memory_order_relaxed);
+}
 
 void ImplicitEulerSolver::setPattern(int particles, const std::vector<std::pair<int, int>>& coupled_pairs)
 {
@@ -155,9 +175,10 @@ void ImplicitEulerSolver::setPattern(int particles, const std::vector<std::pair<
   inverse_mass_.assign(particles, 0.0);
   curvature_chunks_.assign((particles + kRowsPerChunk - 1) / kRowsPerChunk, 0.0);
   residual_chunks_.assign((particles + kParticlesPerVectorChunk - 1) / kParticlesPerVectorChunk, ResidualSums());
-  for (Eigen::Matrix3Xd* m :
-       {&delta_v_, &rhs_, &residual_, &direction_, &product_, &preconditioned_, &held_change_, &original_rhs_})
+  for (Eigen::Matrix3Xd* m : {&delta_v_, &rhs_, &residual_, &preconditioned_, &held_change_, &original_rhs_})
     m->setZero(3, particles);
+  for (PaddedVectors* v : {&padded_delta_v_, &padded_residual_, &padded_preconditioned_, &direction_, &product_})
+    v->setZero(particles);
   // Room for the resting contacts' bookkeeping (holdContacts) for every particle held, so that no
   // step allocates when contacts first appear or grow in number.
   original_blocks_.reserve(blocks_.size());
@@ -250,13 +271,18 @@ bool ImplicitEulerSolver::preparePairProduct()
   return false;
 }
 
-void ImplicitEulerSolver::multiplyPairRows(const Eigen::Matrix3Xd& p, Eigen::Matrix3Xd& out, int chunk, int first,
+void ImplicitEulerSolver::multiplyPairRows(const PaddedVectors& p, PaddedVectors& out, int chunk, int first,
                                            int last) const
 {
   // E_i p_i, from e_i alone while E_i = e_i I: row r of E_i p_i is (e_i p_r + 0 p_s) + 0 p_t, which
   // is e_i p_r but for the sign of a zero (where p_s or p_t is not finite, the row is not finite
   // either way: a NaN there, an infinity or a NaN here).
-  if (own_isotropic_)
+  const bool avx2 = useAvx2();
+  if (own_isotropic_ && avx2)
+  {
+    cg_avx2::scaleRows(own_scale_.data(), first, last, p.data(), out.data());
+  }
+  else if (own_isotropic_)
   {
     for (int i = first; i < last; ++i)
       out.col(i) = own_scale_[i] * p.col(i);
@@ -273,16 +299,19 @@ void ImplicitEulerSolver::multiplyPairRows(const Eigen::Matrix3Xd& p, Eigen::Mat
   for (int r = pair_chunks_.runStart(chunk); r < pair_chunks_.runStart(chunk + 1); ++r)
   {
     const PairChunks::Run run = pair_chunks_.runs()[r];
-    if (run.ends == PairChunks::kBothEnds)
+    const bool add_i = (run.ends & PairChunks::kEndI) != 0, add_j = (run.ends & PairChunks::kEndJ) != 0;
+    if (avx2)
+      cg_avx2::addPairProducts(add_i, add_j, ends, cs, run.first, run.first + run.count, ps, outs);
+    else if (add_i && add_j)
       addPairProducts<true, true>(ends, cs, run.first, run.first + run.count, ps, outs);
-    else if (run.ends == PairChunks::kEndI)
+    else if (add_i)
       addPairProducts<true, false>(ends, cs, run.first, run.first + run.count, ps, outs);
-    else
+    else if (add_j)
       addPairProducts<false, true>(ends, cs, run.first, run.first + run.count, ps, outs);
   }
 }
 
-void ImplicitEulerSolver::multiply(const Eigen::Matrix3Xd& p, Eigen::Matrix3Xd& out, bool pair_product) const
+void ImplicitEulerSolver::multiply(const PaddedVectors& p, PaddedVectors& out, bool pair_product) const
 {
   if (!pair_product)
   {
@@ -293,7 +322,7 @@ void ImplicitEulerSolver::multiply(const Eigen::Matrix3Xd& p, Eigen::Matrix3Xd& 
                     [&](int chunk, int first, int last) { multiplyPairRows(p, out, chunk, first, last); });
 }
 
-void ImplicitEulerSolver::multiplyRows(const Eigen::Matrix3Xd& p, Eigen::Matrix3Xd& out, int begin, int end) const
+void ImplicitEulerSolver::multiplyRows(const PaddedVectors& p, PaddedVectors& out, int begin, int end) const
 {
   for (int i = begin; i < end; ++i)
   {
@@ -555,8 +584,12 @@ void ImplicitEulerSolver::conjugateGradient(const std::vector<char>& pinned, con
   for (int i = 0; i < static_cast<int>(pinned.size()); ++i)
     free_mass += pinned[i] ? 0.0 : (*mass_)[i];
   const double rhs_norm = residualNorms(residual_, free_mass).euclidean;
-  multiply(delta_v_, product_, pair_product);
-  residual_ -= product_;
+  const int rows = static_cast<int>(diagonal_block_.size());
+  for (int i = 0; i < rows; ++i)
+    padded_delta_v_.col(i) = delta_v_.col(i);
+  multiply(padded_delta_v_, product_, pair_product);
+  for (int i = 0; i < rows; ++i)
+    residual_.col(i) -= product_.col(i);
   filter(pinned, residual_);
   ResidualNorms norms = residualNorms(residual_, free_mass);
   auto within = [&](const ResidualNorms& n) {
@@ -566,16 +599,23 @@ void ImplicitEulerSolver::conjugateGradient(const std::vector<char>& pinned, con
   {
     for (int i = 0; i < static_cast<int>(diagonal_block_.size()); ++i)
       inverse_diagonal_[i] = blocks_[diagonal_block_[i]].inverse();
-    precondition(residual_, direction_);
-    filter(pinned, direction_);
+    precondition(residual_, preconditioned_);
+    filter(pinned, preconditioned_);
+    for (int i = 0; i < rows; ++i)
+    {
+      direction_.col(i) = preconditioned_.col(i);
+      padded_residual_.col(i) = residual_.col(i);
+    }
   }
-  double delta_new = dot(residual_, direction_);
+  double delta_new = dot(residual_, preconditioned_);
   // Each iteration is three passes over the particles, each shared by rows (WorkerPool): the product
   // A d with the curvature d·Ad; the updates of Δv and r with the preconditioned residual z and the
   // sums r·z, |r|² and Σ |r_i|² / m_i; the new direction. Every row is computed alone, in the same
   // operations as on one thread, and every sum is taken in fixed chunks of rows and then chunk after
-  // chunk (like sumByChunks()): the same bits at any thread count.
-  const int rows = static_cast<int>(diagonal_block_.size());
+  // chunk (like sumByChunks()): the same bits at any thread count. The iterations' vectors are
+  // padded (PaddedVectors), for the AVX2 passes where the processor has them (cg_avx2.h: the same
+  // bits as the scalar passes here).
+  const bool avx2 = useAvx2();
   while (!within(norms) && report.iterations < max_iterations)
   {
     forEachFixedChunk(workers_, rows, kRowsPerChunk, [&](int index, int first, int last) {
@@ -583,6 +623,11 @@ void ImplicitEulerSolver::conjugateGradient(const std::vector<char>& pinned, con
         multiplyPairRows(direction_, product_, index, first, last);
       else
         multiplyRows(direction_, product_, first, last);
+      if (avx2)
+      {
+        curvature_chunks_[index] = cg_avx2::curvature(pinned.data(), first, last, direction_.data(), product_.data());
+        return;
+      }
       // Three running sums, one per coordinate, so that each add need not wait for the last.
       Eigen::Vector3d curvature = Eigen::Vector3d::Zero();
       for (int i = first; i < last; ++i)
@@ -606,24 +651,33 @@ void ImplicitEulerSolver::conjugateGradient(const std::vector<char>& pinned, con
       // loop reads through members (or through the lambda's references) would be read again after
       // every store.
       const double* const inverse_mass = inverse_mass_.data();
-      double* const delta_v = delta_v_.data();
-      double* const residual = residual_.data();
-      double* const preconditioned_out = preconditioned_.data();
+      double* const delta_v = padded_delta_v_.data();
+      double* const residual = padded_residual_.data();
+      double* const preconditioned_out = padded_preconditioned_.data();
       const double* const direction = direction_.data();
       const double* const product = product_.data();
       const Eigen::Matrix3d* const inverse_diagonal = inverse_diagonal_.data();
       const double step = alpha;
+      if (avx2)
+      {
+        const cg_avx2::UpdateSums sums =
+            cg_avx2::updateIterate(first, last, step, inverse_mass, inverse_diagonal, direction, product, delta_v,
+                                   residual, preconditioned_out);
+        residual_chunks_[index] = {sums.preconditioned, sums.squared, sums.weighted};
+        return;
+      }
+      constexpr int kStride = PaddedVectors::kStride;
       using Column = Eigen::Map<Eigen::Vector3d>;
       using ConstColumn = Eigen::Map<const Eigen::Vector3d>;
       Eigen::Vector3d preconditioned = Eigen::Vector3d::Zero(), squared = Eigen::Vector3d::Zero(),
                       weighted = Eigen::Vector3d::Zero();  // per coordinate, as above
       for (int i = first; i < last; ++i)
       {
-        Column(delta_v + 3 * i) += step * ConstColumn(direction + 3 * i);
-        const Eigen::Vector3d r = Column(residual + 3 * i) - step * ConstColumn(product + 3 * i);
-        Column(residual + 3 * i) = r;
+        Column(delta_v + kStride * i) += step * ConstColumn(direction + kStride * i);
+        const Eigen::Vector3d r = Column(residual + kStride * i) - step * ConstColumn(product + kStride * i);
+        Column(residual + kStride * i) = r;
         const Eigen::Vector3d z = inverse_diagonal[i] * r;
-        Column(preconditioned_out + 3 * i) = z;
+        Column(preconditioned_out + kStride * i) = z;
         preconditioned += r.cwiseProduct(z);
         const Eigen::Vector3d r2 = r.cwiseAbs2();
         squared += r2;
@@ -642,15 +696,22 @@ void ImplicitEulerSolver::conjugateGradient(const std::vector<char>& pinned, con
     delta_new = total.preconditioned;
     const double beta = delta_new / delta_old;
     shareLoop(workers_, rows, kParticlesPerVectorChunk, [&](int begin, int end) {
-      const int count = end - begin;
-      direction_.middleCols(begin, count) =
-          preconditioned_.middleCols(begin, count) + beta * direction_.middleCols(begin, count);
+      if (avx2)
+      {
+        cg_avx2::updateDirection(pinned.data(), begin, end, beta, padded_preconditioned_.data(), direction_.data());
+        return;
+      }
       for (int i = begin; i < end; ++i)
+      {
+        direction_.col(i) = padded_preconditioned_.col(i) + beta * direction_.col(i);
         if (pinned[i]) direction_.col(i).setZero();
+      }
     });
     norms = normsOf(total.squared, total.weighted, free_mass);
     ++report.iterations;
   }
+  for (int i = 0; i < rows; ++i)
+    delta_v_.col(i) = padded_delta_v_.col(i);
   report.relative_residual = rhs_norm > 0.0 ? norms.euclidean / rhs_norm : 0.0;
   report.velocity_error = norms.velocity;
   report.converged = within(norms) && std::isfinite(norms.euclidean);

@@ -7,6 +7,7 @@
 
 #include "particle_sim/core/constraints/resting_contact.h"
 #include "particle_sim/core/integrator.h"
+#include "particle_sim/core/integrators/padded_vectors.h"
 #include "particle_sim/core/integrators/sparse_block_ldlt.h"
 #include "particle_sim/core/pair_chunks.h"
 #include "particle_sim/core/worker_pool.h"
@@ -135,6 +136,12 @@ public:
   /// vector updates and sums are shared by rows; each sum is taken in fixed chunks of rows and then
   /// chunk after chunk, so that the result is the same bits at any thread count.
   void setWorkers(WorkerPool* workers) { workers_ = workers; }
+  /// Whether the conjugate gradient's passes run a particle's three coordinates in one 256-bit
+  /// register (cg_avx2.h), which they do where the processor has AVX2, with the same bits as the
+  /// scalar passes. Off forces the scalar passes (for the test that compares the two, and for
+  /// benchmarks); on takes effect only where the processor has AVX2. For every solver at once.
+  static bool useAvx2();
+  static void setUseAvx2(bool use);
 
 private:
   // A_ij −= h dfdv + h² dfdx at `block` (row i, column j) and b_i += h² dfdx v0_j.
@@ -186,7 +193,7 @@ private:
   // out = A p on the rows [first, last) of chunk `chunk` of kRowsPerChunk rows, from the kept pairs:
   // (A p)_i = E_i p_i + Σ over the pairs at i, in list order, of ±C (p_j − p_i) (+ at end i, − at j),
   // with E_i = A_ii + Σ C its diagonal block without the pairs' part (own_diagonal_).
-  void multiplyPairRows(const Eigen::Matrix3Xd& p, Eigen::Matrix3Xd& out, int chunk, int first, int last) const;
+  void multiplyPairRows(const PaddedVectors& p, PaddedVectors& out, int chunk, int first, int last) const;
   // CG iterations from delta_v_ until the filtered residual is within cg_tolerance |b|, or the
   // velocity error it bounds within cg_velocity_tolerance, or `max_iterations`.
   void conjugateGradient(const std::vector<char>& pinned, const IntegratorDef& settings, int max_iterations,
@@ -205,9 +212,9 @@ private:
     double preconditioned = 0.0, squared = 0.0, weighted = 0.0;
   };
   // out = A p, all rows: from the kept pairs when `pair_product`, else from the blocks.
-  void multiply(const Eigen::Matrix3Xd& p, Eigen::Matrix3Xd& out, bool pair_product) const;
+  void multiply(const PaddedVectors& p, PaddedVectors& out, bool pair_product) const;
   // out = A p on rows [begin, end).
-  void multiplyRows(const Eigen::Matrix3Xd& p, Eigen::Matrix3Xd& out, int begin, int end) const;
+  void multiplyRows(const PaddedVectors& p, PaddedVectors& out, int begin, int end) const;
   static void filter(const std::vector<char>& pinned, Eigen::Matrix3Xd& p);
   void precondition(const Eigen::Matrix3Xd& r, Eigen::Matrix3Xd& out) const;
   // Decides which contacts are held and turns the system into one for the rest (keeping the
@@ -270,7 +277,10 @@ private:
   // Per chunk of rows, an iteration's sums (conjugateGradient()).
   std::vector<double> curvature_chunks_;
   std::vector<ResidualSums> residual_chunks_;
-  Eigen::Matrix3Xd delta_v_, rhs_, residual_, direction_, product_, preconditioned_;
+  Eigen::Matrix3Xd delta_v_, rhs_, residual_, preconditioned_;
+  // CG's iterations: Δv, the residual r, the preconditioned residual z, the direction d and the
+  // product A d, padded for the AVX2 passes (PaddedVectors).
+  PaddedVectors padded_delta_v_, padded_residual_, padded_preconditioned_, direction_, product_;
 };
 
 }  // namespace core
