@@ -664,7 +664,17 @@ def main():
                  '1.46 ms, 3.78 against 3.16 ms, one run after the other). Tighter code would bring that towards the two of '
                  'the prototype outside the engine, not further: each row of a sweep needs the row before it '
                  '(a chain of dependent 3×3 products, where the product\'s rows are independent), so the solve '
-                 'would gain about 1.3×, the step at most about 1.2×, short of goal 7\'s 5× from 4.2×; not kept.'
+                 'would gain about 1.3×, the step at most about 1.2×, short of goal 7\'s 5× from 4.2×; not kept. '
+                 'What did it, later on 2026-11-30: the conjugate gradient\'s passes over the particles with a '
+                 'particle\'s three coordinates in one 256-bit register where the processor has AVX2 (asked at run '
+                 'time; each lane in the scalar passes\' order and without fused multiply-adds, so the same bits, '
+                 'which a golden test checks by forcing the scalar passes), its vectors padded to four doubles a '
+                 'particle: hang64 at h = 1/1000 took 0.99–1.05 ms a step against 1.20–1.25 at 3.45e-4 and '
+                 '1.62–1.80 against 2.21–2.43 ms at 1e-6 (the two libraries in turn, five pairs, each the fastest '
+                 'of 30 runs of 100 steps). The springs\' Jacobians (a fifth of that step) were tried with their '
+                 'four divisions (the direction\'s three and L/l) in one four-lane division, the same bits: no '
+                 'faster (23.5 against 21.9 %% of the step in a profile), so the divider does not bound them; not '
+                 'kept.'
                  % (direct64['detail'].split(';')[0] if direct64 and direct64['detail'] else 'see the table',
                     factorization_rate(direct64), roof_sentence(rows, direct64),
                     ' (%.0f iterations a step at 1e-6)' % cg_tol['cg_iterations'] if cg_tol else ''))
