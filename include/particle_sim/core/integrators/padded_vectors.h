@@ -12,8 +12,8 @@ namespace core
 {
 /// One 3-vector per particle, stored four doubles apart (the fourth is padding, zero unless a
 /// writer says otherwise) from a 64-byte boundary: each particle's vector is one aligned 256-bit
-/// load, and never straddles two cache lines. The layout of the conjugate gradient's direction and
-/// product, which the pair product reads and writes a particle at a time (ImplicitEulerSolver).
+/// load, and never straddles two cache lines. The layout of the conjugate gradient's iteration
+/// vectors, which its AVX2 passes read and write a particle at a time (ImplicitEulerSolver, cg_avx2.h).
 class PaddedVectors
 {
 public:
