@@ -95,6 +95,18 @@ template <bool kAddI, bool kAddJ>
   storeHeld();
 }
 
+// Copies between the 3-row matrices and the CG's padded vectors, particle by particle.
+void copyPadded(const Eigen::Matrix3Xd& from, PaddedVectors& to)
+{
+  for (int i = 0; i < static_cast<int>(from.cols()); ++i)
+    to.col(i) = from.col(i);
+}
+void copyPadded(const PaddedVectors& from, Eigen::Matrix3Xd& to)
+{
+  for (int i = 0; i < static_cast<int>(to.cols()); ++i)
+    to.col(i) = from.col(i);
+}
+
 // Whether the conjugate gradient takes the AVX2 passes (ImplicitEulerSolver::setUseAvx2()).
 std::atomic<bool>& useAvx2Flag()
 {
@@ -585,8 +597,7 @@ void ImplicitEulerSolver::conjugateGradient(const std::vector<char>& pinned, con
     free_mass += pinned[i] ? 0.0 : (*mass_)[i];
   const double rhs_norm = residualNorms(residual_, free_mass).euclidean;
   const int rows = static_cast<int>(diagonal_block_.size());
-  for (int i = 0; i < rows; ++i)
-    padded_delta_v_.col(i) = delta_v_.col(i);
+  copyPadded(delta_v_, padded_delta_v_);
   multiply(padded_delta_v_, product_, pair_product);
   for (int i = 0; i < rows; ++i)
     residual_.col(i) -= product_.col(i);
@@ -601,11 +612,8 @@ void ImplicitEulerSolver::conjugateGradient(const std::vector<char>& pinned, con
       inverse_diagonal_[i] = blocks_[diagonal_block_[i]].inverse();
     precondition(residual_, preconditioned_);
     filter(pinned, preconditioned_);
-    for (int i = 0; i < rows; ++i)
-    {
-      direction_.col(i) = preconditioned_.col(i);
-      padded_residual_.col(i) = residual_.col(i);
-    }
+    copyPadded(preconditioned_, direction_);
+    copyPadded(residual_, padded_residual_);
   }
   double delta_new = dot(residual_, preconditioned_);
   // Each iteration is three passes over the particles, each shared by rows (WorkerPool): the product
@@ -710,8 +718,7 @@ void ImplicitEulerSolver::conjugateGradient(const std::vector<char>& pinned, con
     norms = normsOf(total.squared, total.weighted, free_mass);
     ++report.iterations;
   }
-  for (int i = 0; i < rows; ++i)
-    delta_v_.col(i) = padded_delta_v_.col(i);
+  copyPadded(padded_delta_v_, delta_v_);
   report.relative_residual = rhs_norm > 0.0 ? norms.euclidean / rhs_norm : 0.0;
   report.velocity_error = norms.velocity;
   report.converged = within(norms) && std::isfinite(norms.euclidean);
