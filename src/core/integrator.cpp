@@ -61,6 +61,8 @@ const char* toString(LinearSolverType type)
       return "cg";
     case LinearSolverType::Direct:
       return "direct";
+    case LinearSolverType::Multigrid:
+      return "multigrid";
     case LinearSolverType::Auto:
       break;
   }
@@ -69,7 +71,8 @@ const char* toString(LinearSolverType type)
 
 bool parseLinearSolverType(const std::string& text, LinearSolverType& type)
 {
-  for (LinearSolverType t : {LinearSolverType::Auto, LinearSolverType::ConjugateGradient, LinearSolverType::Direct})
+  for (LinearSolverType t : {LinearSolverType::Auto, LinearSolverType::ConjugateGradient, LinearSolverType::Direct,
+                             LinearSolverType::Multigrid})
   {
     if (text == toString(t))
     {
@@ -82,7 +85,7 @@ bool parseLinearSolverType(const std::string& text, LinearSolverType& type)
 
 const char* linearSolverTypeNames()
 {
-  return "auto, cg, direct";
+  return "auto, cg, direct, multigrid";
 }
 
 IntegratorDef resolve(const BodyIntegratorDef& body, const IntegratorDef& defaults)

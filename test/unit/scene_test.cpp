@@ -307,7 +307,7 @@ TEST(SceneFiles, RefusesBadRopesAndNetworks)
   EXPECT_TRUE(contains(refusal(rope + "    verlet_damping: 1.5\n"), "verlet_damping = 1.5 is out of range"));
   EXPECT_TRUE(contains(refusal("world:\n  cg_max_iterations: 0\n"), "cg_max_iterations = 0 is out of range"));
   EXPECT_TRUE(contains(refusal(rope + "    linear_solver: lu\n"),
-                       "bodies[0].linear_solver = 'lu' is not a linear solver; allowed: auto, cg, direct"));
+                       "bodies[0].linear_solver = 'lu' is not a linear solver; allowed: auto, cg, direct, multigrid"));
 
   const std::string net = "bodies:\n  - name: n\n    kind: spring_network\n";
   EXPECT_TRUE(contains(refusal(net + "    particles: []\n"), "particles must be a non-empty list"));

@@ -63,6 +63,11 @@ enum class LinearSolverType
   ConjugateGradient,  ///< Baraff & Witkin's modified preconditioned conjugate gradient, to cg_velocity_tolerance
                       ///< or cg_tolerance
   Direct,             ///< sparse block L D Lᵀ in a fill-reducing order (exact; O(n) on a rope)
+  /// the conjugate gradient of ConjugateGradient (the same stopping rule and cap) preconditioned by
+  /// one V-cycle of smoothed-aggregation multigrid (SmoothedAggregation) instead of block Jacobi:
+  /// iterations that hardly grow with the size of a sheet, each dearer; its hierarchy is built anew
+  /// each solve
+  Multigrid,
 };
 /// `auto` picks the direct solver when one factorization and solve cost at most this many
 /// conjugate-gradient iterations, counted in floating-point operations from the pattern: true of
@@ -73,11 +78,11 @@ enum class LinearSolverType
 /// directly.
 inline constexpr double kDirectSolverCgIterations = 40.0;
 
-/// "auto", "cg", "direct".
+/// "auto", "cg", "direct", "multigrid".
 const char* toString(LinearSolverType type);
-/// Parses "auto", "cg" or "direct"; false when unknown.
+/// Parses "auto", "cg", "direct" or "multigrid"; false when unknown.
 bool parseLinearSolverType(const std::string& text, LinearSolverType& type);
-/// "auto, cg, direct", for error messages.
+/// "auto, cg, direct, multigrid", for error messages.
 const char* linearSolverTypeNames();
 
 /// An integrator and its settings, with defaults.

@@ -187,8 +187,10 @@ void ImplicitEulerSolver::setPattern(int particles, const std::vector<std::pair<
   inverse_mass_.assign(particles, 0.0);
   curvature_chunks_.assign((particles + kRowsPerChunk - 1) / kRowsPerChunk, 0.0);
   residual_chunks_.assign((particles + kParticlesPerVectorChunk - 1) / kParticlesPerVectorChunk, ResidualSums());
-  for (Eigen::Matrix3Xd* m : {&delta_v_, &rhs_, &residual_, &preconditioned_, &held_change_, &original_rhs_})
+  for (Eigen::Matrix3Xd* m : {&delta_v_, &rhs_, &residual_, &preconditioned_, &held_change_, &original_rhs_,
+                              &multigrid_direction_, &multigrid_product_})
     m->setZero(3, particles);
+  multigrid_planned_ = false;
   for (PaddedVectors* v : {&padded_delta_v_, &padded_residual_, &padded_preconditioned_, &direction_, &product_})
     v->setZero(particles);
   // Room for the resting contacts' bookkeeping (holdContacts) for every particle held, so that no
@@ -370,7 +372,7 @@ double ImplicitEulerSolver::directCostInCgIterations() const
 
 bool ImplicitEulerSolver::usesDirect(LinearSolverType solver)
 {
-  if (solver == LinearSolverType::ConjugateGradient) return false;
+  if (solver == LinearSolverType::ConjugateGradient || solver == LinearSolverType::Multigrid) return false;
   if (solver == LinearSolverType::Auto && auto_choice_ == DirectChoice::Undecided)
   {
     // The direct solve's cost in CG iterations decides now (kDirectSolverCgIterations) and again
@@ -498,6 +500,7 @@ SolverReport ImplicitEulerSolver::solve(const std::vector<char>& pinned, std::ve
   // particle then does. A step that would need more than kMaxContactSolves (a long rope or a sheet
   // dragged over a floor in one step) keeps the last solve and reports itself unconverged, which the
   // status and diagnostics warn of, rather than costing an unbounded number of factorizations.
+  positions_ = &x;
   for (RestingContact& contact : contacts)
     contact.let_go = contact.slipping = false;
   if (!contacts.empty()) movePairsIntoBlocks();  // holding contacts works on the rows of A
@@ -539,6 +542,11 @@ SolverReport ImplicitEulerSolver::solveLinear(const std::vector<char>& pinned, c
   // Directly, when chosen and the factorization succeeds (a singular or non-finite pivot leaves it
   // to CG, from the last step's Δv); then CG, which stops at once when the residual is small enough.
   SolverReport report;
+  if (settings.linear_solver == LinearSolverType::Multigrid)
+  {
+    multigridConjugateGradient(pinned, settings, report);
+    return report;
+  }
   report.direct = usesDirect(settings.linear_solver) && solveDirectly(pinned);
   // Under `auto`, CG may go on past the cap until it has spent what the direct solve costs: until
   // then, stopping for the direct solve would only add its cost to the iterations already spent.
@@ -592,9 +600,7 @@ void ImplicitEulerSolver::conjugateGradient(const std::vector<char>& pinned, con
   filter(pinned, delta_v_);
   residual_ = rhs_;
   filter(pinned, residual_);
-  double free_mass = 0.0;
-  for (int i = 0; i < static_cast<int>(pinned.size()); ++i)
-    free_mass += pinned[i] ? 0.0 : (*mass_)[i];
+  const double free_mass = freeMass(pinned);
   const double rhs_norm = residualNorms(residual_, free_mass).euclidean;
   const int rows = static_cast<int>(diagonal_block_.size());
   copyPadded(delta_v_, padded_delta_v_);
@@ -603,9 +609,7 @@ void ImplicitEulerSolver::conjugateGradient(const std::vector<char>& pinned, con
     residual_.col(i) -= product_.col(i);
   filter(pinned, residual_);
   ResidualNorms norms = residualNorms(residual_, free_mass);
-  auto within = [&](const ResidualNorms& n) {
-    return n.euclidean <= settings.cg_tolerance * rhs_norm || n.velocity <= settings.cg_velocity_tolerance;
-  };
+  auto within = [&](const ResidualNorms& n) { return withinTolerance(n, rhs_norm, settings); };
   if (!within(norms) && max_iterations > 0)
   {
     for (int i = 0; i < static_cast<int>(diagonal_block_.size()); ++i)
@@ -722,6 +726,83 @@ void ImplicitEulerSolver::conjugateGradient(const std::vector<char>& pinned, con
   report.relative_residual = rhs_norm > 0.0 ? norms.euclidean / rhs_norm : 0.0;
   report.velocity_error = norms.velocity;
   report.converged = within(norms) && std::isfinite(norms.euclidean);
+}
+
+void ImplicitEulerSolver::multigridConjugateGradient(const std::vector<char>& pinned, const IntegratorDef& settings,
+                                                     SolverReport& report)
+{
+  // The hierarchy reads A whole, and so does the product: the pairs go into the blocks. Its
+  // aggregates and plans are laid out at the first solve of a pattern; its numbers every solve.
+  movePairsIntoBlocks();
+  if (!multigrid_planned_)
+  {
+    multigrid_.setPattern(static_cast<int>(diagonal_block_.size()), row_start_, block_column_);
+    multigrid_planned_ = true;
+  }
+  // A new hierarchy every solve: kept over later solves (refresh()), its rigid-body modes turn away
+  // from a swinging cloth's within a few steps at h = 1/60 (hang64: 24 iterations a step with a new
+  // one each solve, 36 with one every second solve, 136 every tenth; docs/performance.md).
+  if (!multigrid_.setup(blocks_, *positions_, pinned))
+  {
+    // Not definite (or not finite): block Jacobi's CG meets it as it would and reports it.
+    conjugateGradient(pinned, settings, settings.cg_max_iterations, report);
+    return;
+  }
+  // Preconditioned CG from the warm start on the filtered system, which the hierarchy's finest level
+  // holds (pinned rows and columns cleared): its product is zero on pinned rows of a filtered
+  // direction, and so is a V-cycle of a filtered residual (filtered again all the same).
+  filter(pinned, delta_v_);
+  residual_ = rhs_;
+  filter(pinned, residual_);
+  const double free_mass = freeMass(pinned);
+  const double rhs_norm = residualNorms(residual_, free_mass).euclidean;
+  multigrid_.multiplyFinest(delta_v_, multigrid_product_);
+  residual_ -= multigrid_product_;
+  filter(pinned, residual_);
+  ResidualNorms norms = residualNorms(residual_, free_mass);
+  double rz = 0.0;
+  auto precondition = [&] {
+    multigrid_.apply(residual_, preconditioned_);
+    filter(pinned, preconditioned_);
+    return dot(residual_, preconditioned_);
+  };
+  if (!withinTolerance(norms, rhs_norm, settings))
+  {
+    rz = precondition();
+    multigrid_direction_ = preconditioned_;
+  }
+  while (!withinTolerance(norms, rhs_norm, settings) && report.iterations < settings.cg_max_iterations)
+  {
+    multigrid_.multiplyFinest(multigrid_direction_, multigrid_product_);
+    const double curvature = dot(multigrid_direction_, multigrid_product_);
+    // Non-positive (or NaN) curvature, or r·z: A or the V-cycle is not positive definite.
+    if (!(curvature > 0.0) || !(rz > 0.0))
+    {
+      report.breakdown = true;
+      break;
+    }
+    const double alpha = rz / curvature;
+    delta_v_ += alpha * multigrid_direction_;
+    residual_ -= alpha * multigrid_product_;
+    norms = residualNorms(residual_, free_mass);
+    ++report.iterations;
+    if (withinTolerance(norms, rhs_norm, settings)) break;
+    const double rz_new = precondition();
+    const double beta = rz_new / rz;
+    rz = rz_new;
+    multigrid_direction_ = preconditioned_ + beta * multigrid_direction_;
+  }
+  report.relative_residual = rhs_norm > 0.0 ? norms.euclidean / rhs_norm : 0.0;
+  report.velocity_error = norms.velocity;
+  report.converged = withinTolerance(norms, rhs_norm, settings) && std::isfinite(norms.euclidean);
+}
+
+double ImplicitEulerSolver::freeMass(const std::vector<char>& pinned) const
+{
+  double free_mass = 0.0;
+  for (int i = 0; i < static_cast<int>(pinned.size()); ++i)
+    free_mass += pinned[i] ? 0.0 : (*mass_)[i];
+  return free_mass;
 }
 
 ImplicitEulerSolver::ResidualNorms ImplicitEulerSolver::residualNorms(const Eigen::Matrix3Xd& r, double free_mass) const

@@ -8,6 +8,7 @@
 #include "particle_sim/core/constraints/resting_contact.h"
 #include "particle_sim/core/integrator.h"
 #include "particle_sim/core/integrators/padded_vectors.h"
+#include "particle_sim/core/integrators/smoothed_aggregation.h"
 #include "particle_sim/core/integrators/sparse_block_ldlt.h"
 #include "particle_sim/core/pair_chunks.h"
 #include "particle_sim/core/worker_pool.h"
@@ -198,11 +199,21 @@ private:
   // velocity error it bounds within cg_velocity_tolerance, or `max_iterations`.
   void conjugateGradient(const std::vector<char>& pinned, const IntegratorDef& settings, int max_iterations,
                          SolverReport& report);
+  // The same conjugate gradient and stopping rule, preconditioned by a V-cycle of multigrid_ (set up
+  // for this system first) instead of block Jacobi; block Jacobi's when the hierarchy is not definite.
+  void multigridConjugateGradient(const std::vector<char>& pinned, const IntegratorDef& settings, SolverReport& report);
   struct ResidualNorms
   {
     double euclidean;  // |r|
     double velocity;   // [m/s] sqrt(Σ |r_i|² / m_i / free_mass): SolverReport::velocity_error
   };
+  // Whether CG may stop: |r| within cg_tolerance |b|, or the velocity error within cg_velocity_tolerance.
+  static bool withinTolerance(const ResidualNorms& norms, double rhs_norm, const IntegratorDef& settings)
+  {
+    return norms.euclidean <= settings.cg_tolerance * rhs_norm || norms.velocity <= settings.cg_velocity_tolerance;
+  }
+  // [kg] the mass of the particles that are not pinned.
+  double freeMass(const std::vector<char>& pinned) const;
   ResidualNorms residualNorms(const Eigen::Matrix3Xd& r, double free_mass) const;
   // The norms from the sums Σ |r_i|² and Σ |r_i|² / m_i.
   static ResidualNorms normsOf(double squared, double weighted, double free_mass);
@@ -256,6 +267,9 @@ private:
   std::vector<Eigen::Matrix3d> inverse_diagonal_;
   std::vector<double> inverse_mass_;  // 1/m per particle (0 where m is 0), set by begin()
   SparseBlockLdlt direct_;
+  SmoothedAggregation multigrid_;                // LinearSolverType::Multigrid's preconditioner
+  bool multigrid_planned_ = false;               // multigrid_ has this pattern
+  const Eigen::Matrix3Xd* positions_ = nullptr;  // x of the step being solved (the multigrid's modes)
   enum class DirectChoice
   {
     Undecided,
@@ -278,6 +292,7 @@ private:
   std::vector<double> curvature_chunks_;
   std::vector<ResidualSums> residual_chunks_;
   Eigen::Matrix3Xd delta_v_, rhs_, residual_, preconditioned_;
+  Eigen::Matrix3Xd multigrid_direction_, multigrid_product_;  // multigridConjugateGradient()'s d and A d
   // CG's iterations: Δv, the residual r, the preconditioned residual z, the direction d and the
   // product A d, padded for the AVX2 passes (PaddedVectors).
   PaddedVectors padded_delta_v_, padded_residual_, padded_preconditioned_, direction_, product_;

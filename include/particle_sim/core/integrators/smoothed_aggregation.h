@@ -1,0 +1,125 @@
+#pragma once
+
+#include <Eigen/Cholesky>
+#include <Eigen/Core>
+#include <array>
+#include <vector>
+
+namespace particle_sim
+{
+namespace core
+{
+/// Smoothed-aggregation algebraic multigrid (Vaněk, Mandel & Brezina 1996) as the conjugate
+/// gradient's preconditioner for the implicit system of a body of particles: one symmetric V-cycle
+/// approximates A⁻¹ r. Each level lumps neighbouring nodes into aggregates (a particle and its
+/// neighbours on the finest level, about 3 × 3 particles of a cloth); the coarse space of an
+/// aggregate is spanned by the six rigid-body modes of its particles (three translations, three
+/// rotations about its centroid), which a free elastic body does not resist, so that the coarse
+/// levels carry the slow bending and swinging that block Jacobi needs hundreds of iterations for.
+///
+/// Per level: the tentative prolongator P̂ is the modes of each aggregate orthonormalised (Q of a
+/// QR, whose R are the modes of the next level's node); P = (I − ω D⁻¹ A) P̂, smoothed by one damped
+/// Jacobi step (ω = 4 / (3 ρ(D⁻¹ A)), ρ from a few power iterations); the next level's matrix is
+/// A_c = Pᵀ A P (Galerkin). Down to a few nodes, which a dense L D Lᵀ solves. The V-cycle smooths
+/// once with damped block Jacobi before the coarse correction and once after: the same smoother
+/// both ways, so the cycle is a symmetric positive definite operator, as CG needs.
+///
+/// Pinned particles: setup() takes the filtered system (pinned rows and columns cleared, the diagonal
+/// kept), their rows of P̂ are zero, and a coarse mode that the pins leave empty is dropped (its
+/// column zero, its diagonal one). So the V-cycle of a filtered residual is zero on pinned rows.
+///
+/// setPattern() aggregates the particle graph and lays out every level's patterns and the plans of
+/// its Galerkin products (allocates); setup() computes the numbers for one system and apply() runs a
+/// V-cycle: neither allocates. Everything is serial, so the same bits at any thread count.
+class SmoothedAggregation
+{
+public:
+  /// The finest level's pattern: block rows with sorted columns, the diagonal included (the
+  /// implicit solver's), for `particles` particles.
+  void setPattern(int particles, const std::vector<int>& row_start, const std::vector<int>& column);
+  /// Builds the hierarchy for the 3x3 blocks A (in the pattern's order, symmetric) at positions x [m]:
+  /// pinned rows and columns are filtered out. False when the coarsest matrix cannot be factored
+  /// (A not positive definite or not finite): apply() must not be called then.
+  bool setup(const std::vector<Eigen::Matrix3d>& blocks, const Eigen::Matrix3Xd& x, const std::vector<char>& pinned);
+  /// z = one V-cycle on r (3 x particles, filtered: zero on pinned rows).
+  void apply(const Eigen::Matrix3Xd& r, Eigen::Matrix3Xd& z);
+  /// y = Ã x with Ã the filtered matrix of the last setup() (pinned rows and columns cleared, an
+  /// identity on their diagonal).
+  void multiplyFinest(const Eigen::Matrix3Xd& x, Eigen::Matrix3Xd& y) const;
+  /// The number of levels, the finest included (0 before setPattern()).
+  int levels() const { return static_cast<int>(levels_.size()); }
+  /// Nodes of level `level` (particles on the finest, aggregates below).
+  int nodes(int level) const { return levels_[level].nodes; }
+  /// Blocks of level `level`'s matrix (3x3 on the finest, 6x6 below).
+  int blocks(int level) const { return static_cast<int>(levels_[level].column.size()); }
+  /// The smoothed prolongator of level `level` (< levels() − 1) applied to a coarse vector
+  /// (6 numbers a node of the next level): for tests.
+  Eigen::VectorXd prolong(int level, const Eigen::VectorXd& coarse) const;
+  /// The tentative prolongator's columns at `level`, times the next level's modes (R): the modes of
+  /// this level, rebuilt (for tests: P̂ R = B).
+  Eigen::VectorXd tentativeTimesCoarseModes(int level, int mode) const;
+  /// The near-null-space modes of `level`, mode `mode` (0..5) as a vector: for tests.
+  Eigen::VectorXd modes(int level, int mode) const;
+
+  /// Nodes of the coarsest level at most (it is solved by a dense factorization).
+  static constexpr int kCoarsestNodes = 24;
+  /// The rigid-body modes of a node's aggregate: the coarse block size.
+  static constexpr int kModes = 6;
+
+private:
+  // One level: its matrix A in b x b blocks (row-major, block-sparse rows with sorted columns), the
+  // inverse of its diagonal blocks, its modes (b x 6 a node), and towards the next level the
+  // aggregates, the tentative and smoothed prolongators (b x 6 blocks) and the Galerkin plans.
+  struct Level
+  {
+    int nodes = 0;
+    int block = 3;  // b: 3 on the finest level, 6 below
+    std::vector<int> start, column, diagonal;
+    std::vector<double> a, inverse_diagonal, modes;
+    // Towards the next level (empty on the coarsest).
+    std::vector<int> aggregate;  // per node
+    std::vector<std::vector<int>> members;
+    std::vector<double> tentative;  // b x 6 per node: its rows of P̂ (columns of its aggregate)
+    std::vector<int> p_start, p_column;
+    std::vector<double> p;  // b x 6 per block of P
+    // A P: rows of this level, columns of the next; planned as (block of A, block of P, block of AP)
+    // per product, row after row.
+    std::vector<int> ap_start, ap_column;
+    std::vector<double> ap;
+    std::vector<std::array<int, 3>> ap_plan;
+    std::vector<int> ap_plan_start;  // per row
+    // Pᵀ (A P) into the next level's blocks: (block of P, block of AP, block of A_c) per product.
+    std::vector<std::array<int, 3>> galerkin_plan;
+    double omega = 0.0;  // the smoother's damping, 4 / (3 ρ(D⁻¹ A))
+    // The V-cycle's vectors: right-hand side, iterate, residual (b a node); and the power
+    // iteration's two.
+    Eigen::VectorXd rhs, x, residual, power, power_product;
+  };
+
+  // Aggregates `level` (from its pattern) and lays out the next level, its pattern and the plans.
+  void planNextLevel(int level);
+  // The numbers of `level` from its matrix: inverse diagonal, ω, P̂ and the next level's modes, P,
+  // A P and the next level's A. Templated on the block size.
+  template <int B>
+  void setupLevel(int level);
+  template <int B>
+  void multiply(const Level& level, const Eigen::VectorXd& x, Eigen::VectorXd& y) const;
+  template <int B>
+  void smooth(const Level& level, const Eigen::VectorXd& residual, Eigen::VectorXd& x) const;
+  template <int B>
+  void restrictResidual(const Level& level, Eigen::VectorXd& coarse_rhs) const;
+  template <int B>
+  void prolongAdd(const Level& level, const Eigen::VectorXd& coarse, Eigen::VectorXd& x) const;
+  // x = V-cycle on `level`'s rhs.
+  void cycle(int level);
+  bool factorCoarsest();
+  // The finest level's matrix from the solver's blocks, pinned rows and columns filtered.
+  void copyFinest(const std::vector<Eigen::Matrix3d>& blocks, const std::vector<char>& pinned);
+
+  std::vector<Level> levels_;
+  Eigen::MatrixXd coarsest_;  // the coarsest level's matrix, dense
+  Eigen::LDLT<Eigen::MatrixXd> coarsest_factor_;
+};
+
+}  // namespace core
+}  // namespace particle_sim

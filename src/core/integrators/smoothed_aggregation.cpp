@@ -1,0 +1,582 @@
+#include "particle_sim/core/integrators/smoothed_aggregation.h"
+
+#include <Eigen/LU>
+#include <algorithm>
+#include <cmath>
+
+namespace particle_sim
+{
+namespace core
+{
+namespace
+{
+constexpr int kModes = SmoothedAggregation::kModes;
+
+template <int R, int C>
+using BlockMap = Eigen::Map<Eigen::Matrix<double, R, C, Eigen::RowMajor>>;
+template <int R, int C>
+using ConstBlockMap = Eigen::Map<const Eigen::Matrix<double, R, C, Eigen::RowMajor>>;
+template <int N>
+using SegmentMap = Eigen::Map<Eigen::Matrix<double, N, 1>>;
+template <int N>
+using ConstSegmentMap = Eigen::Map<const Eigen::Matrix<double, N, 1>>;
+
+// Power iterations for the largest eigenvalue of D⁻¹ A, and the margin its estimate is raised by
+// (the iterations approach it from below): the smoother's ω ρ then stays below 2 with room to spare.
+constexpr int kPowerIterations = 12;
+constexpr double kSpectralMargin = 1.1;
+// A mode whose part orthogonal to the ones before is below this fraction of its norm (or that is zero:
+// every particle of the aggregate pinned, a rotation about a straight rope's axis) is dropped.
+constexpr double kDroppedMode = 1e-10;
+// The coarsest level is factored densely up to this many unknowns (else smoothed by block Jacobi
+// alone: a body whose graph does not coarsen, such as particles without couplings).
+constexpr int kMaxDenseUnknowns = 1200;
+
+// Position of `value` in the sorted range [first, last) (it must be there).
+int positionIn(const std::vector<int>& sorted, int first, int last, int value)
+{
+  return static_cast<int>(std::lower_bound(sorted.begin() + first, sorted.begin() + last, value) - sorted.begin());
+}
+
+// Sorted rows of unique columns, as block-sparse rows (start, column).
+void compressRows(std::vector<std::vector<int>>& rows, std::vector<int>& start, std::vector<int>& column)
+{
+  start.assign(rows.size() + 1, 0);
+  column.clear();
+  for (std::size_t i = 0; i < rows.size(); ++i)
+  {
+    std::sort(rows[i].begin(), rows[i].end());
+    rows[i].erase(std::unique(rows[i].begin(), rows[i].end()), rows[i].end());
+    column.insert(column.end(), rows[i].begin(), rows[i].end());
+    start[i + 1] = static_cast<int>(column.size());
+  }
+}
+}  // namespace
+
+void SmoothedAggregation::setPattern(int particles, const std::vector<int>& row_start, const std::vector<int>& column)
+{
+  levels_.clear();
+  levels_.emplace_back();
+  Level& finest = levels_.back();
+  finest.nodes = particles;
+  finest.block = 3;
+  finest.start = row_start;
+  finest.column = column;
+  // Each level is aggregated into the next until it is small enough to factor, or stops shrinking.
+  while (true)
+  {
+    Level& level = levels_.back();
+    level.diagonal.resize(level.nodes);
+    for (int i = 0; i < level.nodes; ++i)
+      level.diagonal[i] = positionIn(level.column, level.start[i], level.start[i + 1], i);
+    const int b = level.block;
+    level.a.assign(level.column.size() * b * b, 0.0);
+    level.inverse_diagonal.assign(static_cast<std::size_t>(level.nodes) * b * b, 0.0);
+    level.modes.assign(static_cast<std::size_t>(level.nodes) * b * kModes, 0.0);
+    for (Eigen::VectorXd* v : {&level.rhs, &level.x, &level.residual, &level.power, &level.power_product})
+      v->setZero(static_cast<Eigen::Index>(level.nodes) * b);
+    if (level.nodes <= kCoarsestNodes) break;
+    const int nodes = level.nodes;
+    planNextLevel(static_cast<int>(levels_.size()) - 1);
+    // Aggregation that leaves three quarters of the nodes does not pay for a level.
+    if (4 * levels_.back().nodes > 3 * nodes)
+    {
+      levels_.pop_back();
+      Level& last = levels_.back();
+      last.aggregate.clear();
+      last.members.clear();
+      break;
+    }
+  }
+  const Level& coarsest = levels_.back();
+  const int unknowns = coarsest.nodes * coarsest.block;
+  coarsest_.setZero(unknowns <= kMaxDenseUnknowns ? unknowns : 0, unknowns <= kMaxDenseUnknowns ? unknowns : 0);
+  coarsest_factor_ = Eigen::LDLT<Eigen::MatrixXd>(coarsest_.rows());
+}
+
+void SmoothedAggregation::planNextLevel(int index)
+{
+  // Aggregation (Vaněk, Mandel & Brezina's three passes over the graph of the pattern):
+  // 1. a node whose neighbours are all free makes an aggregate with them;
+  // 2. every node left joins the aggregate of pass 1 that most of its neighbours belong to
+  //    (the first such in column order on a tie);
+  // 3. a node still left (no neighbour aggregated) makes an aggregate with its free neighbours.
+  Level& level = levels_[index];
+  const int n = level.nodes;
+  std::vector<int>& aggregate = level.aggregate;
+  aggregate.assign(n, -1);
+  int aggregates = 0;
+  for (int i = 0; i < n; ++i)
+  {
+    bool free = aggregate[i] < 0;
+    for (int k = level.start[i]; free && k < level.start[i + 1]; ++k)
+      free = aggregate[level.column[k]] < 0;
+    if (!free) continue;
+    for (int k = level.start[i]; k < level.start[i + 1]; ++k)
+      aggregate[level.column[k]] = aggregates;
+    ++aggregates;
+  }
+  const std::vector<int> first_pass = aggregate;
+  for (int i = 0; i < n; ++i)
+  {
+    if (aggregate[i] >= 0) continue;
+    int best = -1, best_count = 0;
+    for (int k = level.start[i]; k < level.start[i + 1]; ++k)
+    {
+      const int candidate = first_pass[level.column[k]];
+      if (candidate < 0) continue;
+      int count = 0;
+      for (int l = level.start[i]; l < level.start[i + 1]; ++l)
+        count += first_pass[level.column[l]] == candidate;
+      if (count > best_count)
+      {
+        best = candidate;
+        best_count = count;
+      }
+    }
+    aggregate[i] = best;
+  }
+  for (int i = 0; i < n; ++i)
+  {
+    if (aggregate[i] >= 0) continue;
+    for (int k = level.start[i]; k < level.start[i + 1]; ++k)
+      if (aggregate[level.column[k]] < 0) aggregate[level.column[k]] = aggregates;
+    ++aggregates;
+  }
+  level.members.assign(aggregates, {});
+  for (int i = 0; i < n; ++i)
+    level.members[aggregate[i]].push_back(i);
+
+  // P has a block (i, J) where a neighbour of i (or i) is in aggregate J; A P a block (i, J) where P
+  // has one in a neighbour's row; A_c = Pᵀ (A P) a block (I, J) where a row has P's (·, I) and
+  // A P's (·, J).
+  std::vector<std::vector<int>> rows(n);
+  for (int i = 0; i < n; ++i)
+    for (int k = level.start[i]; k < level.start[i + 1]; ++k)
+      rows[i].push_back(aggregate[level.column[k]]);
+  compressRows(rows, level.p_start, level.p_column);
+  for (int i = 0; i < n; ++i)
+  {
+    rows[i].clear();
+    for (int k = level.start[i]; k < level.start[i + 1]; ++k)
+    {
+      const int j = level.column[k];
+      rows[i].insert(rows[i].end(), level.p_column.begin() + level.p_start[j],
+                     level.p_column.begin() + level.p_start[j + 1]);
+    }
+  }
+  compressRows(rows, level.ap_start, level.ap_column);
+  std::vector<std::vector<int>> coarse_rows(aggregates);
+  for (int i = 0; i < n; ++i)
+    for (int q = level.p_start[i]; q < level.p_start[i + 1]; ++q)
+    {
+      std::vector<int>& row = coarse_rows[level.p_column[q]];
+      row.insert(row.end(), level.ap_column.begin() + level.ap_start[i],
+                 level.ap_column.begin() + level.ap_start[i + 1]);
+    }
+  Level next;
+  next.nodes = aggregates;
+  next.block = kModes;
+  compressRows(coarse_rows, next.start, next.column);
+
+  // The plans: every block product of A P and of Pᵀ (A P), in a fixed order, with where it goes.
+  level.ap_plan.clear();
+  level.ap_plan_start.assign(n + 1, 0);
+  level.galerkin_plan.clear();
+  for (int i = 0; i < n; ++i)
+  {
+    for (int k = level.start[i]; k < level.start[i + 1]; ++k)
+    {
+      const int j = level.column[k];
+      for (int q = level.p_start[j]; q < level.p_start[j + 1]; ++q)
+        level.ap_plan.push_back(
+            {k, q, positionIn(level.ap_column, level.ap_start[i], level.ap_start[i + 1], level.p_column[q])});
+    }
+    level.ap_plan_start[i + 1] = static_cast<int>(level.ap_plan.size());
+    for (int q = level.p_start[i]; q < level.p_start[i + 1]; ++q)
+    {
+      const int coarse_row = level.p_column[q];
+      for (int t = level.ap_start[i]; t < level.ap_start[i + 1]; ++t)
+        level.galerkin_plan.push_back(
+            {q, t, positionIn(next.column, next.start[coarse_row], next.start[coarse_row + 1], level.ap_column[t])});
+    }
+  }
+  const int b = level.block;
+  level.tentative.assign(static_cast<std::size_t>(n) * b * kModes, 0.0);
+  level.p.assign(level.p_column.size() * b * kModes, 0.0);
+  level.ap.assign(level.ap_column.size() * b * kModes, 0.0);
+  levels_.push_back(std::move(next));
+}
+
+void SmoothedAggregation::copyFinest(const std::vector<Eigen::Matrix3d>& blocks, const std::vector<char>& pinned)
+{
+  // The finest matrix, filtered: a pinned particle's row and column cleared but for an identity on
+  // the diagonal (it decouples; the residual is zero there).
+  Level& finest = levels_[0];
+  for (int i = 0; i < finest.nodes; ++i)
+  {
+    for (int k = finest.start[i]; k < finest.start[i + 1]; ++k)
+    {
+      const int j = finest.column[k];
+      BlockMap<3, 3> a(finest.a.data() + 9 * k);
+      if (!pinned[i] && !pinned[j])
+        a = blocks[k];
+      else if (j == i)
+        a.setIdentity();
+      else
+        a.setZero();
+    }
+  }
+}
+
+bool SmoothedAggregation::setup(const std::vector<Eigen::Matrix3d>& blocks, const Eigen::Matrix3Xd& x,
+                                const std::vector<char>& pinned)
+{
+  copyFinest(blocks, pinned);
+  Level& finest = levels_[0];
+  // The rigid-body modes (zero for a pinned particle) of each particle about its aggregate's centroid: the
+  // translations, and the rotations e_k × (x_i − c) about the three axes.
+  if (levels_.size() > 1)
+  {
+    for (const std::vector<int>& members : finest.members)
+    {
+      Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+      for (const int i : members)
+        centroid += x.col(i);
+      centroid /= static_cast<double>(members.size());
+      for (const int i : members)
+      {
+        BlockMap<3, kModes> mode(finest.modes.data() + 3 * kModes * i);
+        if (pinned[i])
+        {
+          mode.setZero();
+          continue;
+        }
+        const Eigen::Vector3d p = x.col(i) - centroid;
+        mode << 1, 0, 0, 0, p.z(), -p.y(),  //
+            0, 1, 0, -p.z(), 0, p.x(),      //
+            0, 0, 1, p.y(), -p.x(), 0;
+      }
+    }
+  }
+  for (int l = 0; l + 1 < static_cast<int>(levels_.size()); ++l)
+  {
+    if (levels_[l].block == 3)
+      setupLevel<3>(l);
+    else
+      setupLevel<kModes>(l);
+  }
+  Level& coarsest = levels_.back();
+  // The inverse diagonal of the coarsest level, for a coarsest level too large to factor.
+  if (coarsest.block == 3)
+    setupLevel<3>(static_cast<int>(levels_.size()) - 1);
+  else
+    setupLevel<kModes>(static_cast<int>(levels_.size()) - 1);
+  return factorCoarsest();
+}
+
+template <int B>
+void SmoothedAggregation::setupLevel(int index)
+{
+  Level& level = levels_[index];
+  const int n = level.nodes;
+  // The inverse of each diagonal block. A mode dropped on the level above left its row and column
+  // empty: its diagonal is set to one, so that it decouples.
+  for (int i = 0; i < n; ++i)
+  {
+    BlockMap<B, B> diagonal(level.a.data() + B * B * level.diagonal[i]);
+    for (int d = 0; d < B; ++d)
+      if (diagonal(d, d) == 0.0) diagonal(d, d) = 1.0;
+    BlockMap<B, B>(level.inverse_diagonal.data() + B * B * i) = diagonal.inverse();
+  }
+  if (static_cast<std::size_t>(index) + 1 == levels_.size()) return;
+
+  // ρ(D⁻¹ A) by power iterations from a fixed start (the same at every setup: the same bits).
+  for (int k = 0; k < level.power.size(); ++k)
+    level.power[k] = 1.0 + 0.5 * std::sin(0.7 * k);
+  double rho = 0.0;
+  for (int iteration = 0; iteration < kPowerIterations; ++iteration)
+  {
+    multiply<B>(level, level.power, level.power_product);
+    for (int i = 0; i < n; ++i)
+      SegmentMap<B>(level.power.data() + B * i).noalias() =
+          ConstBlockMap<B, B>(level.inverse_diagonal.data() + B * B * i) *
+          ConstSegmentMap<B>(level.power_product.data() + B * i);
+    const double norm = level.power.norm();
+    if (!(norm > 0.0) || !std::isfinite(norm)) break;
+    rho = norm;  // |D⁻¹ A v| for |v| = 1
+    level.power /= norm;
+  }
+  level.omega = rho > 0.0 ? 4.0 / (3.0 * kSpectralMargin * rho) : 0.0;
+
+  // The tentative prolongator: each aggregate's modes, orthonormalised by modified Gram–Schmidt
+  // (twice, for orthogonality to rounding), as Q; R is the next level's modes of that node.
+  Level& next = levels_[index + 1];
+  for (int a = 0; a < next.nodes; ++a)
+  {
+    const std::vector<int>& members = level.members[a];
+    BlockMap<kModes, kModes> r(next.modes.data() + kModes * kModes * a);
+    r.setZero();
+    for (const int i : members)
+      BlockMap<B, kModes>(level.tentative.data() + B * kModes * i) =
+          ConstBlockMap<B, kModes>(level.modes.data() + B * kModes * i);
+    for (int c = 0; c < kModes; ++c)
+    {
+      double before = 0.0;
+      for (const int i : members)
+        before += BlockMap<B, kModes>(level.tentative.data() + B * kModes * i).col(c).squaredNorm();
+      for (int pass = 0; pass < 2; ++pass)
+        for (int e = 0; e < c; ++e)
+        {
+          double projection = 0.0;
+          for (const int i : members)
+          {
+            const BlockMap<B, kModes> q(level.tentative.data() + B * kModes * i);
+            projection += q.col(e).dot(q.col(c));
+          }
+          for (const int i : members)
+          {
+            BlockMap<B, kModes> q(level.tentative.data() + B * kModes * i);
+            q.col(c) -= projection * q.col(e);
+          }
+          r(e, c) += projection;
+        }
+      double after = 0.0;
+      for (const int i : members)
+        after += BlockMap<B, kModes>(level.tentative.data() + B * kModes * i).col(c).squaredNorm();
+      const bool dropped = !(after > kDroppedMode * kDroppedMode * before) || !(before > 0.0);
+      const double norm = std::sqrt(after);
+      r(c, c) = dropped ? 0.0 : norm;
+      for (const int i : members)
+      {
+        BlockMap<B, kModes> q(level.tentative.data() + B * kModes * i);
+        if (dropped)
+          q.col(c).setZero();
+        else
+          q.col(c) /= norm;
+      }
+    }
+  }
+
+  // P = (I − ω D⁻¹ A) P̂: row i's blocks first collect Σ_j A_ij P̂_j by the aggregate of j, then
+  // become −ω D_i⁻¹ times that, plus P̂_i in i's own aggregate.
+  std::fill(level.p.begin(), level.p.end(), 0.0);
+  for (int i = 0; i < n; ++i)
+  {
+    const int first = level.p_start[i], last = level.p_start[i + 1];
+    for (int k = level.start[i]; k < level.start[i + 1]; ++k)
+    {
+      const int j = level.column[k];
+      const int q = positionIn(level.p_column, first, last, level.aggregate[j]);
+      BlockMap<B, kModes>(level.p.data() + B * kModes * q).noalias() +=
+          ConstBlockMap<B, B>(level.a.data() + B * B * k) *
+          ConstBlockMap<B, kModes>(level.tentative.data() + B * kModes * j);
+    }
+    const ConstBlockMap<B, B> inverse(level.inverse_diagonal.data() + B * B * i);
+    for (int q = first; q < last; ++q)
+    {
+      BlockMap<B, kModes> block(level.p.data() + B * kModes * q);
+      const Eigen::Matrix<double, B, kModes> smoothed = -level.omega * (inverse * block);
+      block = smoothed;
+    }
+    const int own = positionIn(level.p_column, first, last, level.aggregate[i]);
+    BlockMap<B, kModes>(level.p.data() + B * kModes * own) +=
+        ConstBlockMap<B, kModes>(level.tentative.data() + B * kModes * i);
+  }
+
+  // A P, then A_c = Pᵀ (A P), by the plans.
+  std::fill(level.ap.begin(), level.ap.end(), 0.0);
+  for (const auto& [k, q, t] : level.ap_plan)
+    BlockMap<B, kModes>(level.ap.data() + B * kModes * t).noalias() +=
+        ConstBlockMap<B, B>(level.a.data() + B * B * k) * ConstBlockMap<B, kModes>(level.p.data() + B * kModes * q);
+  std::fill(next.a.begin(), next.a.end(), 0.0);
+  for (const auto& [q, t, c] : level.galerkin_plan)
+    BlockMap<kModes, kModes>(next.a.data() + kModes * kModes * c).noalias() +=
+        ConstBlockMap<B, kModes>(level.p.data() + B * kModes * q).transpose() *
+        ConstBlockMap<B, kModes>(level.ap.data() + B * kModes * t);
+}
+
+bool SmoothedAggregation::factorCoarsest()
+{
+  const Level& coarsest = levels_.back();
+  if (coarsest_.rows() == 0) return true;  // block Jacobi there
+  const int b = coarsest.block;
+  coarsest_.setZero();
+  for (int i = 0; i < coarsest.nodes; ++i)
+    for (int k = coarsest.start[i]; k < coarsest.start[i + 1]; ++k)
+      for (int r = 0; r < b; ++r)
+        for (int c = 0; c < b; ++c)
+          coarsest_(b * i + r, b * coarsest.column[k] + c) = coarsest.a[b * b * k + b * r + c];
+  coarsest_factor_.compute(coarsest_);
+  // Positive definite: every pivot positive and finite.
+  if (coarsest_factor_.info() != Eigen::Success) return false;
+  const auto pivots = coarsest_factor_.vectorD();
+  for (Eigen::Index k = 0; k < pivots.size(); ++k)
+    if (!(pivots[k] > 0.0) || !std::isfinite(pivots[k])) return false;
+  return true;
+}
+
+template <int B>
+void SmoothedAggregation::multiply(const Level& level, const Eigen::VectorXd& x, Eigen::VectorXd& y) const
+{
+  for (int i = 0; i < level.nodes; ++i)
+  {
+    Eigen::Matrix<double, B, 1> sum = Eigen::Matrix<double, B, 1>::Zero();
+    for (int k = level.start[i]; k < level.start[i + 1]; ++k)
+      sum.noalias() +=
+          ConstBlockMap<B, B>(level.a.data() + B * B * k) * ConstSegmentMap<B>(x.data() + B * level.column[k]);
+    SegmentMap<B>(y.data() + B * i) = sum;
+  }
+}
+
+template <int B>
+void SmoothedAggregation::smooth(const Level& level, const Eigen::VectorXd& residual, Eigen::VectorXd& x) const
+{
+  for (int i = 0; i < level.nodes; ++i)
+    SegmentMap<B>(x.data() + B * i).noalias() +=
+        level.omega *
+        (ConstBlockMap<B, B>(level.inverse_diagonal.data() + B * B * i) * ConstSegmentMap<B>(residual.data() + B * i));
+}
+
+template <int B>
+void SmoothedAggregation::restrictResidual(const Level& level, Eigen::VectorXd& coarse_rhs) const
+{
+  coarse_rhs.setZero();
+  for (int i = 0; i < level.nodes; ++i)
+    for (int q = level.p_start[i]; q < level.p_start[i + 1]; ++q)
+      SegmentMap<kModes>(coarse_rhs.data() + kModes * level.p_column[q]).noalias() +=
+          ConstBlockMap<B, kModes>(level.p.data() + B * kModes * q).transpose() *
+          ConstSegmentMap<B>(level.residual.data() + B * i);
+}
+
+template <int B>
+void SmoothedAggregation::prolongAdd(const Level& level, const Eigen::VectorXd& coarse, Eigen::VectorXd& x) const
+{
+  for (int i = 0; i < level.nodes; ++i)
+  {
+    Eigen::Matrix<double, B, 1> sum = Eigen::Matrix<double, B, 1>::Zero();
+    for (int q = level.p_start[i]; q < level.p_start[i + 1]; ++q)
+      sum.noalias() += ConstBlockMap<B, kModes>(level.p.data() + B * kModes * q) *
+                       ConstSegmentMap<kModes>(coarse.data() + kModes * level.p_column[q]);
+    SegmentMap<B>(x.data() + B * i) += sum;
+  }
+}
+
+void SmoothedAggregation::cycle(int index)
+{
+  Level& level = levels_[index];
+  const bool fine_block = level.block == 3;
+  if (static_cast<std::size_t>(index) + 1 == levels_.size())
+  {
+    // The coarsest level: solved exactly (or by its block Jacobi when too large to factor).
+    if (coarsest_.rows() > 0)
+    {
+      level.x = coarsest_factor_.solve(level.rhs);
+    }
+    else
+    {
+      for (int i = 0; i < level.nodes; ++i)
+      {
+        const int b = level.block;
+        level.x.segment(b * i, b).noalias() =
+            Eigen::Map<const Eigen::MatrixXd>(level.inverse_diagonal.data() + b * b * i, b, b).transpose() *
+            level.rhs.segment(b * i, b);
+      }
+    }
+    return;
+  }
+  Level& next = levels_[index + 1];
+  // Pre-smoothing from zero, the coarse correction of the residual left, post-smoothing.
+  level.x.setZero();
+  auto residualOfX = [&] {
+    if (fine_block)
+      multiply<3>(level, level.x, level.residual);
+    else
+      multiply<kModes>(level, level.x, level.residual);
+    level.residual = level.rhs - level.residual;
+  };
+  if (fine_block)
+    smooth<3>(level, level.rhs, level.x);
+  else
+    smooth<kModes>(level, level.rhs, level.x);
+  residualOfX();
+  if (fine_block)
+    restrictResidual<3>(level, next.rhs);
+  else
+    restrictResidual<kModes>(level, next.rhs);
+  cycle(index + 1);
+  if (fine_block)
+    prolongAdd<3>(level, next.x, level.x);
+  else
+    prolongAdd<kModes>(level, next.x, level.x);
+  residualOfX();
+  if (fine_block)
+    smooth<3>(level, level.residual, level.x);
+  else
+    smooth<kModes>(level, level.residual, level.x);
+}
+
+void SmoothedAggregation::apply(const Eigen::Matrix3Xd& r, Eigen::Matrix3Xd& z)
+{
+  Level& finest = levels_[0];
+  finest.rhs = Eigen::Map<const Eigen::VectorXd>(r.data(), r.size());
+  cycle(0);
+  Eigen::Map<Eigen::VectorXd>(z.data(), z.size()) = finest.x;
+}
+
+void SmoothedAggregation::multiplyFinest(const Eigen::Matrix3Xd& x, Eigen::Matrix3Xd& y) const
+{
+  const Level& finest = levels_[0];
+  for (int i = 0; i < finest.nodes; ++i)
+  {
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    for (int k = finest.start[i]; k < finest.start[i + 1]; ++k)
+      sum.noalias() += ConstBlockMap<3, 3>(finest.a.data() + 9 * k) * x.col(finest.column[k]);
+    y.col(i) = sum;
+  }
+}
+
+Eigen::VectorXd SmoothedAggregation::prolong(int index, const Eigen::VectorXd& coarse) const
+{
+  const Level& level = levels_[index];
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(level.nodes) * level.block);
+  if (level.block == 3)
+    prolongAdd<3>(level, coarse, x);
+  else
+    prolongAdd<kModes>(level, coarse, x);
+  return x;
+}
+
+Eigen::VectorXd SmoothedAggregation::tentativeTimesCoarseModes(int index, int mode) const
+{
+  const Level& level = levels_[index];
+  const Level& next = levels_[index + 1];
+  const int b = level.block;
+  Eigen::VectorXd out(static_cast<Eigen::Index>(level.nodes) * b);
+  for (int i = 0; i < level.nodes; ++i)
+  {
+    const int a = level.aggregate[i];
+    for (int r = 0; r < b; ++r)
+    {
+      double sum = 0.0;
+      for (int c = 0; c < kModes; ++c)
+        sum += level.tentative[b * kModes * i + kModes * r + c] * next.modes[kModes * kModes * a + kModes * c + mode];
+      out[b * i + r] = sum;
+    }
+  }
+  return out;
+}
+
+Eigen::VectorXd SmoothedAggregation::modes(int index, int mode) const
+{
+  const Level& level = levels_[index];
+  const int b = level.block;
+  Eigen::VectorXd out(static_cast<Eigen::Index>(level.nodes) * b);
+  for (int i = 0; i < level.nodes; ++i)
+    for (int r = 0; r < b; ++r)
+      out[b * i + r] = level.modes[b * kModes * i + kModes * r + mode];
+  return out;
+}
+
+}  // namespace core
+}  // namespace particle_sim
