@@ -167,7 +167,7 @@ void cloths(std::ostream& out, bool quick)
 {
   const std::vector<int> sizes = quick ? std::vector<int>{32} : std::vector<int>{32, 64, 128, 256};
   for (const core::LinearSolverType solver :
-       {core::LinearSolverType::ConjugateGradient, core::LinearSolverType::Direct})
+       {core::LinearSolverType::ConjugateGradient, core::LinearSolverType::Direct, core::LinearSolverType::Multigrid})
   {
     for (int n : sizes)
     {
@@ -279,7 +279,7 @@ void hang(std::ostream& out, bool quick)
     core::LinearSolverType solver;
     double tolerance, dt;
   };
-  // Implicit Euler at h = 1/60 with both linear solvers (goal 1); Verlet split into the substeps its
+  // Implicit Euler at h = 1/60 with each linear solver (goal 1); Verlet split into the substeps its
   // stability needs (the cheapest stable explicit method: against Bullet's position-based solver at
   // equal stretch, goal 7); and `auto` (goal 8: within 1.2x of the best fixed choice). Then the same
   // at h = 1/1000, where Bullet's implicit solver is compared at the same dt (goal 7), to 1e-6 and to
@@ -291,6 +291,8 @@ void hang(std::ostream& out, bool quick)
       {"implicit_euler cg tol 1e-4", core::kImplicitEulerIntegrator, core::LinearSolverType::ConjugateGradient, 1e-4,
        h60},
       {"implicit_euler direct", core::kImplicitEulerIntegrator, core::LinearSolverType::Direct, 1e-6, h60},
+      {"implicit_euler multigrid tol 1e-6", core::kImplicitEulerIntegrator, core::LinearSolverType::Multigrid, 1e-6,
+       h60},
       {"verlet substepped", core::kVerletIntegrator, core::LinearSolverType::Auto, 1e-6, h60},
       {"auto", core::kAutoIntegrator, core::LinearSolverType::Auto, 1e-6, h60},
       {"implicit_euler cg dt 1/1000", core::kImplicitEulerIntegrator, core::LinearSolverType::ConjugateGradient, 1e-6,
@@ -298,6 +300,8 @@ void hang(std::ostream& out, bool quick)
       {"implicit_euler cg dt 1/1000 tol 3.45e-4", core::kImplicitEulerIntegrator,
        core::LinearSolverType::ConjugateGradient, 3.45e-4, h1000},
       {"implicit_euler direct dt 1/1000", core::kImplicitEulerIntegrator, core::LinearSolverType::Direct, 1e-6, h1000},
+      {"implicit_euler multigrid dt 1/1000", core::kImplicitEulerIntegrator, core::LinearSolverType::Multigrid, 1e-6,
+       h1000},
       {"verlet substepped dt 1/1000", core::kVerletIntegrator, core::LinearSolverType::Auto, 1e-6, h1000},
       {"auto dt 1/1000", core::kAutoIntegrator, core::LinearSolverType::Auto, 1e-6, h1000},
   };
