@@ -24,6 +24,8 @@ using ConstSegmentMap = Eigen::Map<const Eigen::Matrix<double, N, 1>>;
 // Power iterations for the largest eigenvalue of D⁻¹ A, and the margin its estimate is raised by
 // (the iterations approach it from below): the smoother's ω ρ then stays below 2 with room to spare.
 constexpr int kPowerIterations = 12;
+// From the last setup's vector (SmoothedAggregation::setupLevel()).
+constexpr int kWarmPowerIterations = 3;
 constexpr double kSpectralMargin = 1.1;
 // A mode whose part orthogonal to the ones before is below this fraction of its norm (or that is zero:
 // every particle of the aggregate pinned, a rotation about a straight rope's axis) is dropped.
@@ -179,32 +181,49 @@ void SmoothedAggregation::planNextLevel(int index)
   next.block = kModes;
   compressRows(coarse_rows, next.start, next.column);
 
-  // The plans: every block product of A P and of Pᵀ (A P), in a fixed order, with where it goes.
+  // The plans: every block product of A P and of Pᵀ (A P), row after row, with where it goes. A P is
+  // made a row at a time in a few blocks of scratch (slot t of the row: its t-th column), which the
+  // Galerkin products of that row then read; of A_c only the blocks on and above the diagonal are
+  // summed (A_c is symmetric), the ones below copied from them after.
   level.ap_plan.clear();
   level.ap_plan_start.assign(n + 1, 0);
   level.galerkin_plan.clear();
+  level.galerkin_plan_start.assign(n + 1, 0);
+  int widest_row = 0;
   for (int i = 0; i < n; ++i)
   {
+    const int first = level.ap_start[i], last = level.ap_start[i + 1];
+    widest_row = std::max(widest_row, last - first);
     for (int k = level.start[i]; k < level.start[i + 1]; ++k)
     {
       const int j = level.column[k];
       for (int q = level.p_start[j]; q < level.p_start[j + 1]; ++q)
-        level.ap_plan.push_back(
-            {k, q, positionIn(level.ap_column, level.ap_start[i], level.ap_start[i + 1], level.p_column[q])});
+        level.ap_plan.push_back({k, q, positionIn(level.ap_column, first, last, level.p_column[q]) - first});
     }
     level.ap_plan_start[i + 1] = static_cast<int>(level.ap_plan.size());
     for (int q = level.p_start[i]; q < level.p_start[i + 1]; ++q)
     {
       const int coarse_row = level.p_column[q];
-      for (int t = level.ap_start[i]; t < level.ap_start[i + 1]; ++t)
+      for (int t = first; t < last; ++t)
+      {
+        if (level.ap_column[t] < coarse_row) continue;
         level.galerkin_plan.push_back(
-            {q, t, positionIn(next.column, next.start[coarse_row], next.start[coarse_row + 1], level.ap_column[t])});
+            {q, t - first, positionIn(next.column, next.start[coarse_row], next.start[coarse_row + 1], level.ap_column[t])});
+      }
     }
+    level.galerkin_plan_start[i + 1] = static_cast<int>(level.galerkin_plan.size());
   }
+  for (int row = 0; row < next.nodes; ++row)
+    for (int k = next.start[row]; k < next.start[row + 1]; ++k)
+    {
+      const int column = next.column[k];
+      if (column < row)
+        next.mirrored.push_back({k, positionIn(next.column, next.start[column], next.start[column + 1], row)});
+    }
   const int b = level.block;
   level.tentative.assign(static_cast<std::size_t>(n) * b * kModes, 0.0);
   level.p.assign(level.p_column.size() * b * kModes, 0.0);
-  level.ap.assign(level.ap_column.size() * b * kModes, 0.0);
+  level.ap.assign(static_cast<std::size_t>(widest_row) * b * kModes, 0.0);
   levels_.push_back(std::move(next));
 }
 
@@ -291,11 +310,19 @@ void SmoothedAggregation::setupLevel(int index)
   }
   if (static_cast<std::size_t>(index) + 1 == levels_.size()) return;
 
-  // ρ(D⁻¹ A) by power iterations from a fixed start (the same at every setup: the same bits).
-  for (int k = 0; k < level.power.size(); ++k)
-    level.power[k] = 1.0 + 0.5 * std::sin(0.7 * k);
+  // ρ(D⁻¹ A) by power iterations: at the first setup (or after forgetHistory()) from a fixed start,
+  // later from the last setup's vector, which the system of a step later hardly turns (the same
+  // setups in the same order: the same bits).
+  int iterations = kWarmPowerIterations;
+  if (!level.power_started)
+  {
+    for (int k = 0; k < level.power.size(); ++k)
+      level.power[k] = 1.0 + 0.5 * std::sin(0.7 * k);
+    level.power_started = true;
+    iterations = kPowerIterations;
+  }
   double rho = 0.0;
-  for (int iteration = 0; iteration < kPowerIterations; ++iteration)
+  for (int iteration = 0; iteration < iterations; ++iteration)
   {
     multiply<B>(level, level.power, level.power_product);
     for (int i = 0; i < n; ++i)
@@ -303,7 +330,11 @@ void SmoothedAggregation::setupLevel(int index)
           ConstBlockMap<B, B>(level.inverse_diagonal.data() + B * B * i) *
           ConstSegmentMap<B>(level.power_product.data() + B * i);
     const double norm = level.power.norm();
-    if (!(norm > 0.0) || !std::isfinite(norm)) break;
+    if (!(norm > 0.0) || !std::isfinite(norm))
+    {
+      level.power_started = false;  // start afresh next time
+      break;
+    }
     rho = norm;  // |D⁻¹ A v| for |v| = 1
     level.power /= norm;
   }
@@ -384,16 +415,34 @@ void SmoothedAggregation::setupLevel(int index)
         ConstBlockMap<B, kModes>(level.tentative.data() + B * kModes * i);
   }
 
-  // A P, then A_c = Pᵀ (A P), by the plans.
-  std::fill(level.ap.begin(), level.ap.end(), 0.0);
-  for (const auto& [k, q, t] : level.ap_plan)
-    BlockMap<B, kModes>(level.ap.data() + B * kModes * t).noalias() +=
-        ConstBlockMap<B, B>(level.a.data() + B * B * k) * ConstBlockMap<B, kModes>(level.p.data() + B * kModes * q);
+  // A_c = Pᵀ (A P) by the plans, a row of A P at a time; then its lower blocks from the upper ones.
   std::fill(next.a.begin(), next.a.end(), 0.0);
-  for (const auto& [q, t, c] : level.galerkin_plan)
-    BlockMap<kModes, kModes>(next.a.data() + kModes * kModes * c).noalias() +=
-        ConstBlockMap<B, kModes>(level.p.data() + B * kModes * q).transpose() *
-        ConstBlockMap<B, kModes>(level.ap.data() + B * kModes * t);
+  for (int i = 0; i < n; ++i)
+  {
+    std::fill(level.ap.begin(), level.ap.begin() + B * kModes * (level.ap_start[i + 1] - level.ap_start[i]), 0.0);
+    for (int e = level.ap_plan_start[i]; e < level.ap_plan_start[i + 1]; ++e)
+    {
+      const auto& [k, q, t] = level.ap_plan[e];
+      BlockMap<B, kModes>(level.ap.data() + B * kModes * t).noalias() +=
+          ConstBlockMap<B, B>(level.a.data() + B * B * k) * ConstBlockMap<B, kModes>(level.p.data() + B * kModes * q);
+    }
+    for (int e = level.galerkin_plan_start[i]; e < level.galerkin_plan_start[i + 1]; ++e)
+    {
+      const auto& [q, t, c] = level.galerkin_plan[e];
+      BlockMap<kModes, kModes>(next.a.data() + kModes * kModes * c).noalias() +=
+          ConstBlockMap<B, kModes>(level.p.data() + B * kModes * q).transpose() *
+          ConstBlockMap<B, kModes>(level.ap.data() + B * kModes * t);
+    }
+  }
+  for (const auto& [lower, upper] : next.mirrored)
+    BlockMap<kModes, kModes>(next.a.data() + kModes * kModes * lower) =
+        ConstBlockMap<kModes, kModes>(next.a.data() + kModes * kModes * upper).transpose();
+}
+
+void SmoothedAggregation::forgetHistory()
+{
+  for (Level& level : levels_)
+    level.power_started = false;
 }
 
 bool SmoothedAggregation::factorCoarsest()

@@ -132,7 +132,11 @@ public:
   /// The pairs kept by addPairBlocks() in this step, not yet in the blocks of A (for tests).
   int keptPairs() const { return pairs_in_blocks_ ? 0 : kept_pairs_; }
   /// Forgets the warm start (after a reset or a jump of the state).
-  void clearWarmStart() { delta_v_.setZero(); }
+  void clearWarmStart()
+  {
+    delta_v_.setZero();
+    multigrid_.forgetHistory();
+  }
   /// Threads to share the conjugate gradient's per-particle loops with (null: none). Its products,
   /// vector updates and sums are shared by rows; each sum is taken in fixed chunks of rows and then
   /// chunk after chunk, so that the result is the same bits at any thread count.

@@ -41,6 +41,9 @@ public:
   /// pinned rows and columns are filtered out. False when the coarsest matrix cannot be factored
   /// (A not positive definite or not finite): apply() must not be called then.
   bool setup(const std::vector<Eigen::Matrix3d>& blocks, const Eigen::Matrix3Xd& x, const std::vector<char>& pinned);
+  /// Starts the next setup's estimates of ρ(D⁻¹ A) afresh (after a reset: the same bits as a new
+  /// solver).
+  void forgetHistory();
   /// z = one V-cycle on r (3 x particles, filtered: zero on pinned rows).
   void apply(const Eigen::Matrix3Xd& r, Eigen::Matrix3Xd& z);
   /// y = Ã x with Ã the filtered matrix of the last setup() (pinned rows and columns cleared, an
@@ -82,15 +85,21 @@ private:
     std::vector<double> tentative;  // b x 6 per node: its rows of P̂ (columns of its aggregate)
     std::vector<int> p_start, p_column;
     std::vector<double> p;  // b x 6 per block of P
-    // A P: rows of this level, columns of the next; planned as (block of A, block of P, block of AP)
-    // per product, row after row.
+    // A P: rows of this level, columns of the next (its pattern), made a row at a time into `ap` (a
+    // row's blocks, slot t its t-th column), planned as (block of A, block of P, slot) per product,
+    // row after row.
     std::vector<int> ap_start, ap_column;
     std::vector<double> ap;
     std::vector<std::array<int, 3>> ap_plan;
     std::vector<int> ap_plan_start;  // per row
-    // Pᵀ (A P) into the next level's blocks: (block of P, block of AP, block of A_c) per product.
+    // Pᵀ (A P) into the next level's blocks on and above the diagonal: (block of P, slot of the row
+    // of A P, block of A_c) per product, row after row.
     std::vector<std::array<int, 3>> galerkin_plan;
-    double omega = 0.0;  // the smoother's damping, 4 / (3 ρ(D⁻¹ A))
+    std::vector<int> galerkin_plan_start;  // per row
+    // This level's blocks below the diagonal with their mirror above it (lower = upperᵀ).
+    std::vector<std::array<int, 2>> mirrored;
+    double omega = 0.0;           // the smoother's damping, 4 / (3 ρ(D⁻¹ A))
+    bool power_started = false;   // `power` holds the last setup's eigenvector estimate
     // The V-cycle's vectors: right-hand side, iterate, residual (b a node); and the power
     // iteration's two.
     Eigen::VectorXd rhs, x, residual, power, power_product;
