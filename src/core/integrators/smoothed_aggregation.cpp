@@ -26,6 +26,9 @@ using ConstSegmentMap = Eigen::Map<const Eigen::Matrix<double, N, 1>>;
 constexpr int kPowerIterations = 12;
 // From the last setup's vector (SmoothedAggregation::setupLevel()).
 constexpr int kWarmPowerIterations = 3;
+// θ of the strength of a coupling (SmoothedAggregation::planNextLevel()): Vaněk, Mandel & Brezina's
+// 0.08 for elasticity.
+constexpr double kStrongCoupling = 0.08;
 constexpr double kSpectralMargin = 1.1;
 // A mode whose part orthogonal to the ones before is below this fraction of its norm (or that is zero:
 // every particle of the aggregate pinned, a rotation about a straight rope's axis) is dropped.
@@ -64,47 +67,79 @@ void SmoothedAggregation::setPattern(int particles, const std::vector<int>& row_
   finest.block = 3;
   finest.start = row_start;
   finest.column = column;
-  // Each level is aggregated into the next until it is small enough to factor, or stops shrinking.
-  while (true)
+  layOut(finest);
+  planned_ = false;
+}
+
+void SmoothedAggregation::layOut(Level& level)
+{
+  level.diagonal.resize(level.nodes);
+  for (int i = 0; i < level.nodes; ++i)
+    level.diagonal[i] = positionIn(level.column, level.start[i], level.start[i + 1], i);
+  const int b = level.block;
+  level.a.assign(level.column.size() * b * b, 0.0);
+  level.inverse_diagonal.assign(static_cast<std::size_t>(level.nodes) * b * b, 0.0);
+  level.modes.assign(static_cast<std::size_t>(level.nodes) * b * kModes, 0.0);
+  for (Eigen::VectorXd* v : {&level.rhs, &level.x, &level.residual, &level.power, &level.power_product})
+    v->setZero(static_cast<Eigen::Index>(level.nodes) * b);
+}
+
+bool SmoothedAggregation::planAndSetUp(const Eigen::Matrix3Xd& x, const std::vector<char>& pinned)
+{
+  // Each level is aggregated by the strength of its couplings in this first system, and its numbers
+  // made, before the next level is aggregated from those; until a level is small enough to factor,
+  // or stops shrinking.
+  for (int index = 0; levels_[index].nodes > kCoarsestNodes; ++index)
   {
-    Level& level = levels_.back();
-    level.diagonal.resize(level.nodes);
-    for (int i = 0; i < level.nodes; ++i)
-      level.diagonal[i] = positionIn(level.column, level.start[i], level.start[i + 1], i);
-    const int b = level.block;
-    level.a.assign(level.column.size() * b * b, 0.0);
-    level.inverse_diagonal.assign(static_cast<std::size_t>(level.nodes) * b * b, 0.0);
-    level.modes.assign(static_cast<std::size_t>(level.nodes) * b * kModes, 0.0);
-    for (Eigen::VectorXd* v : {&level.rhs, &level.x, &level.residual, &level.power, &level.power_product})
-      v->setZero(static_cast<Eigen::Index>(level.nodes) * b);
-    if (level.nodes <= kCoarsestNodes) break;
-    const int nodes = level.nodes;
-    planNextLevel(static_cast<int>(levels_.size()) - 1);
+    const int nodes = levels_[index].nodes;
+    planNextLevel(index);
     // Aggregation that leaves three quarters of the nodes does not pay for a level.
     if (4 * levels_.back().nodes > 3 * nodes)
     {
       levels_.pop_back();
-      Level& last = levels_.back();
-      last.aggregate.clear();
-      last.members.clear();
+      levels_[index].aggregate.clear();
+      levels_[index].members.clear();
       break;
     }
+    if (index == 0) finestModes(x, pinned);
+    if (levels_[index].block == 3)
+      setupLevel<3>(index);
+    else
+      setupLevel<kModes>(index);
   }
   const Level& coarsest = levels_.back();
   const int unknowns = coarsest.nodes * coarsest.block;
-  coarsest_.setZero(unknowns <= kMaxDenseUnknowns ? unknowns : 0, unknowns <= kMaxDenseUnknowns ? unknowns : 0);
-  coarsest_factor_ = Eigen::LDLT<Eigen::MatrixXd>(coarsest_.rows());
+  const int dense = unknowns <= kMaxDenseUnknowns ? unknowns : 0;
+  coarsest_.setZero(dense, dense);
+  coarsest_factor_ = Eigen::LDLT<Eigen::MatrixXd>(dense);
+  return setUpCoarsest();
 }
 
 void SmoothedAggregation::planNextLevel(int index)
 {
-  // Aggregation (Vaněk, Mandel & Brezina's three passes over the graph of the pattern):
-  // 1. a node whose neighbours are all free makes an aggregate with them;
-  // 2. every node left joins the aggregate of pass 1 that most of its neighbours belong to
+  // Aggregation (Vaněk, Mandel & Brezina's three passes over the graph of strong couplings: j is a
+  // strong neighbour of i when |A_ij| >= θ sqrt(|A_ii| |A_jj|) in Frobenius norms, so that a cloth's
+  // bend springs, ten times weaker than its stretch springs and two particles long, do not make
+  // aggregates of five particles across):
+  // 1. a node whose strong neighbours are all free makes an aggregate with them;
+  // 2. every node left joins the aggregate of pass 1 that most of its strong neighbours belong to
   //    (the first such in column order on a tie);
-  // 3. a node still left (no neighbour aggregated) makes an aggregate with its free neighbours.
+  // 3. a node still left (no strong neighbour aggregated) makes an aggregate with its free ones.
   Level& level = levels_[index];
   const int n = level.nodes;
+  const int bb = level.block * level.block;
+  auto blockNorm = [&](int k) {
+    return Eigen::Map<const Eigen::VectorXd>(level.a.data() + static_cast<std::size_t>(bb) * k, bb).norm();
+  };
+  std::vector<char> strong(level.column.size(), 0);
+  for (int i = 0; i < n; ++i)
+    for (int k = level.start[i]; k < level.start[i + 1]; ++k)
+    {
+      const int j = level.column[k];
+      const double coupling = blockNorm(k);
+      strong[k] = j == i || coupling * coupling >= kStrongCoupling * kStrongCoupling * blockNorm(level.diagonal[i]) *
+                                                       blockNorm(level.diagonal[j]);
+    }
   std::vector<int>& aggregate = level.aggregate;
   aggregate.assign(n, -1);
   int aggregates = 0;
@@ -112,10 +147,10 @@ void SmoothedAggregation::planNextLevel(int index)
   {
     bool free = aggregate[i] < 0;
     for (int k = level.start[i]; free && k < level.start[i + 1]; ++k)
-      free = aggregate[level.column[k]] < 0;
+      free = !strong[k] || aggregate[level.column[k]] < 0;
     if (!free) continue;
     for (int k = level.start[i]; k < level.start[i + 1]; ++k)
-      aggregate[level.column[k]] = aggregates;
+      if (strong[k]) aggregate[level.column[k]] = aggregates;
     ++aggregates;
   }
   const std::vector<int> first_pass = aggregate;
@@ -125,11 +160,11 @@ void SmoothedAggregation::planNextLevel(int index)
     int best = -1, best_count = 0;
     for (int k = level.start[i]; k < level.start[i + 1]; ++k)
     {
-      const int candidate = first_pass[level.column[k]];
+      const int candidate = strong[k] ? first_pass[level.column[k]] : -1;
       if (candidate < 0) continue;
       int count = 0;
       for (int l = level.start[i]; l < level.start[i + 1]; ++l)
-        count += first_pass[level.column[l]] == candidate;
+        count += strong[l] && first_pass[level.column[l]] == candidate;
       if (count > best_count)
       {
         best = candidate;
@@ -142,7 +177,7 @@ void SmoothedAggregation::planNextLevel(int index)
   {
     if (aggregate[i] >= 0) continue;
     for (int k = level.start[i]; k < level.start[i + 1]; ++k)
-      if (aggregate[level.column[k]] < 0) aggregate[level.column[k]] = aggregates;
+      if (strong[k] && aggregate[level.column[k]] < 0) aggregate[level.column[k]] = aggregates;
     ++aggregates;
   }
   level.members.assign(aggregates, {});
@@ -208,7 +243,8 @@ void SmoothedAggregation::planNextLevel(int index)
       {
         if (level.ap_column[t] < coarse_row) continue;
         level.galerkin_plan.push_back(
-            {q, t - first, positionIn(next.column, next.start[coarse_row], next.start[coarse_row + 1], level.ap_column[t])});
+            {q, t - first,
+             positionIn(next.column, next.start[coarse_row], next.start[coarse_row + 1], level.ap_column[t])});
       }
     }
     level.galerkin_plan_start[i + 1] = static_cast<int>(level.galerkin_plan.size());
@@ -225,6 +261,7 @@ void SmoothedAggregation::planNextLevel(int index)
   level.p.assign(level.p_column.size() * b * kModes, 0.0);
   level.ap.assign(static_cast<std::size_t>(widest_row) * b * kModes, 0.0);
   levels_.push_back(std::move(next));
+  layOut(levels_.back());
 }
 
 void SmoothedAggregation::copyFinest(const std::vector<Eigen::Matrix3d>& blocks, const std::vector<char>& pinned)
@@ -252,32 +289,12 @@ bool SmoothedAggregation::setup(const std::vector<Eigen::Matrix3d>& blocks, cons
                                 const std::vector<char>& pinned)
 {
   copyFinest(blocks, pinned);
-  Level& finest = levels_[0];
-  // The rigid-body modes (zero for a pinned particle) of each particle about its aggregate's centroid: the
-  // translations, and the rotations e_k × (x_i − c) about the three axes.
-  if (levels_.size() > 1)
+  if (!planned_)
   {
-    for (const std::vector<int>& members : finest.members)
-    {
-      Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
-      for (const int i : members)
-        centroid += x.col(i);
-      centroid /= static_cast<double>(members.size());
-      for (const int i : members)
-      {
-        BlockMap<3, kModes> mode(finest.modes.data() + 3 * kModes * i);
-        if (pinned[i])
-        {
-          mode.setZero();
-          continue;
-        }
-        const Eigen::Vector3d p = x.col(i) - centroid;
-        mode << 1, 0, 0, 0, p.z(), -p.y(),  //
-            0, 1, 0, -p.z(), 0, p.x(),      //
-            0, 0, 1, p.y(), -p.x(), 0;
-      }
-    }
+    planned_ = true;
+    return planAndSetUp(x, pinned);
   }
+  if (levels_.size() > 1) finestModes(x, pinned);
   for (int l = 0; l + 1 < static_cast<int>(levels_.size()); ++l)
   {
     if (levels_[l].block == 3)
@@ -285,9 +302,41 @@ bool SmoothedAggregation::setup(const std::vector<Eigen::Matrix3d>& blocks, cons
     else
       setupLevel<kModes>(l);
   }
-  Level& coarsest = levels_.back();
-  // The inverse diagonal of the coarsest level, for a coarsest level too large to factor.
-  if (coarsest.block == 3)
+  return setUpCoarsest();
+}
+
+void SmoothedAggregation::finestModes(const Eigen::Matrix3Xd& x, const std::vector<char>& pinned)
+{
+  // The rigid-body modes (zero for a pinned particle) of each particle about its aggregate's centroid:
+  // the translations, and the rotations e_k × (x_i − c) about the three axes.
+  Level& finest = levels_[0];
+  for (const std::vector<int>& members : finest.members)
+  {
+    Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+    for (const int i : members)
+      centroid += x.col(i);
+    centroid /= static_cast<double>(members.size());
+    for (const int i : members)
+    {
+      BlockMap<3, kModes> mode(finest.modes.data() + 3 * kModes * i);
+      if (pinned[i])
+      {
+        mode.setZero();
+        continue;
+      }
+      const Eigen::Vector3d p = x.col(i) - centroid;
+      mode << 1, 0, 0, 0, p.z(), -p.y(),  //
+          0, 1, 0, -p.z(), 0, p.x(),      //
+          0, 0, 1, p.y(), -p.x(), 0;
+    }
+  }
+}
+
+bool SmoothedAggregation::setUpCoarsest()
+{
+  // The inverse diagonal of the coarsest level (for a coarsest level too large to factor), then its
+  // factorization.
+  if (levels_.back().block == 3)
     setupLevel<3>(static_cast<int>(levels_.size()) - 1);
   else
     setupLevel<kModes>(static_cast<int>(levels_.size()) - 1);

@@ -11,8 +11,9 @@ namespace core
 {
 /// Smoothed-aggregation algebraic multigrid (Vaněk, Mandel & Brezina 1996) as the conjugate
 /// gradient's preconditioner for the implicit system of a body of particles: one symmetric V-cycle
-/// approximates A⁻¹ r. Each level lumps neighbouring nodes into aggregates (a particle and its
-/// neighbours on the finest level, about 3 × 3 particles of a cloth); the coarse space of an
+/// approximates A⁻¹ r. Each level lumps strongly coupled neighbouring nodes into aggregates (a
+/// particle and its stretch and shear neighbours on the finest level, about 3 × 3 particles of a
+/// cloth); the coarse space of an
 /// aggregate is spanned by the six rigid-body modes of its particles (three translations, three
 /// rotations about its centroid), which a free elastic body does not resist, so that the coarse
 /// levels carry the slow bending and swinging that block Jacobi needs hundreds of iterations for.
@@ -28,9 +29,11 @@ namespace core
 /// kept), their rows of P̂ are zero, and a coarse mode that the pins leave empty is dropped (its
 /// column zero, its diagonal one). So the V-cycle of a filtered residual is zero on pinned rows.
 ///
-/// setPattern() aggregates the particle graph and lays out every level's patterns and the plans of
-/// its Galerkin products (allocates); setup() computes the numbers for one system and apply() runs a
-/// V-cycle: neither allocates. Everything is serial, so the same bits at any thread count.
+/// setPattern() takes the finest level's pattern; the first setup() after it aggregates each level
+/// by the strength of its couplings in that first system and lays out every level's patterns and the
+/// plans of its Galerkin products (allocates); every setup() computes the numbers for one system and
+/// apply() runs a V-cycle: neither allocates after the first setup(). Everything is serial, so the
+/// same bits at any thread count.
 class SmoothedAggregation
 {
 public:
@@ -49,7 +52,7 @@ public:
   /// y = Ã x with Ã the filtered matrix of the last setup() (pinned rows and columns cleared, an
   /// identity on their diagonal).
   void multiplyFinest(const Eigen::Matrix3Xd& x, Eigen::Matrix3Xd& y) const;
-  /// The number of levels, the finest included (0 before setPattern()).
+  /// The number of levels, the finest included (0 before setPattern(), 1 until the first setup()).
   int levels() const { return static_cast<int>(levels_.size()); }
   /// Nodes of level `level` (particles on the finest, aggregates below).
   int nodes(int level) const { return levels_[level].nodes; }
@@ -98,15 +101,24 @@ private:
     std::vector<int> galerkin_plan_start;  // per row
     // This level's blocks below the diagonal with their mirror above it (lower = upperᵀ).
     std::vector<std::array<int, 2>> mirrored;
-    double omega = 0.0;           // the smoother's damping, 4 / (3 ρ(D⁻¹ A))
-    bool power_started = false;   // `power` holds the last setup's eigenvector estimate
+    double omega = 0.0;          // the smoother's damping, 4 / (3 ρ(D⁻¹ A))
+    bool power_started = false;  // `power` holds the last setup's eigenvector estimate
     // The V-cycle's vectors: right-hand side, iterate, residual (b a node); and the power
     // iteration's two.
     Eigen::VectorXd rhs, x, residual, power, power_product;
   };
 
-  // Aggregates `level` (from its pattern) and lays out the next level, its pattern and the plans.
+  // Sizes a level's arrays from its pattern.
+  static void layOut(Level& level);
+  // At the first setup(): aggregates each level by the strength of its couplings, lays out the next
+  // level (planNextLevel()) and makes its numbers, down to the coarsest, which it factors.
+  bool planAndSetUp(const Eigen::Matrix3Xd& x, const std::vector<char>& pinned);
+  // Aggregates `level` (its strong couplings) and lays out the next level, its pattern and the plans.
   void planNextLevel(int level);
+  // The finest level's rigid-body modes at positions x.
+  void finestModes(const Eigen::Matrix3Xd& x, const std::vector<char>& pinned);
+  // The coarsest level's inverse diagonal and factorization.
+  bool setUpCoarsest();
   // The numbers of `level` from its matrix: inverse diagonal, ω, P̂ and the next level's modes, P,
   // A P and the next level's A. Templated on the block size.
   template <int B>
@@ -126,6 +138,7 @@ private:
   void copyFinest(const std::vector<Eigen::Matrix3d>& blocks, const std::vector<char>& pinned);
 
   std::vector<Level> levels_;
+  bool planned_ = false;      // the levels below the finest are laid out (at the first setup())
   Eigen::MatrixXd coarsest_;  // the coarsest level's matrix, dense
   Eigen::LDLT<Eigen::MatrixXd> coarsest_factor_;
 };
