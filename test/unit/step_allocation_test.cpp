@@ -16,6 +16,7 @@
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
+#include <functional>
 #include <memory>
 #include <new>
 #include <string>
@@ -206,6 +207,20 @@ constexpr long long kMinWarmUpSteps = 100;
 constexpr long long kStepsCounted = 1000;
 #endif
 
+// Loads shipped scene `scene_name` for `threads` threads a world, applies `edit` to it and builds its
+// world (a fatal failure names the scene when either fails).
+void buildShippedScene(
+    const std::string& scene_name, int threads, scene::SceneDef& scene_def, std::unique_ptr<core::World>& world,
+    const std::function<void(scene::SceneDef&)>& edit = [](scene::SceneDef&) {})
+{
+  const core::Status loaded = scene::loadSceneFile(particle_sim_test::kShippedScenesDir + "/" + scene_name, scene_def);
+  ASSERT_TRUE(loaded.ok) << scene_name << ": " << loaded.message;
+  scene_def.world.threads = threads;
+  edit(scene_def);
+  const core::Status built = scene::buildWorld(scene_def, world);
+  ASSERT_TRUE(built.ok) << scene_name << ": " << built.message;
+}
+
 // The allocations made by `steps` calls of scene::stepScene.
 long long allocationsOver(const scene::SceneDef& scene_def, core::World& world, long long steps)
 {
@@ -256,13 +271,8 @@ TEST(StepAllocations, NoShippedSceneAllocatesInAWarmedUpStep)
       if (scene_name == "cloth_tear.yaml") continue;
       SCOPED_TRACE(std::to_string(threads) + " threads");
       scene::SceneDef scene_def;
-      const core::Status loaded =
-          scene::loadSceneFile(particle_sim_test::kShippedScenesDir + "/" + scene_name, scene_def);
-      ASSERT_TRUE(loaded.ok) << scene_name << ": " << loaded.message;
-      scene_def.world.threads = threads;
       std::unique_ptr<core::World> world;
-      const core::Status built = scene::buildWorld(scene_def, world);
-      ASSERT_TRUE(built.ok) << scene_name << ": " << built.message;
+      ASSERT_NO_FATAL_FAILURE(buildShippedScene(scene_name, threads, scene_def, world));
       const long long warm_up = std::max(kMinWarmUpSteps, static_cast<long long>(std::ceil(kWarmUpTime / world->dt())));
       for (long long k = 0; k < warm_up; ++k)
         scene::stepScene(scene_def, *world);
@@ -287,14 +297,10 @@ TEST(StepAllocations, TheMultigridSolverAllocatesNothingInAWarmedUpStep)
   {
     SCOPED_TRACE(std::to_string(threads) + " threads");
     scene::SceneDef scene_def;
-    const core::Status loaded =
-        scene::loadSceneFile(particle_sim_test::kShippedScenesDir + "/" + scene_name, scene_def);
-    ASSERT_TRUE(loaded.ok) << scene_name << ": " << loaded.message;
-    scene_def.world.threads = threads;
-    scene::editIntegrators(scene_def,
-                           [](core::IntegratorDef& def) { def.linear_solver = core::LinearSolverType::Multigrid; });
     std::unique_ptr<core::World> world;
-    ASSERT_TRUE(scene::buildWorld(scene_def, world).ok) << scene_name;
+    ASSERT_NO_FATAL_FAILURE(buildShippedScene(scene_name, threads, scene_def, world, [](scene::SceneDef& def) {
+      scene::editIntegrators(def, [](core::IntegratorDef& i) { i.linear_solver = core::LinearSolverType::Multigrid; });
+    }));
     for (long long k = 0; k < kMinWarmUpSteps; ++k)
       scene::stepScene(scene_def, *world);
     const auto& cloth = dynamic_cast<const core::SpringNetworkBody&>(*world->bodies()[0]);

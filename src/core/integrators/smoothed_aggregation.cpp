@@ -3,6 +3,7 @@
 #include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
+#include <type_traits>
 
 namespace particle_sim
 {
@@ -563,55 +564,43 @@ void SmoothedAggregation::prolongAdd(const Level& level, const Eigen::VectorXd& 
 void SmoothedAggregation::cycle(int index)
 {
   Level& level = levels_[index];
-  const bool fine_block = level.block == 3;
   if (static_cast<std::size_t>(index) + 1 == levels_.size())
   {
     // The coarsest level: solved exactly (or by its block Jacobi when too large to factor).
     if (coarsest_.rows() > 0)
     {
       level.x = coarsest_factor_.solve(level.rhs);
+      return;
     }
-    else
-    {
-      for (int i = 0; i < level.nodes; ++i)
-      {
-        const int b = level.block;
-        level.x.segment(b * i, b).noalias() =
-            Eigen::Map<const Eigen::MatrixXd>(level.inverse_diagonal.data() + b * b * i, b, b).transpose() *
-            level.rhs.segment(b * i, b);
-      }
-    }
+    const int b = level.block;
+    for (int i = 0; i < level.nodes; ++i)
+      level.x.segment(b * i, b).noalias() =
+          Eigen::Map<const Eigen::MatrixXd>(level.inverse_diagonal.data() + b * b * i, b, b).transpose() *
+          level.rhs.segment(b * i, b);
     return;
   }
+  // Pre-smoothing from zero, the coarse correction of the residual left, post-smoothing; in the
+  // kernels of the level's block size B.
   Level& next = levels_[index + 1];
-  // Pre-smoothing from zero, the coarse correction of the residual left, post-smoothing.
-  level.x.setZero();
-  auto residualOfX = [&] {
-    if (fine_block)
-      multiply<3>(level, level.x, level.residual);
-    else
-      multiply<kModes>(level, level.x, level.residual);
-    level.residual = level.rhs - level.residual;
+  auto vCycle = [&](auto block_size) {
+    constexpr int B = decltype(block_size)::value;
+    auto residualOfX = [&] {
+      multiply<B>(level, level.x, level.residual);
+      level.residual = level.rhs - level.residual;
+    };
+    level.x.setZero();
+    smooth<B>(level, level.rhs, level.x);
+    residualOfX();
+    restrictResidual<B>(level, next.rhs);
+    cycle(index + 1);
+    prolongAdd<B>(level, next.x, level.x);
+    residualOfX();
+    smooth<B>(level, level.residual, level.x);
   };
-  if (fine_block)
-    smooth<3>(level, level.rhs, level.x);
+  if (level.block == 3)
+    vCycle(std::integral_constant<int, 3>());
   else
-    smooth<kModes>(level, level.rhs, level.x);
-  residualOfX();
-  if (fine_block)
-    restrictResidual<3>(level, next.rhs);
-  else
-    restrictResidual<kModes>(level, next.rhs);
-  cycle(index + 1);
-  if (fine_block)
-    prolongAdd<3>(level, next.x, level.x);
-  else
-    prolongAdd<kModes>(level, next.x, level.x);
-  residualOfX();
-  if (fine_block)
-    smooth<3>(level, level.residual, level.x);
-  else
-    smooth<kModes>(level, level.residual, level.x);
+    vCycle(std::integral_constant<int, kModes>());
 }
 
 void SmoothedAggregation::apply(const Eigen::Matrix3Xd& r, Eigen::Matrix3Xd& z)
