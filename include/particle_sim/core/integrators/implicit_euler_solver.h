@@ -23,7 +23,8 @@ namespace core
 ///
 /// solved by their modified preconditioned conjugate gradient: pinned particles' Δv is held at 0
 /// by filtering every search direction and residual (no huge masses); 3x3 block-Jacobi
-/// preconditioner; warm start from the previous step's Δv. Particles resting on a collider are
+/// preconditioner, or under LinearSolverType::Multigrid one V-cycle of smoothed-aggregation multigrid
+/// (SmoothedAggregation); warm start from the previous step's Δv. Particles resting on a collider are
 /// held the same way along the surface's normal only (RestingContact): their normal velocity is
 /// set to the surface's, and the rest of the system is solved for what remains. Or, by IntegratorDef::linear_solver,
 /// directly (SparseBlockLdlt, the same filtered system), with CG iterations after it only if its
