@@ -739,9 +739,9 @@ void ImplicitEulerSolver::multigridConjugateGradient(const std::vector<char>& pi
     multigrid_.setPattern(static_cast<int>(diagonal_block_.size()), row_start_, block_column_);
     multigrid_planned_ = true;
   }
-  // A new hierarchy every solve: kept over later solves (refresh()), its rigid-body modes turn away
-  // from a swinging cloth's within a few steps at h = 1/60 (hang64: 24 iterations a step with a new
-  // one each solve, 36 with one every second solve, 136 every tenth; docs/performance.md).
+  // A new hierarchy every solve: kept over later solves, its rigid-body modes turn away from a
+  // swinging cloth's within a few steps at h = 1/60 (hang64: 24 iterations a step with a new one
+  // each solve, 36 with one every second solve, 136 every tenth; README, "Or by multigrid").
   if (!multigrid_.setup(blocks_, *positions_, pinned))
   {
     // Not definite (or not finite): block Jacobi's CG meets it as it would and reports it.

@@ -111,8 +111,7 @@ bool SmoothedAggregation::planAndSetUp(const Eigen::Matrix3Xd& x, const std::vec
   const Level& coarsest = levels_.back();
   const int unknowns = coarsest.nodes * coarsest.block;
   const int dense = unknowns <= kMaxDenseUnknowns ? unknowns : 0;
-  coarsest_.setZero(dense, dense);
-  coarsest_factor_ = Eigen::LDLT<Eigen::MatrixXd>(dense);
+  coarsest_.setZero(dense, dense);  // its factor takes its room at its first compute(), below
   return setUpCoarsest();
 }
 
@@ -621,17 +620,6 @@ void SmoothedAggregation::multiplyFinest(const Eigen::Matrix3Xd& x, Eigen::Matri
       sum.noalias() += ConstBlockMap<3, 3>(finest.a.data() + 9 * k) * x.col(finest.column[k]);
     y.col(i) = sum;
   }
-}
-
-Eigen::VectorXd SmoothedAggregation::prolong(int index, const Eigen::VectorXd& coarse) const
-{
-  const Level& level = levels_[index];
-  Eigen::VectorXd x = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(level.nodes) * level.block);
-  if (level.block == 3)
-    prolongAdd<3>(level, coarse, x);
-  else
-    prolongAdd<kModes>(level, coarse, x);
-  return x;
 }
 
 Eigen::VectorXd SmoothedAggregation::tentativeTimesCoarseModes(int index, int mode) const

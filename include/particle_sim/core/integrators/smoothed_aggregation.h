@@ -56,11 +56,6 @@ public:
   int levels() const { return static_cast<int>(levels_.size()); }
   /// Nodes of level `level` (particles on the finest, aggregates below).
   int nodes(int level) const { return levels_[level].nodes; }
-  /// Blocks of level `level`'s matrix (3x3 on the finest, 6x6 below).
-  int blocks(int level) const { return static_cast<int>(levels_[level].column.size()); }
-  /// The smoothed prolongator of level `level` (< levels() − 1) applied to a coarse vector
-  /// (6 numbers a node of the next level): for tests.
-  Eigen::VectorXd prolong(int level, const Eigen::VectorXd& coarse) const;
   /// The tentative prolongator's columns at `level`, times the next level's modes (R): the modes of
   /// this level, rebuilt (for tests: P̂ R = B).
   Eigen::VectorXd tentativeTimesCoarseModes(int level, int mode) const;
