@@ -57,6 +57,21 @@ void compressRows(std::vector<std::vector<int>>& rows, std::vector<int>& start, 
     start[i + 1] = static_cast<int>(column.size());
   }
 }
+
+// y = A x for a matrix of B x B row-major blocks in block-sparse rows (start, column), x and y B
+// numbers a node: each row's blocks summed in their order.
+template <int B>
+void blockSparseProduct(int nodes, const std::vector<int>& start, const std::vector<int>& column,
+                        const std::vector<double>& a, const double* x, double* y)
+{
+  for (int i = 0; i < nodes; ++i)
+  {
+    Eigen::Matrix<double, B, 1> sum = Eigen::Matrix<double, B, 1>::Zero();
+    for (int k = start[i]; k < start[i + 1]; ++k)
+      sum.noalias() += ConstBlockMap<B, B>(a.data() + B * B * k) * ConstSegmentMap<B>(x + B * column[k]);
+    SegmentMap<B>(y + B * i) = sum;
+  }
+}
 }  // namespace
 
 void SmoothedAggregation::setPattern(int particles, const std::vector<int>& row_start, const std::vector<int>& column)
@@ -517,14 +532,7 @@ bool SmoothedAggregation::factorCoarsest()
 template <int B>
 void SmoothedAggregation::multiply(const Level& level, const Eigen::VectorXd& x, Eigen::VectorXd& y) const
 {
-  for (int i = 0; i < level.nodes; ++i)
-  {
-    Eigen::Matrix<double, B, 1> sum = Eigen::Matrix<double, B, 1>::Zero();
-    for (int k = level.start[i]; k < level.start[i + 1]; ++k)
-      sum.noalias() +=
-          ConstBlockMap<B, B>(level.a.data() + B * B * k) * ConstSegmentMap<B>(x.data() + B * level.column[k]);
-    SegmentMap<B>(y.data() + B * i) = sum;
-  }
+  blockSparseProduct<B>(level.nodes, level.start, level.column, level.a, x.data(), y.data());
 }
 
 template <int B>
@@ -613,13 +621,7 @@ void SmoothedAggregation::apply(const Eigen::Matrix3Xd& r, Eigen::Matrix3Xd& z)
 void SmoothedAggregation::multiplyFinest(const Eigen::Matrix3Xd& x, Eigen::Matrix3Xd& y) const
 {
   const Level& finest = levels_[0];
-  for (int i = 0; i < finest.nodes; ++i)
-  {
-    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-    for (int k = finest.start[i]; k < finest.start[i + 1]; ++k)
-      sum.noalias() += ConstBlockMap<3, 3>(finest.a.data() + 9 * k) * x.col(finest.column[k]);
-    y.col(i) = sum;
-  }
+  blockSparseProduct<3>(finest.nodes, finest.start, finest.column, finest.a, x.data(), y.data());
 }
 
 Eigen::VectorXd SmoothedAggregation::tentativeTimesCoarseModes(int index, int mode) const
