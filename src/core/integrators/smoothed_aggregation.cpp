@@ -146,7 +146,9 @@ void SmoothedAggregation::planNextLevel(int index)
   auto blockNorm = [&](int k) {
     return Eigen::Map<const Eigen::VectorXd>(level.a.data() + static_cast<std::size_t>(bb) * k, bb).norm();
   };
-  std::vector<char> strong(level.column.size(), 0);
+  std::vector<char>& strong = level.strong;
+  strong.assign(level.column.size(), 0);
+  level.has_weak = false;
   for (int i = 0; i < n; ++i)
     for (int k = level.start[i]; k < level.start[i + 1]; ++k)
     {
@@ -154,6 +156,7 @@ void SmoothedAggregation::planNextLevel(int index)
       const double coupling = blockNorm(k);
       strong[k] = j == i || coupling * coupling >= kStrongCoupling * kStrongCoupling * blockNorm(level.diagonal[i]) *
                                                        blockNorm(level.diagonal[j]);
+      if (!strong[k] && coupling > 0.0) level.has_weak = true;
     }
   std::vector<int>& aggregate = level.aggregate;
   aggregate.assign(n, -1);
@@ -199,13 +202,13 @@ void SmoothedAggregation::planNextLevel(int index)
   for (int i = 0; i < n; ++i)
     level.members[aggregate[i]].push_back(i);
 
-  // P has a block (i, J) where a neighbour of i (or i) is in aggregate J; A P a block (i, J) where P
-  // has one in a neighbour's row; A_c = Pᵀ (A P) a block (I, J) where a row has P's (·, I) and
-  // A P's (·, J).
+  // P has a block (i, J) where a strong neighbour of i (or i) is in aggregate J (it is smoothed by the
+  // lumped matrix A_L); A P a block (i, J) where P has one in a neighbour's row; A_c = Pᵀ (A P) a
+  // block (I, J) where a row has P's (·, I) and A P's (·, J).
   std::vector<std::vector<int>> rows(n);
   for (int i = 0; i < n; ++i)
     for (int k = level.start[i]; k < level.start[i + 1]; ++k)
-      rows[i].push_back(aggregate[level.column[k]]);
+      if (strong[k]) rows[i].push_back(aggregate[level.column[k]]);
   compressRows(rows, level.p_start, level.p_column);
   for (int i = 0; i < n; ++i)
   {
@@ -272,6 +275,12 @@ void SmoothedAggregation::planNextLevel(int index)
         next.mirrored.push_back({k, positionIn(next.column, next.start[column], next.start[column + 1], row)});
     }
   const int b = level.block;
+  if (level.has_weak)
+  {
+    level.lumped_inverse_diagonal.assign(static_cast<std::size_t>(n) * b * b, 0.0);
+    level.lumped_power.setZero(static_cast<Eigen::Index>(n) * b);
+    level.lumped_power_product.setZero(static_cast<Eigen::Index>(n) * b);
+  }
   level.tentative.assign(static_cast<std::size_t>(n) * b * kModes, 0.0);
   level.p.assign(level.p_column.size() * b * kModes, 0.0);
   level.ap.assign(static_cast<std::size_t>(widest_row) * b * kModes, 0.0);
@@ -374,35 +383,27 @@ void SmoothedAggregation::setupLevel(int index)
   }
   if (static_cast<std::size_t>(index) + 1 == levels_.size()) return;
 
-  // ρ(D⁻¹ A) by power iterations: at the first setup (or after forgetHistory()) from a fixed start,
-  // later from the last setup's vector, which the system of a step later hardly turns (the same
-  // setups in the same order: the same bits).
-  int iterations = kWarmPowerIterations;
-  if (!level.power_started)
+  // The smoother's damping; and the lumped matrix's inverse diagonal blocks D_L,i = A_ii + Σ of the
+  // row's weak blocks (where one is not invertible, A_ii's inverse stands in) and its damping.
+  level.omega = smootherDamping<B>(
+      n, level.inverse_diagonal, [&](const Eigen::VectorXd& x, Eigen::VectorXd& y) { multiply<B>(level, x, y); },
+      level.power, level.power_product, level.power_started);
+  if (level.has_weak)
   {
-    for (int k = 0; k < level.power.size(); ++k)
-      level.power[k] = 1.0 + 0.5 * std::sin(0.7 * k);
-    level.power_started = true;
-    iterations = kPowerIterations;
-  }
-  double rho = 0.0;
-  for (int iteration = 0; iteration < iterations; ++iteration)
-  {
-    multiply<B>(level, level.power, level.power_product);
     for (int i = 0; i < n; ++i)
-      SegmentMap<B>(level.power.data() + B * i).noalias() =
-          ConstBlockMap<B, B>(level.inverse_diagonal.data() + B * B * i) *
-          ConstSegmentMap<B>(level.power_product.data() + B * i);
-    const double norm = level.power.norm();
-    if (!(norm > 0.0) || !std::isfinite(norm))
     {
-      level.power_started = false;  // start afresh next time
-      break;
+      Eigen::Matrix<double, B, B> diagonal = ConstBlockMap<B, B>(level.a.data() + B * B * level.diagonal[i]);
+      for (int k = level.start[i]; k < level.start[i + 1]; ++k)
+        if (!level.strong[k]) diagonal += ConstBlockMap<B, B>(level.a.data() + B * B * k);
+      const Eigen::Matrix<double, B, B> inverse = diagonal.inverse();
+      BlockMap<B, B>(level.lumped_inverse_diagonal.data() + B * B * i) =
+          inverse.allFinite() ? inverse : ConstBlockMap<B, B>(level.inverse_diagonal.data() + B * B * i);
     }
-    rho = norm;  // |D⁻¹ A v| for |v| = 1
-    level.power /= norm;
+    level.lumped_omega = smootherDamping<B>(
+        n, level.lumped_inverse_diagonal,
+        [&](const Eigen::VectorXd& x, Eigen::VectorXd& y) { multiplyLumped<B>(level, x, y); }, level.lumped_power,
+        level.lumped_power_product, level.lumped_power_started);
   }
-  level.omega = rho > 0.0 ? 4.0 / (3.0 * kSpectralMargin * rho) : 0.0;
 
   // The tentative prolongator: each aggregate's modes, orthonormalised by modified Gram–Schmidt
   // (twice, for orthogonality to rounding), as Q; R is the next level's modes of that node.
@@ -453,25 +454,30 @@ void SmoothedAggregation::setupLevel(int index)
     }
   }
 
-  // P = (I − ω D⁻¹ A) P̂: row i's blocks first collect Σ_j A_ij P̂_j by the aggregate of j, then
-  // become −ω D_i⁻¹ times that, plus P̂_i in i's own aggregate.
+  // P = (I − ω_L D_L⁻¹ A_L) P̂: row i's blocks first collect Σ_j A_L,ij P̂_j by the aggregate of j
+  // (the strong blocks of A; the weak ones' part, A_ij P̂_i, is in i's own aggregate), then become
+  // −ω_L D_L,i⁻¹ times that, plus P̂_i in i's own aggregate.
+  const std::vector<double>& smoothing_inverse =
+      level.has_weak ? level.lumped_inverse_diagonal : level.inverse_diagonal;
+  const double smoothing_omega = level.has_weak ? level.lumped_omega : level.omega;
   std::fill(level.p.begin(), level.p.end(), 0.0);
   for (int i = 0; i < n; ++i)
   {
     const int first = level.p_start[i], last = level.p_start[i + 1];
     for (int k = level.start[i]; k < level.start[i + 1]; ++k)
     {
-      const int j = level.column[k];
+      const int j = level.strong[k] ? level.column[k] : i;
+      if (!level.strong[k] && !level.has_weak) continue;  // a zero block
       const int q = positionIn(level.p_column, first, last, level.aggregate[j]);
       BlockMap<B, kModes>(level.p.data() + B * kModes * q).noalias() +=
           ConstBlockMap<B, B>(level.a.data() + B * B * k) *
           ConstBlockMap<B, kModes>(level.tentative.data() + B * kModes * j);
     }
-    const ConstBlockMap<B, B> inverse(level.inverse_diagonal.data() + B * B * i);
+    const ConstBlockMap<B, B> inverse(smoothing_inverse.data() + B * B * i);
     for (int q = first; q < last; ++q)
     {
       BlockMap<B, kModes> block(level.p.data() + B * kModes * q);
-      const Eigen::Matrix<double, B, kModes> smoothed = -level.omega * (inverse * block);
+      const Eigen::Matrix<double, B, kModes> smoothed = -smoothing_omega * (inverse * block);
       block = smoothed;
     }
     const int own = positionIn(level.p_column, first, last, level.aggregate[i]);
@@ -506,7 +512,7 @@ void SmoothedAggregation::setupLevel(int index)
 void SmoothedAggregation::forgetHistory()
 {
   for (Level& level : levels_)
-    level.power_started = false;
+    level.power_started = level.lumped_power_started = false;
 }
 
 bool SmoothedAggregation::factorCoarsest()
@@ -533,6 +539,54 @@ template <int B>
 void SmoothedAggregation::multiply(const Level& level, const Eigen::VectorXd& x, Eigen::VectorXd& y) const
 {
   blockSparseProduct<B>(level.nodes, level.start, level.column, level.a, x.data(), y.data());
+}
+
+template <int B>
+void SmoothedAggregation::multiplyLumped(const Level& level, const Eigen::VectorXd& x, Eigen::VectorXd& y) const
+{
+  for (int i = 0; i < level.nodes; ++i)
+  {
+    Eigen::Matrix<double, B, 1> sum = Eigen::Matrix<double, B, 1>::Zero();
+    for (int k = level.start[i]; k < level.start[i + 1]; ++k)
+      sum.noalias() += ConstBlockMap<B, B>(level.a.data() + B * B * k) *
+                       ConstSegmentMap<B>(x.data() + B * (level.strong[k] ? level.column[k] : i));
+    SegmentMap<B>(y.data() + B * i) = sum;
+  }
+}
+
+template <int B, typename Product>
+double SmoothedAggregation::smootherDamping(int nodes, const std::vector<double>& inverse_diagonal,
+                                            const Product& product, Eigen::VectorXd& power,
+                                            Eigen::VectorXd& power_product, bool& power_started)
+{
+  // ρ(D⁻¹ A) by power iterations: at the first setup (or after forgetHistory()) from a fixed start,
+  // later from the last setup's vector, which the system of a step later hardly turns (the same
+  // setups in the same order: the same bits).
+  int iterations = kWarmPowerIterations;
+  if (!power_started)
+  {
+    for (int k = 0; k < power.size(); ++k)
+      power[k] = 1.0 + 0.5 * std::sin(0.7 * k);
+    power_started = true;
+    iterations = kPowerIterations;
+  }
+  double rho = 0.0;
+  for (int iteration = 0; iteration < iterations; ++iteration)
+  {
+    product(power, power_product);
+    for (int i = 0; i < nodes; ++i)
+      SegmentMap<B>(power.data() + B * i).noalias() =
+          ConstBlockMap<B, B>(inverse_diagonal.data() + B * B * i) * ConstSegmentMap<B>(power_product.data() + B * i);
+    const double norm = power.norm();
+    if (!(norm > 0.0) || !std::isfinite(norm))
+    {
+      power_started = false;  // start afresh next time
+      break;
+    }
+    rho = norm;  // |D⁻¹ A v| for |v| = 1
+    power /= norm;
+  }
+  return rho > 0.0 ? 4.0 / (3.0 * kSpectralMargin * rho) : 0.0;
 }
 
 template <int B>

@@ -13,17 +13,21 @@ namespace core
 /// gradient's preconditioner for the implicit system of a body of particles: one symmetric V-cycle
 /// approximates A⁻¹ r. Each level lumps strongly coupled neighbouring nodes into aggregates (a
 /// particle and its stretch and shear neighbours on the finest level, about 3 × 3 particles of a
-/// cloth); the coarse space of an
-/// aggregate is spanned by the six rigid-body modes of its particles (three translations, three
-/// rotations about its centroid), which a free elastic body does not resist, so that the coarse
-/// levels carry the slow bending and swinging that block Jacobi needs hundreds of iterations for.
+/// cloth); the coarse space of an aggregate is spanned by the six rigid-body modes of its particles
+/// (three translations, three rotations about its centroid), which a free elastic body does not
+/// resist, so that the coarse levels carry the slow bending and swinging that block Jacobi needs
+/// hundreds of iterations for.
 ///
 /// Per level: the tentative prolongator P̂ is the modes of each aggregate orthonormalised (Q of a
-/// QR, whose R are the modes of the next level's node); P = (I − ω D⁻¹ A) P̂, smoothed by one damped
-/// Jacobi step (ω = 4 / (3 ρ(D⁻¹ A)), ρ from a few power iterations); the next level's matrix is
-/// A_c = Pᵀ A P (Galerkin). Down to a few nodes, which a dense L D Lᵀ solves. The V-cycle smooths
-/// once with damped block Jacobi before the coarse correction and once after: the same smoother
-/// both ways, so the cycle is a symmetric positive definite operator, as CG needs.
+/// QR, whose R are the modes of the next level's node); P = (I − ω D_L⁻¹ A_L) P̂, smoothed by one
+/// damped Jacobi step on the lumped matrix A_L (ω = 4 / (3 ρ(D_L⁻¹ A_L)), ρ from a few power
+/// iterations): A without its weak couplings (a cloth's bend springs), each added to its row's
+/// diagonal block instead, so that a row's sum is kept and P spreads an aggregate over its strong
+/// neighbours only (Vaněk, Mandel & Brezina's filtered matrix: fewer blocks in P, A P and the coarse
+/// levels); the next level's matrix is A_c = Pᵀ A P (Galerkin, with A whole). Down to a few nodes,
+/// which a dense L D Lᵀ solves. The V-cycle smooths once with damped block Jacobi before the coarse
+/// correction and once after: the same smoother both ways, so the cycle is a symmetric positive
+/// definite operator, as CG needs.
 ///
 /// Pinned particles: setup() takes the filtered system (pinned rows and columns cleared, the diagonal
 /// kept), their rows of P̂ are zero, and a coarse mode that the pins leave empty is dropped (its
@@ -61,6 +65,14 @@ public:
   Eigen::VectorXd tentativeTimesCoarseModes(int level, int mode) const;
   /// The near-null-space modes of `level`, mode `mode` (0..5) as a vector: for tests.
   Eigen::VectorXd modes(int level, int mode) const;
+  /// The aggregate (the next level's node) that node `node` of `level` belongs to: for tests.
+  int aggregateOf(int level, int node) const { return levels_[level].aggregate[node]; }
+  /// The columns (the next level's nodes) of row `node` of `level`'s prolongator P: for tests.
+  std::vector<int> prolongatorColumns(int level, int node) const
+  {
+    const Level& l = levels_[level];
+    return std::vector<int>(l.p_column.begin() + l.p_start[node], l.p_column.begin() + l.p_start[node + 1]);
+  }
 
   /// Nodes of the coarsest level at most (it is solved by a dense factorization).
   static constexpr int kCoarsestNodes = 24;
@@ -79,6 +91,15 @@ private:
     std::vector<double> a, inverse_diagonal, modes;
     // Towards the next level (empty on the coarsest).
     std::vector<int> aggregate;  // per node
+    // Per block of A: 1 where the coupling is strong (the diagonal always), 0 where it is weak or
+    // zero; whether any weak coupling is not zero (else A_L = A, and P's smoothing takes A's
+    // diagonal and ω); A_L's inverse diagonal blocks, its ω and its power iteration's vectors.
+    std::vector<char> strong;
+    bool has_weak = false;
+    std::vector<double> lumped_inverse_diagonal;
+    double lumped_omega = 0.0;
+    bool lumped_power_started = false;
+    Eigen::VectorXd lumped_power, lumped_power_product;
     std::vector<std::vector<int>> members;
     std::vector<double> tentative;  // b x 6 per node: its rows of P̂ (columns of its aggregate)
     std::vector<int> p_start, p_column;
@@ -120,6 +141,14 @@ private:
   void setupLevel(int level);
   template <int B>
   void multiply(const Level& level, const Eigen::VectorXd& x, Eigen::VectorXd& y) const;
+  // y = A_L x, the level's lumped matrix (its weak blocks applied to x_i instead of x_j).
+  template <int B>
+  void multiplyLumped(const Level& level, const Eigen::VectorXd& x, Eigen::VectorXd& y) const;
+  // ω = 4 / (3 ρ(D⁻¹ A)) of the operator `product` (y = A x) whose inverse diagonal blocks are
+  // `inverse_diagonal`, ρ by power iterations in `power` and `power_product`.
+  template <int B, typename Product>
+  static double smootherDamping(int nodes, const std::vector<double>& inverse_diagonal, const Product& product,
+                                Eigen::VectorXd& power, Eigen::VectorXd& power_product, bool& power_started);
   template <int B>
   void smooth(const Level& level, const Eigen::VectorXd& residual, Eigen::VectorXd& x) const;
   template <int B>
