@@ -59,18 +59,26 @@ void compressRows(std::vector<std::vector<int>>& rows, std::vector<int>& start, 
 }
 
 // y = A x for a matrix of B x B row-major blocks in block-sparse rows (start, column), x and y B
-// numbers a node: each row's blocks summed in their order.
-template <int B>
-void blockSparseProduct(int nodes, const std::vector<int>& start, const std::vector<int>& column,
-                        const std::vector<double>& a, const double* x, double* y)
+// numbers a node: each row's blocks summed in their order. Block k of row i multiplies the node
+// sourceOf(k, i) of x (its column, or another node for a matrix with blocks moved).
+template <int B, typename Source>
+void blockSparseProduct(int nodes, const std::vector<int>& start, const std::vector<double>& a, const double* x,
+                        double* y, const Source& sourceOf)
 {
   for (int i = 0; i < nodes; ++i)
   {
     Eigen::Matrix<double, B, 1> sum = Eigen::Matrix<double, B, 1>::Zero();
     for (int k = start[i]; k < start[i + 1]; ++k)
-      sum.noalias() += ConstBlockMap<B, B>(a.data() + B * B * k) * ConstSegmentMap<B>(x + B * column[k]);
+      sum.noalias() += ConstBlockMap<B, B>(a.data() + B * B * k) * ConstSegmentMap<B>(x + B * sourceOf(k, i));
     SegmentMap<B>(y + B * i) = sum;
   }
+}
+
+template <int B>
+void blockSparseProduct(int nodes, const std::vector<int>& start, const std::vector<int>& column,
+                        const std::vector<double>& a, const double* x, double* y)
+{
+  blockSparseProduct<B>(nodes, start, a, x, y, [&](int k, int) { return column[k]; });
 }
 }  // namespace
 
@@ -544,14 +552,8 @@ void SmoothedAggregation::multiply(const Level& level, const Eigen::VectorXd& x,
 template <int B>
 void SmoothedAggregation::multiplyLumped(const Level& level, const Eigen::VectorXd& x, Eigen::VectorXd& y) const
 {
-  for (int i = 0; i < level.nodes; ++i)
-  {
-    Eigen::Matrix<double, B, 1> sum = Eigen::Matrix<double, B, 1>::Zero();
-    for (int k = level.start[i]; k < level.start[i + 1]; ++k)
-      sum.noalias() += ConstBlockMap<B, B>(level.a.data() + B * B * k) *
-                       ConstSegmentMap<B>(x.data() + B * (level.strong[k] ? level.column[k] : i));
-    SegmentMap<B>(y.data() + B * i) = sum;
-  }
+  blockSparseProduct<B>(level.nodes, level.start, level.a, x.data(), y.data(),
+                        [&](int k, int i) { return level.strong[k] ? level.column[k] : i; });
 }
 
 template <int B, typename Product>
