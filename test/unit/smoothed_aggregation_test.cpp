@@ -194,10 +194,10 @@ TEST(SmoothedAggregation, VCycleIsSymmetricPositiveDefiniteAndZeroOnPinnedRows)
 TEST(SmoothedAggregation, TheProlongatorSpreadsAnAggregateOverItsStrongCouplingsOnly)
 {
   // A sheet with weak bend springs beside its structural and shear ones: P is smoothed by the
-  // lumped matrix (its weak couplings in the diagonal), so that row i of P has blocks only in the aggregates of i and
-  // of the particles it shares a structural or shear spring with, never in one that only a bend spring reaches; and
-  // there are such aggregates (the bends reach two particles across, past a 3 x 3 aggregate's
-  // neighbours), which the smoothing by A itself would have filled.
+  // lumped matrix (its weak couplings in the diagonal), so that row i of P has blocks only in the
+  // aggregates of i and of the particles it shares a structural or shear spring with, never in one
+  // that only a bend spring reaches; and there are such aggregates (the bends reach two particles
+  // across, past a 3 x 3 aggregate's neighbours), which the smoothing by A itself would have filled.
   const SheetSystem s = crumpledSheet(40, 4, true);
   SmoothedAggregation multigrid;
   multigrid.setPattern(s.particles, s.row_start, s.column);
