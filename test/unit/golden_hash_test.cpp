@@ -401,7 +401,8 @@ TEST(GoldenHash, EveryPairEndsInTheSameStateWithTwoThreadsPerWorld)
 // The conjugate gradient's AVX2 passes (core/integrators/cg_avx2.h), which the solver takes where
 // the processor has AVX2, give the same bits as its scalar passes: with the scalar passes forced,
 // every pair of the methods that solve with CG ends in its golden state too (a golden file written
-// on a machine with AVX2 thus holds on one without, and the other way round).
+// on a machine with AVX2 thus holds on one without, and the other way round). The switch forces the
+// direct solver's supernodal tiles (dense_panel.h) to their scalar form as well.
 TEST(GoldenHash, TheConjugateGradientsScalarAndAvx2PassesGiveTheSameStates)
 {
   const bool avx2 = core::ImplicitEulerSolver::useAvx2();

@@ -145,6 +145,81 @@ TEST(SparseBlockLdlt, SolvesTheFilteredSystemLikeADenseLu)
   }
 }
 
+TEST(SparseBlockLdlt, ASheetTakesSupernodesThatSolveLikeADenseLuWithTheSameBitsInEitherKernel)
+{
+  // A 2-D sheet's separators are wide supernodes: analyze() takes the supernodal form, whose
+  // solution matches a dense LU of the filtered matrix, pins included; its dense products give the
+  // same bits with the AVX2 tiles and without.
+  std::mt19937_64 random(5);
+  const int nu = 26, nv = 21, n = nu * nv;
+  const std::vector<std::pair<int, int>> pairs = gridPairs(nu, nv);
+  const Pattern p = patternOf(n, pairs);
+  const std::vector<Eigen::Matrix3d> blocks = randomSpdBlocks(p, n, pairs, random);
+  std::vector<char> pinned(n, 0);
+  pinned[0] = pinned[nu - 1] = pinned[n / 2 + 3] = 1;
+  Eigen::Matrix3Xd b = Eigen::Matrix3Xd::Random(3, n);
+  for (int i = 0; i < n; ++i)
+    if (pinned[i]) b.col(i).setZero();
+
+  const bool avx2 = SparseBlockLdlt::useAvx2();
+  std::vector<Eigen::Matrix3Xd> solutions;
+  for (const bool use_avx2 : {true, false})
+  {
+    SparseBlockLdlt::setUseAvx2(use_avx2);
+    SparseBlockLdlt ldlt;
+    ldlt.analyze(p.row_start, p.block_column);
+    ASSERT_TRUE(ldlt.supernodal());
+    ASSERT_TRUE(ldlt.factorize(blocks, pinned));
+    Eigen::Matrix3Xd x(3, n);
+    ldlt.solve(b, x);
+    solutions.push_back(x);
+  }
+  SparseBlockLdlt::setUseAvx2(avx2);
+  EXPECT_EQ(std::memcmp(solutions[0].data(), solutions[1].data(), sizeof(double) * 3 * n), 0);
+
+  const Eigen::MatrixXd a = denseFiltered(p, n, blocks, pinned);
+  const Eigen::VectorXd expected = a.partialPivLu().solve(Eigen::Map<const Eigen::VectorXd>(b.data(), 3 * n));
+  const Eigen::Map<const Eigen::VectorXd> got(solutions[0].data(), 3 * n);
+  EXPECT_LT((got - expected).norm(), 1e-10 * expected.norm());
+  for (int i = 0; i < n; ++i)
+  {
+    if (!pinned[i]) continue;
+    EXPECT_EQ(solutions[0].col(i).norm(), 0.0) << "pinned particle " << i;
+  }
+
+  // A second factorization of other numbers on the same analysis (the panels are made afresh).
+  SparseBlockLdlt ldlt;
+  ldlt.analyze(p.row_start, p.block_column);
+  ASSERT_TRUE(ldlt.factorize(randomSpdBlocks(p, n, pairs, random), pinned));
+  ASSERT_TRUE(ldlt.factorize(blocks, pinned));
+  Eigen::Matrix3Xd again(3, n);
+  ldlt.solve(b, again);
+  EXPECT_EQ(std::memcmp(again.data(), solutions[0].data(), sizeof(double) * 3 * n), 0);
+}
+
+TEST(SparseBlockLdlt, TheSupernodalFormRefusesASingularPivot)
+{
+  const int nu = 26, nv = 21, n = nu * nv;
+  const std::vector<std::pair<int, int>> pairs = gridPairs(nu, nv);
+  const Pattern p = patternOf(n, pairs);
+  std::mt19937_64 random(9);
+  std::vector<Eigen::Matrix3d> blocks = randomSpdBlocks(p, n, pairs, random);
+  SparseBlockLdlt ldlt;
+  ldlt.analyze(p.row_start, p.block_column);
+  ASSERT_TRUE(ldlt.supernodal());
+  // A zero row and column: singular.
+  const int singular = n / 3;
+  for (int k = p.row_start[singular]; k < p.row_start[singular + 1]; ++k)
+  {
+    const int j = p.block_column[k];
+    blocks[k].row(1).setZero();
+    blocks[p.blockIndex(j, singular)].col(1).setZero();
+  }
+  EXPECT_FALSE(ldlt.factorize(blocks, std::vector<char>(n, 0)));
+  blocks[p.blockIndex(singular, singular)](1, 1) = std::nan("");
+  EXPECT_FALSE(ldlt.factorize(blocks, std::vector<char>(n, 0)));
+}
+
 TEST(SparseBlockLdlt, SolvesAnIndefiniteButRegularSystem)
 {
   // Compressed springs make ∂f/∂x positive in places, and A = M − h² ∂f/∂x may then be indefinite;
@@ -206,6 +281,7 @@ TEST(SparseBlockLdlt, AChainHasNoFillInAnyLabelling)
   SparseBlockLdlt ldlt;
   ldlt.analyze(p.row_start, p.block_column);
   EXPECT_EQ(ldlt.factorBlocks(), 2 * n - 3);
+  EXPECT_FALSE(ldlt.supernodal());
 }
 
 TEST(SparseBlockLdlt, CostEstimateMatchesTheFactorItBuilds)

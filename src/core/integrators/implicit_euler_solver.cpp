@@ -131,6 +131,7 @@ bool ImplicitEulerSolver::useAvx2()
 void ImplicitEulerSolver::setUseAvx2(bool use)
 {
   useAvx2Flag().store(use && cg_avx2::available(), std::memory_order_relaxed);
+  SparseBlockLdlt::setUseAvx2(use);
 }
 
 void ImplicitEulerSolver::setPattern(int particles, const std::vector<std::pair<int, int>>& coupled_pairs)

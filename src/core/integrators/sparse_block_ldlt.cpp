@@ -4,7 +4,10 @@
 #include <Eigen/OrderingMethods>
 #include <Eigen/SparseCore>
 #include <algorithm>
+#include <atomic>
 #include <cmath>
+
+#include "particle_sim/core/integrators/dense_panel.h"
 
 namespace particle_sim
 {
@@ -109,7 +112,33 @@ void addColumnFlops(int count, double& factor_flops, double& solve_flops)
   factor_flops += 60.0 + 45.0 * count + 45.0 * count * (count + 1.0) / 2.0;
   solve_flops += 2.0 * 18.0 * count + 15.0;
 }
+
+// A supernode at least this many block columns wide is wide; the supernodal form is taken when the
+// wide ones hold at least half the factorization's flops.
+constexpr int kWideSupernode = 4;
+constexpr double kWideShare = 0.5;
+// The columns of a panel factored together: those before them are applied to them as one dense
+// product (dense_panel), those among them one by one.
+constexpr int kPanelColumns = 16;
+// A scalar pivot at most this fraction of its diagonal entry in A (or not finite) is singular.
+constexpr double kSingularPivot = 1e-14;
+
+std::atomic<bool>& useAvx2Flag()
+{
+  static std::atomic<bool> use(dense_panel::available());
+  return use;
+}
 }  // namespace
+
+bool SparseBlockLdlt::useAvx2()
+{
+  return useAvx2Flag().load(std::memory_order_relaxed);
+}
+
+void SparseBlockLdlt::setUseAvx2(bool use)
+{
+  useAvx2Flag().store(use && dense_panel::available(), std::memory_order_relaxed);
+}
 
 SparseBlockLdlt::Cost SparseBlockLdlt::estimateCost(const std::vector<int>& row_start,
                                                     const std::vector<int>& block_column)
@@ -180,9 +209,48 @@ void SparseBlockLdlt::analyze(const std::vector<int>& row_start, const std::vect
     }
   }
 
-  // The elimination's updates, in the order factorize() makes them, and the flop counts.
-  update_slot_.clear();
+  // The flop counts; and the supernodes: column j + 1 joins column j's when j's rows are j + 1 and
+  // column j + 1's rows (then j + 1 is j's parent and the two columns have one pattern below them).
   factor_flops_ = solve_flops_ = 0.0;
+  std::vector<int> supernode_of(n, 0);
+  std::vector<std::array<int, 2>> found;  // first column, width
+  double wide_flops = 0.0;
+  for (int j = 0; j < n;)
+  {
+    const int first = j;
+    double flops = 0.0, unused = 0.0;
+    for (;; ++j)
+    {
+      const int count = column_start_[j + 1] - column_start_[j];
+      addColumnFlops(count, flops, unused);
+      supernode_of[j] = static_cast<int>(found.size());
+      if (j + 1 == n || count == 0 || row_index_[column_start_[j]] != j + 1 ||
+          column_start_[j + 2] - column_start_[j + 1] != count - 1)
+        break;
+    }
+    ++j;
+    found.push_back({first, j - first});
+    if (j - first >= kWideSupernode) wide_flops += flops;
+  }
+  for (int j = 0; j < n; ++j)
+    addColumnFlops(column_start_[j + 1] - column_start_[j], factor_flops_, solve_flops_);
+
+  supernodes_.clear();
+  update_slot_.clear();
+  if (wide_flops >= kWideShare * factor_flops_ && factor_flops_ > 0.0)
+  {
+    for (const auto& [first, width] : found)
+    {
+      Supernode supernode;
+      supernode.first = first;
+      supernode.width = width;
+      supernodes_.push_back(supernode);
+    }
+    analyzeSupernodes(row_start, block_column, supernode_of);
+    return;
+  }
+
+  // The elimination's updates of the 3x3 blocks, in the order factorize() makes them.
   for (int j = 0; j < n; ++j)
   {
     const int first = column_start_[j], count = column_start_[j + 1] - first;
@@ -194,16 +262,94 @@ void SparseBlockLdlt::analyze(const std::vector<int>& row_start, const std::vect
         update_slot_.push_back(i == k ? -1 - i : slot(i, k));
       }
     }
-    addColumnFlops(count, factor_flops_, solve_flops_);
   }
+}
+
+void SparseBlockLdlt::analyzeSupernodes(const std::vector<int>& row_start, const std::vector<int>& block_column,
+                                        const std::vector<int>& supernode_of)
+{
+  const int n = static_cast<int>(new_of_.size());
+  lower_.clear();
+  lower_.shrink_to_fit();
+  // Each supernode's rows below it (those of its last column) and its panel.
+  super_rows_.clear();
+  std::size_t panel = 0, largest_panel = 0, largest_below = 0;
+  for (Supernode& supernode : supernodes_)
+  {
+    const int last = supernode.first + supernode.width - 1;
+    supernode.rows = static_cast<int>(super_rows_.size());
+    supernode.below = column_start_[last + 1] - column_start_[last];
+    super_rows_.insert(super_rows_.end(), row_index_.begin() + column_start_[last],
+                       row_index_.begin() + column_start_[last + 1]);
+    supernode.panel = panel;
+    const std::size_t m = 3 * static_cast<std::size_t>(supernode.width + supernode.below);
+    const std::size_t size = m * 3 * static_cast<std::size_t>(supernode.width);
+    panel += size;
+    largest_panel = std::max(largest_panel, size);
+    largest_below = std::max(largest_below, 3 * static_cast<std::size_t>(supernode.below));
+  }
+  panels_.assign(panel, 0.0);
+  scaled_.assign(largest_panel, 0.0);
+  update_.assign(largest_below * largest_below, 0.0);
+  gathered_.assign(largest_below, 0.0);
+  scalar_pivot_.assign(3 * static_cast<std::size_t>(n), 1.0);
+
+  // The block row of block row `row` in supernode t's panel (its own columns first, then below).
+  auto localRow = [this](int t, int row) {
+    const Supernode& target = supernodes_[t];
+    if (row < target.first + target.width) return row - target.first;
+    const auto first = super_rows_.begin() + target.rows, last = first + target.below;
+    return target.width + static_cast<int>(std::lower_bound(first, last, row) - first);
+  };
+
+  // Where A's blocks go: the panel of their column's supernode.
+  block_place_.assign(block_column.size(), {-1, 0});
+  for (int r = 0; r < n; ++r)
+  {
+    for (int b = row_start[r]; b < row_start[r + 1]; ++b)
+    {
+      const int i = new_of_[r], k = new_of_[block_column[b]];
+      if (i < k) continue;
+      const int t = supernode_of[k];
+      const Supernode& target = supernodes_[t];
+      const long m = 3L * (target.width + target.below);
+      block_place_[b] = {static_cast<long>(target.panel) + 3L * (k - target.first) * m + 3L * localRow(t, i), m};
+    }
+  }
+
+  // Each supernode's runs of rows below it by the supernode that holds them as columns.
+  runs_.clear();
+  relative_rows_.clear();
+  run_start_.assign(supernodes_.size() + 1, 0);
+  for (std::size_t s = 0; s < supernodes_.size(); ++s)
+  {
+    run_start_[s] = static_cast<int>(runs_.size());
+    const Supernode& supernode = supernodes_[s];
+    for (int a = 0; a < supernode.below;)
+    {
+      UpdateRun run;
+      run.target = supernode_of[super_rows_[supernode.rows + a]];
+      run.begin = a;
+      while (a < supernode.below && supernode_of[super_rows_[supernode.rows + a]] == run.target)
+        ++a;
+      run.end = a;
+      run.relative = static_cast<int>(relative_rows_.size());
+      for (int row = run.begin; row < supernode.below; ++row)
+        relative_rows_.push_back(localRow(run.target, super_rows_[supernode.rows + row]));
+      runs_.push_back(run);
+    }
+  }
+  run_start_[supernodes_.size()] = static_cast<int>(runs_.size());
 }
 
 bool SparseBlockLdlt::factorize(const std::vector<Eigen::Matrix3d>& blocks, const std::vector<char>& pinned)
 {
   const int n = static_cast<int>(pivot_.size());
   for (int i = 0; i < n; ++i)
-  {
     pinned_new_[i] = pinned[old_of_[i]];
+  if (supernodal()) return factorizeSupernodes(blocks);
+  for (int i = 0; i < n; ++i)
+  {
     if (pinned_new_[i])
       pivot_[i].setIdentity();
     else
@@ -263,6 +409,13 @@ void SparseBlockLdlt::solve(const Eigen::Matrix3Xd& b, Eigen::Matrix3Xd& x)
   const int n = static_cast<int>(pivot_.size());
   for (int i = 0; i < n; ++i)
     work_.col(i) = b.col(old_of_[i]);
+  if (supernodal())
+  {
+    solveSupernodes();
+    for (int i = 0; i < n; ++i)
+      x.col(old_of_[i]) = work_.col(i);
+    return;
+  }
   // L y = b (forward), then z = D⁻¹ y, then Lᵀ x = z (backward).
   for (int j = 0; j < n; ++j)
   {
@@ -281,6 +434,148 @@ void SparseBlockLdlt::solve(const Eigen::Matrix3Xd& b, Eigen::Matrix3Xd& x)
   }
   for (int i = 0; i < n; ++i)
     x.col(old_of_[i]) = work_.col(i);
+}
+
+bool SparseBlockLdlt::factorizeSupernodes(const std::vector<Eigen::Matrix3d>& blocks)
+{
+  // A's lower triangle into the panels; a pinned particle's row and column stay 0, its diagonal I.
+  // Each scalar column's diagonal entry in A is the scale its pivot is judged by.
+  std::fill(panels_.begin(), panels_.end(), 0.0);
+  for (std::size_t b = 0; b < blocks.size(); ++b)
+  {
+    const auto [offset, ld] = block_place_[b];
+    if (offset < 0) continue;
+    const int i = block_row_new_[b], k = block_column_new_[b];
+    double* const corner = panels_.data() + offset;
+    if (pinned_new_[i] || pinned_new_[k])
+    {
+      if (i == k)
+        for (int r = 0; r < 3; ++r)
+        {
+          corner[r + r * ld] = 1.0;
+          scalar_pivot_[3 * i + r] = 1.0;
+        }
+      continue;
+    }
+    for (int c = 0; c < 3; ++c)
+      for (int r = 0; r < 3; ++r)
+        corner[r + c * ld] = blocks[b](r, c);
+    if (i == k)
+      for (int r = 0; r < 3; ++r)
+        scalar_pivot_[3 * i + r] = std::abs(blocks[b](r, r));
+  }
+
+  const bool avx2 = useAvx2();
+  for (std::size_t s = 0; s < supernodes_.size(); ++s)
+  {
+    const Supernode& supernode = supernodes_[s];
+    const int width = 3 * supernode.width, below = 3 * supernode.below, m = width + below;
+    double* const panel = panels_.data() + supernode.panel;
+    double* const scaled = scaled_.data();  // T = L D, column by column as they are done
+    double* const pivots = scalar_pivot_.data() + 3 * supernode.first;
+    // Left-looking by groups of columns: the columns before a group, as one dense product, then the
+    // group's own columns one by one; each column's pivot, T's column (the column before it is
+    // divided by its pivot) and L's.
+    for (int c0 = 0; c0 < width; c0 += kPanelColumns)
+    {
+      const int c1 = std::min(width, c0 + kPanelColumns);
+      if (c0 > 0)
+        dense_panel::subtractLowerProducts(avx2, m - c0, c1 - c0, c0, scaled + c0, m, panel + c0, m,
+                                           panel + c0 + static_cast<long>(c0) * m, m);
+      for (int c = c0; c < c1; ++c)
+      {
+        double* const column = panel + static_cast<long>(c) * m;
+        for (int p = c0; p < c; ++p)
+        {
+          dense_panel::subtractScaled(avx2, m - c, scaled + static_cast<long>(p) * m + c,
+                                      panel[c + static_cast<long>(p) * m], column + c);
+        }
+        const double pivot = column[c];
+        if (!std::isfinite(pivot) || !(std::abs(pivot) > kSingularPivot * pivots[c])) return false;
+        pivots[c] = pivot;
+        const double inverse = 1.0 / pivot;
+        double* const t_c = scaled + static_cast<long>(c) * m;
+        for (int r = c + 1; r < m; ++r)
+        {
+          t_c[r] = column[r];
+          column[r] *= inverse;
+        }
+      }
+    }
+    if (below == 0) continue;
+    // The update of the rows below, −L_R D L_Rᵀ, into the panels that hold them.
+    double* const update = update_.data();
+    std::fill(update, update + static_cast<long>(below) * below, 0.0);
+    dense_panel::subtractLowerProducts(avx2, below, below, width, scaled + width, m, panel + width, m, update, below);
+    for (int q = run_start_[s]; q < run_start_[s + 1]; ++q)
+    {
+      const UpdateRun& run = runs_[q];
+      const Supernode& target = supernodes_[run.target];
+      const long target_m = 3L * (target.width + target.below);
+      double* const target_panel = panels_.data() + target.panel;
+      const int* const relative = relative_rows_.data() + run.relative - run.begin;
+      for (int a = run.begin; a < run.end; ++a)
+      {
+        const long local_column = 3L * (super_rows_[supernode.rows + a] - target.first);
+        for (int cc = 0; cc < 3; ++cc)
+        {
+          const double* const from = update + static_cast<long>(3 * a + cc) * below;
+          double* const to = target_panel + (local_column + cc) * target_m;
+          for (int a2 = a; a2 < supernode.below; ++a2)
+          {
+            const long row = 3L * relative[a2];
+            for (int r = 0; r < 3; ++r)
+              to[row + r] += from[3 * a2 + r];
+          }
+        }
+      }
+    }
+  }
+  return true;
+}
+
+void SparseBlockLdlt::solveSupernodes()
+{
+  // L y = b by supernodes (each panel's own triangle, then its rows below gathered as one sum a
+  // row), y = D⁻¹ y, then Lᵀ x = y backwards; on work_'s numbers in the new order.
+  double* const y = work_.data();
+  double* const gathered = gathered_.data();
+  const bool avx2 = useAvx2();
+  for (const Supernode& supernode : supernodes_)
+  {
+    const int width = 3 * supernode.width, below = 3 * supernode.below, m = width + below;
+    const double* const panel = panels_.data() + supernode.panel;
+    double* const own = y + 3L * supernode.first;
+    std::fill(gathered, gathered + below, 0.0);
+    for (int c = 0; c < width; ++c)
+    {
+      const double* const column = panel + static_cast<long>(c) * m;
+      dense_panel::subtractScaled(avx2, width - c - 1, column + c + 1, own[c], own + c + 1);
+      dense_panel::subtractScaled(avx2, below, column + width, own[c], gathered);  // −Σ of the rows below
+    }
+    const int* const rows = super_rows_.data() + supernode.rows;
+    for (int a = 0; a < supernode.below; ++a)
+      for (int r = 0; r < 3; ++r)
+        y[3L * rows[a] + r] += gathered[3 * a + r];
+  }
+  for (std::size_t q = 0; q < scalar_pivot_.size(); ++q)
+    y[q] /= scalar_pivot_[q];
+  for (auto supernode = supernodes_.rbegin(); supernode != supernodes_.rend(); ++supernode)
+  {
+    const int width = 3 * supernode->width, below = 3 * supernode->below, m = width + below;
+    const double* const panel = panels_.data() + supernode->panel;
+    double* const own = y + 3L * supernode->first;
+    const int* const rows = super_rows_.data() + supernode->rows;
+    for (int a = 0; a < supernode->below; ++a)
+      for (int r = 0; r < 3; ++r)
+        gathered[3 * a + r] = y[3L * rows[a] + r];
+    for (int c = width - 1; c >= 0; --c)
+    {
+      const double* const column = panel + static_cast<long>(c) * m;
+      own[c] -= dense_panel::dot(avx2, below, column + width, gathered) +
+                dense_panel::dot(avx2, width - c - 1, column + c + 1, own + c + 1);
+    }
+  }
 }
 
 }  // namespace core

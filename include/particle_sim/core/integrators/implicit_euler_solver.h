@@ -145,7 +145,8 @@ public:
   /// Whether the conjugate gradient's passes run a particle's three coordinates in one 256-bit
   /// register (cg_avx2.h), which they do where the processor has AVX2, with the same bits as the
   /// scalar passes. Off forces the scalar passes (for the test that compares the two, and for
-  /// benchmarks); on takes effect only where the processor has AVX2. For every solver at once.
+  /// benchmarks); on takes effect only where the processor has AVX2. For every solver at once, and
+  /// for the direct solver's supernodal products too (SparseBlockLdlt::setUseAvx2()).
   static bool useAvx2();
   static void setUseAvx2(bool use);
 

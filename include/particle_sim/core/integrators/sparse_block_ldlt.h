@@ -1,7 +1,9 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <array>
 #include <climits>
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
@@ -34,6 +36,12 @@ inline void multiplyInline(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b, E
 /// like n log n and the work like n^1.5, so the conjugate gradient is cheaper there for large n
 /// (ImplicitEulerSolver's `auto` compares the two costs: flops()).
 ///
+/// Where most of the work lies in wide supernodes (runs of columns of L with one pattern below
+/// them: the separators of a 2-D sheet), analyze() takes the supernodal form instead: each supernode
+/// is one dense column-major panel, factored as scalar L D Lᵀ by products of many columns at once
+/// (dense_panel.h, on AVX2 where the processor has it), and passes its update to the supernodes
+/// above it as one dense matrix. A chain has no wide supernodes and keeps the 3x3 blocks.
+///
 /// Pinned particles are solved as identity rows (their Δv is 0), which is the filtered system that
 /// Baraff & Witkin's modified conjugate gradient solves.
 class SparseBlockLdlt
@@ -47,6 +55,12 @@ public:
   /// Floating-point operations of one factorize() and of one solve() (from the pattern of L).
   double factorFlops() const { return factor_flops_; }
   double solveFlops() const { return solve_flops_; }
+  /// Whether analyze() took the supernodal form.
+  bool supernodal() const { return !supernodes_.empty(); }
+  /// Whether the supernodal form's dense products take their AVX2 tiles (the same bits either way;
+  /// where the processor has AVX2, by default).
+  static bool useAvx2();
+  static void setUseAvx2(bool use);
   /// Off-diagonal blocks of L.
   std::int64_t factorBlocks() const { return static_cast<std::int64_t>(row_index_.size()); }
 
@@ -84,6 +98,40 @@ private:
   // in L (or −1 − i for the pivot i when i == k), in the order factorize() visits them.
   std::vector<int> update_slot_;
   std::vector<char> pinned_new_;
+
+  // The supernodal form (empty when analyze() keeps the 3x3 blocks). Supernode s holds the block
+  // columns first .. first + width − 1 of L, whose rows below it are the same: super_rows_[rows ..
+  // rows + below − 1]. Its panel, at panels_[panel], is (3 width + 3 below) × 3 width scalars,
+  // column-major: its own columns' rows first, then those below.
+  struct Supernode
+  {
+    int first = 0, width = 0, rows = 0, below = 0;
+    std::size_t panel = 0;
+  };
+  std::vector<Supernode> supernodes_;
+  std::vector<int> super_rows_;
+  std::vector<double> panels_;
+  // Per block of A: the offset of its (0, 0) entry in panels_ and its panel's leading dimension
+  // ({−1, 0} for the upper triangle).
+  std::vector<std::array<long, 2>> block_place_;
+  // A supernode's update passes to the supernodes that hold its rows below, one run of consecutive
+  // rows (below's [begin, end)) per target: for every row from begin on, its block row in the
+  // target's panel, at relative_rows_[relative + row − begin].
+  struct UpdateRun
+  {
+    int target = 0, begin = 0, end = 0, relative = 0;
+  };
+  std::vector<UpdateRun> runs_;
+  std::vector<int> run_start_, relative_rows_;
+  std::vector<double> scalar_pivot_;                // D, one number a scalar column
+  std::vector<double> scaled_, update_, gathered_;  // T = L D of a panel, a supernode's update, R's x
+  // analyze()'s rest for the supernodal form (supernodes_ holds each one's columns): the panels,
+  // where A's blocks go in them and the update runs.
+  void analyzeSupernodes(const std::vector<int>& row_start, const std::vector<int>& block_column,
+                         const std::vector<int>& supernode_of);
+  // factorize() and solve() in the supernodal form (solve() on work_, in the new order).
+  bool factorizeSupernodes(const std::vector<Eigen::Matrix3d>& blocks);
+  void solveSupernodes();
   Eigen::Matrix3Xd work_;
   double factor_flops_ = 0.0, solve_flops_ = 0.0;
 };
