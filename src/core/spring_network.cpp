@@ -243,7 +243,9 @@ void SpringNetworkBody::rebuildPattern()
   pattern.setPattern(n, pairs);
   forces_.bindPattern(pattern);
   // What an implicit step costs this body, in explicit substeps: `auto` weighs it against Verlet's.
-  implicit_step_cost_ = StabilityGuard::implicitStepCost(pattern.directCostInCgIterations());
+  bool supernodal = false;
+  const double direct_in_cg_iterations = pattern.directCostInCgIterations(&supernodal);
+  implicit_step_cost_ = StabilityGuard::implicitStepCost(direct_in_cg_iterations, supernodal);
   methods_.clear();
   for (const IntegratorInfo& info : integratorRegistry())
     methods_.emplace_back(info.type, info.make(n, pairs));

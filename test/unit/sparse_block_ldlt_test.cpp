@@ -282,6 +282,7 @@ TEST(SparseBlockLdlt, AChainHasNoFillInAnyLabelling)
   ldlt.analyze(p.row_start, p.block_column);
   EXPECT_EQ(ldlt.factorBlocks(), 2 * n - 3);
   EXPECT_FALSE(ldlt.supernodal());
+  EXPECT_FALSE(SparseBlockLdlt::estimateCost(p.row_start, p.block_column).supernodal);
 }
 
 TEST(SparseBlockLdlt, CostEstimateMatchesTheFactorItBuilds)
@@ -294,6 +295,7 @@ TEST(SparseBlockLdlt, CostEstimateMatchesTheFactorItBuilds)
   EXPECT_EQ(cost.factor_blocks, ldlt.factorBlocks());
   EXPECT_EQ(cost.factor_flops, ldlt.factorFlops());
   EXPECT_EQ(cost.solve_flops, ldlt.solveFlops());
+  EXPECT_EQ(cost.supernodal, ldlt.supernodal());
   // A 2-D sheet fills in: more blocks than the pattern's lower triangle.
   EXPECT_GT(cost.factor_blocks, static_cast<std::int64_t>(gridPairs(nu, nv).size()));
 }

@@ -5,6 +5,7 @@
 #if defined(__x86_64__)
 #include <immintrin.h>
 #endif
+#include <algorithm>
 
 namespace particle_sim
 {
@@ -40,9 +41,9 @@ void subtractTileScalar(int rows, int columns, int k, const double* t, int ldt, 
 #if defined(__x86_64__)
 // An 8 × 4 tile in eight 4-lane sums, named so that they stay in registers: at each p, T's eight
 // rows in two registers times each of L's four numbers, broadcast; each lane is one entry's sum in
-// the scalar order.
+// the scalar order. Only C's first `columns` columns are written (L's others are padding).
 __attribute__((target("avx2"))) void subtractTileAvx2(int k, const double* t, int ldt, const double* l, int ldl,
-                                                      double* c, int ldc)
+                                                      double* c, int ldc, int columns)
 {
   __m256d u0 = _mm256_setzero_pd(), u1 = u0, u2 = u0, u3 = u0, w0 = u0, w1 = u0, w2 = u0, w3 = u0;
   for (int p = 0; p < k; ++p)
@@ -62,7 +63,7 @@ __attribute__((target("avx2"))) void subtractTileAvx2(int k, const double* t, in
     w3 = _mm256_add_pd(w3, _mm256_mul_pd(lower, l3));
   }
   const __m256d upper_sums[kTileColumns] = {u0, u1, u2, u3}, lower_sums[kTileColumns] = {w0, w1, w2, w3};
-  for (int j = 0; j < kTileColumns; ++j)
+  for (int j = 0; j < columns; ++j)
   {
     double* const cj = c + static_cast<long>(j) * ldc;
     _mm256_storeu_pd(cj, _mm256_sub_pd(_mm256_loadu_pd(cj), upper_sums[j]));
@@ -70,25 +71,50 @@ __attribute__((target("avx2"))) void subtractTileAvx2(int k, const double* t, in
   }
 }
 
-// A 4 × 4 tile: subtractTileAvx2's upper half.
+// A tile of up to 4 rows (`rows`: the lanes past them are neither read nor written) × 4 columns, of
+// which the first `columns` are written.
 __attribute__((target("avx2"))) void subtractTile4Avx2(int k, const double* t, int ldt, const double* l, int ldl,
-                                                       double* c, int ldc)
+                                                       double* c, int ldc, int rows, int columns)
 {
+  const __m256i lanes = _mm256_setr_epi64x(0, 1, 2, 3);
+  const __m256i mask = _mm256_cmpgt_epi64(_mm256_set1_epi64x(rows), lanes);  // lane < rows
   __m256d u0 = _mm256_setzero_pd(), u1 = u0, u2 = u0, u3 = u0;
   for (int p = 0; p < k; ++p)
   {
-    const __m256d rows = _mm256_loadu_pd(t + static_cast<long>(p) * ldt);
+    const __m256d column = _mm256_maskload_pd(t + static_cast<long>(p) * ldt, mask);
     const double* const lp = l + static_cast<long>(p) * ldl;
-    u0 = _mm256_add_pd(u0, _mm256_mul_pd(rows, _mm256_broadcast_sd(lp)));
-    u1 = _mm256_add_pd(u1, _mm256_mul_pd(rows, _mm256_broadcast_sd(lp + 1)));
-    u2 = _mm256_add_pd(u2, _mm256_mul_pd(rows, _mm256_broadcast_sd(lp + 2)));
-    u3 = _mm256_add_pd(u3, _mm256_mul_pd(rows, _mm256_broadcast_sd(lp + 3)));
+    u0 = _mm256_add_pd(u0, _mm256_mul_pd(column, _mm256_broadcast_sd(lp)));
+    u1 = _mm256_add_pd(u1, _mm256_mul_pd(column, _mm256_broadcast_sd(lp + 1)));
+    u2 = _mm256_add_pd(u2, _mm256_mul_pd(column, _mm256_broadcast_sd(lp + 2)));
+    u3 = _mm256_add_pd(u3, _mm256_mul_pd(column, _mm256_broadcast_sd(lp + 3)));
   }
   const __m256d sums[kTileColumns] = {u0, u1, u2, u3};
-  for (int j = 0; j < kTileColumns; ++j)
+  for (int j = 0; j < columns; ++j)
   {
     double* const cj = c + static_cast<long>(j) * ldc;
-    _mm256_storeu_pd(cj, _mm256_sub_pd(_mm256_loadu_pd(cj), sums[j]));
+    _mm256_maskstore_pd(cj, mask, _mm256_sub_pd(_mm256_maskload_pd(cj, mask), sums[j]));
+  }
+}
+
+// The strips of subtractLowerProducts() in AVX2 tiles: each strip's four rows of L packed side by
+// side, p after p (zero past the last column), then its tiles of eight rows, one of four, and the
+// last rows in a masked one.
+__attribute__((target("avx2"))) void subtractLowerProductsAvx2(int rows, int columns, int k, const double* t, int ldt,
+                                                               const double* l, int ldl, double* c, int ldc)
+{
+  alignas(32) double packed[kTileColumns * kMaxPacked];
+  for (int j = 0; j < columns; j += kTileColumns)
+  {
+    const int strip_columns = std::min(kTileColumns, columns - j);
+    for (int p = 0; p < k; ++p)
+      for (int q = 0; q < kTileColumns; ++q)
+        packed[kTileColumns * p + q] = q < strip_columns ? l[j + q + static_cast<long>(p) * ldl] : 0.0;
+    int i = j;
+    for (; i + kTileRows <= rows; i += kTileRows)
+      subtractTileAvx2(k, t + i, ldt, packed, kTileColumns, c + i + static_cast<long>(j) * ldc, ldc, strip_columns);
+    for (; i < rows; i += kTileRows / 2)
+      subtractTile4Avx2(k, t + i, ldt, packed, kTileColumns, c + i + static_cast<long>(j) * ldc, ldc,
+                        std::min(kTileRows / 2, rows - i), strip_columns);
   }
 }
 
@@ -100,6 +126,23 @@ __attribute__((target("avx2"))) void subtractScaledAvx2(int n, const double* t, 
     _mm256_storeu_pd(column + r, _mm256_sub_pd(_mm256_loadu_pd(column + r), _mm256_mul_pd(_mm256_loadu_pd(t + r), f)));
   for (; r < n; ++r)
     column[r] -= t[r] * factor;
+}
+
+__attribute__((target("avx2"))) void keepAndScaleAvx2(int n, double factor, double* column, double* kept)
+{
+  const __m256d f = _mm256_set1_pd(factor);
+  int r = 0;
+  for (; r + 4 <= n; r += 4)
+  {
+    const __m256d value = _mm256_loadu_pd(column + r);
+    _mm256_storeu_pd(kept + r, value);
+    _mm256_storeu_pd(column + r, _mm256_mul_pd(value, f));
+  }
+  for (; r < n; ++r)
+  {
+    kept[r] = column[r];
+    column[r] *= factor;
+  }
 }
 
 __attribute__((target("avx2"))) double dotAvx2(int n, const double* a, const double* b)
@@ -126,50 +169,18 @@ bool available()
 void subtractLowerProducts(bool avx2, int rows, int columns, int k, const double* t, int ldt, const double* l, int ldl,
                            double* c, int ldc)
 {
-  avx2 = avx2 && available();
-  // Column strips of four; in each, the tiles of eight rows from the strip's diagonal down, one of
-  // four rows if four are left, and the rows left then entry by entry. The columns left over (fewer than four) entry by
-  // entry too.
-  int j = 0;
-  alignas(32) double packed[kTileColumns * kMaxPacked];
-  for (; j + kTileColumns <= columns; j += kTileColumns)
+  // Column strips of four, in each the entries from the strip's diagonal down.
+#if defined(__x86_64__)
+  if (avx2 && available() && k <= kMaxPacked)
   {
-    // The strip's four rows of L side by side, p after p, where they fit.
-    const double* strip = l + j;
-    int ld_strip = ldl;
-    if (avx2 && k <= kMaxPacked)
-    {
-      for (int p = 0; p < k; ++p)
-        for (int q = 0; q < kTileColumns; ++q)
-          packed[kTileColumns * p + q] = l[j + q + static_cast<long>(p) * ldl];
-      strip = packed;
-      ld_strip = kTileColumns;
-    }
-    int i = j;
-    for (; i + kTileRows <= rows; i += kTileRows)
-    {
-      double* const tile = c + i + static_cast<long>(j) * ldc;
-#if defined(__x86_64__)
-      if (avx2)
-      {
-        subtractTileAvx2(k, t + i, ldt, strip, ld_strip, tile, ldc);
-        continue;
-      }
-#endif
-      subtractTileScalar(kTileRows, kTileColumns, k, t + i, ldt, l + j, ldl, tile, ldc);
-    }
-#if defined(__x86_64__)
-    if (avx2 && i + kTileRows / 2 <= rows)
-    {
-      subtractTile4Avx2(k, t + i, ldt, strip, ld_strip, c + i + static_cast<long>(j) * ldc, ldc);
-      i += kTileRows / 2;
-    }
-#endif
-    if (i < rows)
-      subtractTileScalar(rows - i, kTileColumns, k, t + i, ldt, l + j, ldl, c + i + static_cast<long>(j) * ldc, ldc);
+    subtractLowerProductsAvx2(rows, columns, k, t, ldt, l, ldl, c, ldc);
+    return;
   }
-  for (; j < columns; ++j)
-    if (j < rows) subtractTileScalar(rows - j, 1, k, t + j, ldt, l + j, ldl, c + j + static_cast<long>(j) * ldc, ldc);
+#endif
+  for (int j = 0; j < columns; j += kTileColumns)
+    if (j < rows)
+      subtractTileScalar(rows - j, std::min(kTileColumns, columns - j), k, t + j, ldt, l + j, ldl,
+                         c + j + static_cast<long>(j) * ldc, ldc);
 }
 
 void subtractScaled(bool avx2, int n, const double* t, double factor, double* column)
@@ -183,6 +194,22 @@ void subtractScaled(bool avx2, int n, const double* t, double factor, double* co
 #endif
   for (int r = 0; r < n; ++r)
     column[r] -= t[r] * factor;
+}
+
+void keepAndScale(bool avx2, int n, double factor, double* column, double* kept)
+{
+#if defined(__x86_64__)
+  if (avx2 && available())
+  {
+    keepAndScaleAvx2(n, factor, column, kept);
+    return;
+  }
+#endif
+  for (int r = 0; r < n; ++r)
+  {
+    kept[r] = column[r];
+    column[r] *= factor;
+  }
 }
 
 double dot(bool avx2, int n, const double* a, const double* b)

@@ -362,11 +362,12 @@ void ImplicitEulerSolver::precondition(const Eigen::Matrix3Xd& r, Eigen::Matrix3
     out.col(i).noalias() = inverse_diagonal_[i] * r.col(i);
 }
 
-double ImplicitEulerSolver::directCostInCgIterations() const
+double ImplicitEulerSolver::directCostInCgIterations(bool* supernodal) const
 {
   // One CG iteration: a product with A (18 flops a block) and about 40 flops a particle of vector
   // passes (residual, direction, preconditioner, dots).
   const SparseBlockLdlt::Cost direct = SparseBlockLdlt::estimateCost(row_start_, block_column_);
+  if (supernodal) *supernodal = direct.supernodal;
   const double cg_iteration = 18.0 * static_cast<double>(blocks_.size()) + 40.0 * diagonal_block_.size();
   return (direct.factor_flops + direct.solve_flops) / cg_iteration;
 }

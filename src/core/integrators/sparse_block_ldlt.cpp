@@ -128,6 +128,36 @@ std::atomic<bool>& useAvx2Flag()
   static std::atomic<bool> use(dense_panel::available());
   return use;
 }
+
+// The supernodes of L, as (first column, width), from its elimination tree and the counts of its
+// columns' off-diagonal blocks: column j + 1 joins column j's when it is j's parent and its rows
+// are j's but j + 1 (then the two columns have one pattern below them). supernode_of[j] is column
+// j's; `wide` whether the supernodal form is worth it (kWideShare of the flops in wide ones).
+std::vector<std::array<int, 2>> findSupernodes(const std::vector<int>& parent, const std::vector<int>& counts,
+                                               std::vector<int>& supernode_of, bool& wide)
+{
+  const int n = static_cast<int>(counts.size());
+  supernode_of.assign(n, 0);
+  std::vector<std::array<int, 2>> found;
+  double all_flops = 0.0, wide_flops = 0.0, unused = 0.0;
+  for (int j = 0; j < n;)
+  {
+    const int first = j;
+    double flops = 0.0;
+    for (;; ++j)
+    {
+      addColumnFlops(counts[j], flops, unused);
+      supernode_of[j] = static_cast<int>(found.size());
+      if (j + 1 == n || parent[j] != j + 1 || counts[j + 1] != counts[j] - 1) break;
+    }
+    ++j;
+    found.push_back({first, j - first});
+    all_flops += flops;
+    if (j - first >= kWideSupernode) wide_flops += flops;
+  }
+  wide = all_flops > 0.0 && wide_flops >= kWideShare * all_flops;
+  return found;
+}
 }  // namespace
 
 bool SparseBlockLdlt::useAvx2()
@@ -150,13 +180,16 @@ SparseBlockLdlt::Cost SparseBlockLdlt::estimateCost(const std::vector<int>& row_
   std::vector<int> start, column;
   lowerNeighbours(row_start, block_column, new_of, start, column);
   std::vector<int> counts(old_of.size(), 0);
-  forEachFactorBlock(start, column, eliminationTree(start, column), [&counts](int, int j) { ++counts[j]; });
+  const std::vector<int> parent = eliminationTree(start, column);
+  forEachFactorBlock(start, column, parent, [&counts](int, int j) { ++counts[j]; });
   Cost cost;
   for (int count : counts)
   {
     cost.factor_blocks += count;
     addColumnFlops(count, cost.factor_flops, cost.solve_flops);
   }
+  std::vector<int> supernode_of;
+  findSupernodes(parent, counts, supernode_of, cost.supernodal);
   return cost;
 }
 
@@ -209,35 +242,21 @@ void SparseBlockLdlt::analyze(const std::vector<int>& row_start, const std::vect
     }
   }
 
-  // The flop counts; and the supernodes: column j + 1 joins column j's when j's rows are j + 1 and
-  // column j + 1's rows (then j + 1 is j's parent and the two columns have one pattern below them).
+  // The flop counts, and the supernodes.
   factor_flops_ = solve_flops_ = 0.0;
-  std::vector<int> supernode_of(n, 0);
-  std::vector<std::array<int, 2>> found;  // first column, width
-  double wide_flops = 0.0;
-  for (int j = 0; j < n;)
-  {
-    const int first = j;
-    double flops = 0.0, unused = 0.0;
-    for (;; ++j)
-    {
-      const int count = column_start_[j + 1] - column_start_[j];
-      addColumnFlops(count, flops, unused);
-      supernode_of[j] = static_cast<int>(found.size());
-      if (j + 1 == n || count == 0 || row_index_[column_start_[j]] != j + 1 ||
-          column_start_[j + 2] - column_start_[j + 1] != count - 1)
-        break;
-    }
-    ++j;
-    found.push_back({first, j - first});
-    if (j - first >= kWideSupernode) wide_flops += flops;
-  }
+  std::vector<int> counts(n);
   for (int j = 0; j < n; ++j)
-    addColumnFlops(column_start_[j + 1] - column_start_[j], factor_flops_, solve_flops_);
+  {
+    counts[j] = column_start_[j + 1] - column_start_[j];
+    addColumnFlops(counts[j], factor_flops_, solve_flops_);
+  }
+  std::vector<int> supernode_of;
+  bool wide = false;
+  const std::vector<std::array<int, 2>> found = findSupernodes(parent, counts, supernode_of, wide);
 
   supernodes_.clear();
   update_slot_.clear();
-  if (wide_flops >= kWideShare * factor_flops_ && factor_flops_ > 0.0)
+  if (wide)
   {
     for (const auto& [first, width] : found)
     {
@@ -493,13 +512,8 @@ bool SparseBlockLdlt::factorizeSupernodes(const std::vector<Eigen::Matrix3d>& bl
         const double pivot = column[c];
         if (!std::isfinite(pivot) || !(std::abs(pivot) > kSingularPivot * pivots[c])) return false;
         pivots[c] = pivot;
-        const double inverse = 1.0 / pivot;
-        double* const t_c = scaled + static_cast<long>(c) * m;
-        for (int r = c + 1; r < m; ++r)
-        {
-          t_c[r] = column[r];
-          column[r] *= inverse;
-        }
+        dense_panel::keepAndScale(avx2, m - c - 1, 1.0 / pivot, column + c + 1,
+                                  scaled + static_cast<long>(c) * m + c + 1);
       }
     }
     if (below == 0) continue;

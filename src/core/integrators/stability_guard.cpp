@@ -13,9 +13,10 @@ namespace particle_sim
 {
 namespace core
 {
-double StabilityGuard::implicitStepCost(double direct_in_cg_iterations)
+double StabilityGuard::implicitStepCost(double direct_in_cg_iterations, bool supernodal)
 {
-  return kImplicitFixedCost + kCgIterationCost * kDirectFlopCost * direct_in_cg_iterations;
+  return kImplicitFixedCost +
+         kCgIterationCost * (supernodal ? kSupernodalFlopCost : kDirectFlopCost) * direct_in_cg_iterations;
 }
 
 IntegratorType StabilityGuard::chooseAuto(double dt, double omega_max, double c_max, double implicit_cost,

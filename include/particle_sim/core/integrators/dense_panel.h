@@ -22,6 +22,8 @@ void subtractLowerProducts(bool avx2, int rows, int columns, int k, const double
 
 /// column[r] −= t[r] factor for r < n (each entry one multiply and one subtraction, either way).
 void subtractScaled(bool avx2, int n, const double* t, double factor, double* column);
+/// kept[r] = column[r], then column[r] *= factor, for r < n.
+void keepAndScale(bool avx2, int n, double factor, double* column, double* kept);
 /// Σ a[r] b[r] for r < n in four sums (r mod 4, up to the last whole four), added as (s0 + s1) +
 /// (s2 + s3), then the rest one by one: the same bits either way.
 double dot(bool avx2, int n, const double* a, const double* b);

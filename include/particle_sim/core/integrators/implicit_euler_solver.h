@@ -127,9 +127,10 @@ public:
   /// switches to the direct solver for good once a CG solve took more iterations than that count.
   bool usesDirect(LinearSolverType solver);
   /// One factorization and solve of the direct solver for this pattern, in CG iterations (their flop
-  /// counts: 18 a block of A and about 40 a particle for one iteration). Analyses the pattern
+  /// counts: 18 a block of A and about 40 a particle for one iteration), and whether the direct
+  /// solver takes its supernodal form there (`supernodal`, if not null). Analyses the pattern
   /// (allocates): for decisions taken once.
-  double directCostInCgIterations() const;
+  double directCostInCgIterations(bool* supernodal = nullptr) const;
   /// The pairs kept by addPairBlocks() in this step, not yet in the blocks of A (for tests).
   int keptPairs() const { return pairs_in_blocks_ ? 0 : kept_pairs_; }
   /// Forgets the warm start (after a reset or a jump of the state).

@@ -71,6 +71,7 @@ public:
     std::int64_t factor_blocks = 0;  ///< off-diagonal blocks of L
     double factor_flops = 0.0;       ///< of one factorize()
     double solve_flops = 0.0;        ///< of one solve()
+    bool supernodal = false;         ///< whether analyze() would take the supernodal form
   };
   static Cost estimateCost(const std::vector<int>& row_start, const std::vector<int>& block_column);
 

@@ -43,14 +43,21 @@ public:
   /// `auto`'s estimate of one implicit Euler step, in explicit substeps (a force evaluation and an
   /// update each): a fixed part (forces, Jacobians, the energy checks) and the linear solve, taken as
   /// the direct solver's, `direct_in_cg_iterations` CG iterations of flops (the `auto` linear
-  /// solver does no worse: it turns to the direct solver once CG needs more). The three constants
-  /// were measured on hang64 (docs/performance.md): a substep of Verlet took 0.18 ms, an implicit
-  /// step's fixed part about 11 substeps, a CG iteration 0.6 substeps, and the direct solve's flops
-  /// ran 1.5 times slower than CG's.
-  static double implicitStepCost(double direct_in_cg_iterations);
+  /// solver does no worse: it turns to the direct solver once CG needs more). The constants were
+  /// measured on hang64 (docs/performance.md): a substep of Verlet took 0.18 ms, an implicit step's
+  /// fixed part about 11 substeps, a CG iteration 0.6 substeps, and the direct solve's flops ran 1.5
+  /// times slower than CG's on 3×3 blocks. By supernodes (`supernodal`, SparseBlockLdlt) they ran
+  /// at 0.65 of CG's on hang64 (2026-12-02, one run of particle_sim_perf: the step 5.48 ms, a Verlet
+  /// substep 0.121 ms, so 45 substeps, 34 of them the solve's 89 CG iterations of flops); but where
+  /// the `auto` linear solver keeps CG the estimate stands for CG's iterations, which cost more
+  /// (config/scenes/cloth_pile.yaml at dt = 0.005 s: about 70 a step, so a step is dearer than its
+  /// 40 Verlet substeps, 7.9 against 6.7–7.4 s for 2 s). 1.0 picks right in both: implicit Euler on
+  /// hang64 (64.6 against 82 substeps), Verlet on cloth_pile (46.2 against 40).
+  static double implicitStepCost(double direct_in_cg_iterations, bool supernodal);
   static constexpr double kImplicitFixedCost = 11.0;  ///< [substeps]
   static constexpr double kCgIterationCost = 0.6;     ///< [substeps per CG iteration]
   static constexpr double kDirectFlopCost = 1.5;      ///< a direct solve's flop against a CG iteration's
+  static constexpr double kSupernodalFlopCost = 1.0;  ///< the same, by supernodes
 
   /// What `auto` runs at step dt [s] with the bounds ω_max and c_max [1/s]: Verlet when the
   /// substeps its stability needs (planSubsteps) fit in max_substeps and cost no more than
