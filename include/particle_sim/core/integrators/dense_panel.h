@@ -16,7 +16,8 @@ namespace dense_panel
 bool available();
 
 /// C (rows × columns, leading dimension ldc) −= T (rows × k, ldt) Lᵀ (L: columns × k, ldl), on and
-/// below the diagonal; with the AVX2 tiles where `avx2` is true (and available()).
+/// below the diagonal; with the AVX2 tiles where `avx2` is true (and available()) and k is at most
+/// 2048 (a strip of L is packed on the stack), else with the scalar ones.
 void subtractLowerProducts(bool avx2, int rows, int columns, int k, const double* t, int ldt, const double* l, int ldl,
                            double* c, int ldc);
 
