@@ -118,17 +118,18 @@ __attribute__((target("avx2"))) void subtractLowerProductsAvx2(int rows, int col
   }
 }
 
-__attribute__((target("avx2"))) void subtractScaledAvx2(int n, const double* t, double factor, double* column)
+// The whole fours of subtractScaled() and keepAndScale(): how many entries they did (the callers
+// do the rest, entry by entry, as their scalar form does all of them).
+__attribute__((target("avx2"))) int subtractScaledAvx2(int n, const double* t, double factor, double* column)
 {
   const __m256d f = _mm256_set1_pd(factor);
   int r = 0;
   for (; r + 4 <= n; r += 4)
     _mm256_storeu_pd(column + r, _mm256_sub_pd(_mm256_loadu_pd(column + r), _mm256_mul_pd(_mm256_loadu_pd(t + r), f)));
-  for (; r < n; ++r)
-    column[r] -= t[r] * factor;
+  return r;
 }
 
-__attribute__((target("avx2"))) void keepAndScaleAvx2(int n, double factor, double* column, double* kept)
+__attribute__((target("avx2"))) int keepAndScaleAvx2(int n, double factor, double* column, double* kept)
 {
   const __m256d f = _mm256_set1_pd(factor);
   int r = 0;
@@ -138,11 +139,7 @@ __attribute__((target("avx2"))) void keepAndScaleAvx2(int n, double factor, doub
     _mm256_storeu_pd(kept + r, value);
     _mm256_storeu_pd(column + r, _mm256_mul_pd(value, f));
   }
-  for (; r < n; ++r)
-  {
-    kept[r] = column[r];
-    column[r] *= factor;
-  }
+  return r;
 }
 
 __attribute__((target("avx2"))) double dotAvx2(int n, const double* a, const double* b)
@@ -185,27 +182,21 @@ void subtractLowerProducts(bool avx2, int rows, int columns, int k, const double
 
 void subtractScaled(bool avx2, int n, const double* t, double factor, double* column)
 {
+  int r = 0;
 #if defined(__x86_64__)
-  if (avx2 && available())
-  {
-    subtractScaledAvx2(n, t, factor, column);
-    return;
-  }
+  if (avx2 && available()) r = subtractScaledAvx2(n, t, factor, column);
 #endif
-  for (int r = 0; r < n; ++r)
+  for (; r < n; ++r)
     column[r] -= t[r] * factor;
 }
 
 void keepAndScale(bool avx2, int n, double factor, double* column, double* kept)
 {
+  int r = 0;
 #if defined(__x86_64__)
-  if (avx2 && available())
-  {
-    keepAndScaleAvx2(n, factor, column, kept);
-    return;
-  }
+  if (avx2 && available()) r = keepAndScaleAvx2(n, factor, column, kept);
 #endif
-  for (int r = 0; r < n; ++r)
+  for (; r < n; ++r)
   {
     kept[r] = column[r];
     column[r] *= factor;
