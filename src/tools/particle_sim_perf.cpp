@@ -1,10 +1,11 @@
 // particle_sim_perf: the performance bench of issue 13. Times the core's step on bodies built in
 // code at a sweep of sizes and writes one CSV row per case and size: ropes and cloths solved
-// implicitly (both linear solvers), Bullet's test cloth ("hang64"), the implicit solve's stopping
-// rule on each of them, the direct solve's flops against the machine's arithmetic roof, explicit
-// springs against its memory bandwidth (a STREAM-like triad), emitters, and the self-collision pass
-// beside the rest of the step. scripts/bench --performance runs it and
-// scripts/performance_report.py turns the CSV into docs/performance.md and its plots.
+// implicitly (both linear solvers), Bullet's test cloth ("hang64"), `auto` beside every fixed
+// choice on it (timed side by side), the implicit solve's stopping rule on each of them, the direct
+// solve's flops against the machine's arithmetic roof, explicit springs against its memory
+// bandwidth (a STREAM-like triad), emitters, and the self-collision pass beside the rest of the
+// step. scripts/bench --performance runs it and scripts/performance_report.py turns the CSV into
+// docs/performance.md and its plots.
 //
 //   particle_sim_perf [--out FILE] [--quick] [--only CASE,...]
 //
@@ -65,8 +66,8 @@ const char* kUsage =
     "usage: particle_sim_perf [--out FILE] [--quick] [--only CASE,...]\n"
     "  --out FILE    CSV output (default performance.csv)\n"
     "  --quick       fewer sizes, steps and repeats: a smoke run, not a report\n"
-    "  --only CASES  run only these cases: rope, cloth, hang64, stopping, springs, emitters, selfcollision,\n"
-    "                threads\n";
+    "  --only CASES  run only these cases: rope, cloth, hang64, auto, stopping, springs, emitters,\n"
+    "                selfcollision, threads\n";
 
 core::Environment noGround()
 {
@@ -326,30 +327,24 @@ double arithmeticRoofAvx2(bool quick)
   return 0.0;
 }
 
-void hang(std::ostream& out, bool quick)
+// hang64's variants: implicit Euler at h = 1/60 with each linear solver (goal 1); Verlet split into
+// the substeps its stability needs (the cheapest stable explicit method: against Bullet's
+// position-based solver at equal stretch, goal 7); and `auto` (goal 8: within 1.2x of the best fixed
+// choice). Then the same at h = 1/1000, where Bullet's implicit solver is compared at the same dt
+// (goal 7), to 1e-6 and to Bullet's own default relative residual of 3.45e-4, like Bullet's two rows
+// at that dt.
+struct HangVariant
 {
-  // The roof the direct solve's flops are measured against (goal 1).
-  writeRoofRow(out, "roof", "arithmetic", arithmeticRoof(quick) / 1e9,
-               "GFlop/s (best of repeats), one core: independent double multiplies and adds on pairs of lanes "
-               "(Eigen's packets in this build, no fused multiply-add)");
-  if (const double avx2 = arithmeticRoofAvx2(quick); avx2 > 0.0)
-    writeRoofRow(out, "roof", "arithmetic avx2", avx2 / 1e9,
-                 "GFlop/s (best of repeats), one core: the same on AVX2's four lanes (no fused multiply-add), which "
-                 "the direct solver's supernodal products run on");
-  struct Variant
-  {
-    std::string name;
-    core::IntegratorType integrator;
-    core::LinearSolverType solver;
-    double tolerance, dt;
-  };
-  // Implicit Euler at h = 1/60 with each linear solver (goal 1); Verlet split into the substeps its
-  // stability needs (the cheapest stable explicit method: against Bullet's position-based solver at
-  // equal stretch, goal 7); and `auto` (goal 8: within 1.2x of the best fixed choice). Then the same
-  // at h = 1/1000, where Bullet's implicit solver is compared at the same dt (goal 7), to 1e-6 and to
-  // Bullet's own default relative residual of 3.45e-4, like Bullet's two rows at that dt.
+  std::string name;
+  core::IntegratorType integrator;
+  core::LinearSolverType solver;
+  double tolerance, dt;
+};
+
+std::vector<HangVariant> hangVariants()
+{
   const double h60 = 1.0 / 60.0, h1000 = 1.0 / 1000.0;
-  const std::vector<Variant> variants = {
+  return {
       {"implicit_euler cg tol 1e-6", core::kImplicitEulerIntegrator, core::LinearSolverType::ConjugateGradient, 1e-6,
        h60},
       {"implicit_euler cg tol 1e-4", core::kImplicitEulerIntegrator, core::LinearSolverType::ConjugateGradient, 1e-4,
@@ -369,15 +364,36 @@ void hang(std::ostream& out, bool quick)
       {"verlet substepped dt 1/1000", core::kVerletIntegrator, core::LinearSolverType::Auto, 1e-6, h1000},
       {"auto dt 1/1000", core::kAutoIntegrator, core::LinearSolverType::Auto, 1e-6, h1000},
   };
-  for (const Variant& variant : variants)
+}
+
+// hang64 set up as `variant` asks: its method and linear solver, the variant's relative tolerance
+// alone (no velocity rule) and no cap in practice on CG's iterations or the substeps.
+core::SpringNetworkDef hangDef(const HangVariant& variant)
+{
+  core::SpringNetworkDef def = hang64(64);
+  def.integrator.type = variant.integrator;
+  def.integrator.linear_solver = variant.solver;
+  def.integrator.cg_tolerance = variant.tolerance;
+  def.integrator.cg_velocity_tolerance = 0.0;
+  def.integrator.cg_max_iterations = 100000;
+  def.integrator.max_substeps = 100000;
+  return def;
+}
+
+void hang(std::ostream& out, bool quick)
+{
+  // The roof the direct solve's flops are measured against (goal 1).
+  writeRoofRow(out, "roof", "arithmetic", arithmeticRoof(quick) / 1e9,
+               "GFlop/s (best of repeats), one core: independent double multiplies and adds on pairs of lanes "
+               "(Eigen's packets in this build, no fused multiply-add)");
+  if (const double avx2 = arithmeticRoofAvx2(quick); avx2 > 0.0)
+    writeRoofRow(out, "roof", "arithmetic avx2", avx2 / 1e9,
+                 "GFlop/s (best of repeats), one core: the same on AVX2's four lanes (no fused multiply-add), which "
+                 "the direct solver's supernodal products run on");
+  const std::vector<HangVariant> variants = hangVariants();
+  for (const HangVariant& variant : variants)
   {
-    core::SpringNetworkDef def = hang64(64);
-    def.integrator.type = variant.integrator;
-    def.integrator.linear_solver = variant.solver;
-    def.integrator.cg_tolerance = variant.tolerance;
-    def.integrator.cg_velocity_tolerance = 0.0;  // the relative rule alone, at the variant's tolerance
-    def.integrator.cg_max_iterations = 100000;
-    def.integrator.max_substeps = 100000;
+    const core::SpringNetworkDef def = hangDef(variant);
     core::SpringNetworkBody body(def);
     const int steps = variant.dt < 0.01 ? 500 : 60;
     Row row = timeBody(body, variant.dt, quick ? 3 : 10, quick ? 5 : steps, quick ? 1 : 3);
@@ -418,6 +434,105 @@ void hang(std::ostream& out, bool quick)
     row.size = 64;
     row.elements = 64 * 64;
     writeRow(out, row);
+  }
+}
+
+// --- `auto` side by side (goal 8): at each dt of hang64's variants, `auto` and every fixed choice of
+// that dt, built in one process and warmed up, then timed in rounds: each round steps every body
+// `steps` times, one after the other, the order shifted by one each round, so that a spell of load on
+// the virtual machine falls on all of them alike. The bodies start from rest together, so every
+// round times each of them over the same span of simulated time. Each round gives auto's time over
+// the fastest fixed choice's in that round; the ratio row's three figures are those ratios' min,
+// median and max, and each body's row its rounds' times. The separate rows of hang() are timed
+// seconds to minutes apart, so their ratios also carry how the machine's load moved in between.
+void autoSideBySide(std::ostream& out, bool quick)
+{
+  const std::vector<HangVariant> variants = hangVariants();
+  std::vector<double> steps_of;
+  for (const HangVariant& variant : variants)
+  {
+    if (std::find(steps_of.begin(), steps_of.end(), variant.dt) == steps_of.end()) steps_of.push_back(variant.dt);
+  }
+  const core::Environment env = noGround();
+  for (const double dt : steps_of)
+  {
+    // The auto body first, then the fixed choices, as hangVariants() lists them.
+    std::vector<const HangVariant*> chosen;
+    for (const HangVariant& variant : variants)
+    {
+      if (variant.dt == dt && variant.integrator == core::kAutoIntegrator)
+        chosen.insert(chosen.begin(), &variant);
+      else if (variant.dt == dt)
+        chosen.push_back(&variant);
+    }
+    if (chosen.size() < 2 || chosen.front()->integrator != core::kAutoIntegrator) continue;
+    std::vector<std::unique_ptr<core::SpringNetworkBody>> bodies;
+    for (const HangVariant* variant : chosen)
+      bodies.push_back(std::make_unique<core::SpringNetworkBody>(hangDef(*variant)));
+    const int bodies_count = static_cast<int>(bodies.size());
+    const int warmup = quick ? 2 : 10;
+    const int rounds = quick ? 3 : 15;
+    const int steps = quick ? 2 : (dt < 0.01 ? 40 : 8);
+    for (auto& body : bodies)
+    {
+      for (int i = 0; i < warmup; ++i)
+        body->step(dt, env);
+    }
+    std::vector<std::vector<double>> times(bodies_count);
+    std::vector<long long> iterations(bodies_count, 0);
+    std::vector<double> ratios;
+    std::vector<int> fastest_rounds(bodies_count, 0);  // rounds in which each fixed choice was the fastest
+    for (int round = 0; round < rounds; ++round)
+    {
+      std::vector<double> round_time(bodies_count);
+      for (int k = 0; k < bodies_count; ++k)
+      {
+        const int b = (k + round) % bodies_count;
+        round_time[b] = timeRepeat(
+            [&] {
+              bodies[b]->step(dt, env);
+              iterations[b] += bodies[b]->lastSolve().iterations;
+            },
+            steps);
+        times[b].push_back(round_time[b]);
+      }
+      const int best =
+          static_cast<int>(std::min_element(round_time.begin() + 1, round_time.end()) - round_time.begin());
+      ++fastest_rounds[best];
+      ratios.push_back(round_time[0] / round_time[best]);
+    }
+    const std::string at = dt < 0.01 ? " dt 1/" + std::to_string(static_cast<int>(std::lround(1.0 / dt))) : "";
+    for (int b = 0; b < bodies_count; ++b)
+    {
+      const core::SpringNetworkBody& body = *bodies[b];
+      Row row;
+      row.case_name = "auto_paired";
+      row.variant = chosen[b]->name;
+      row.size = 64;
+      row.elements = 64 * 64;
+      row.timing = summarize(times[b]);
+      row.iterations = static_cast<double>(iterations[b]) / (static_cast<double>(rounds) * steps);
+      std::ostringstream detail;
+      detail << rounds << " rounds of " << steps << " steps after " << warmup << " warm-up steps, in turn with "
+             << bodies_count - 1 << " other bodies";
+      if (b > 0) detail << "; the fastest fixed choice in " << fastest_rounds[b] << " of " << rounds << " rounds";
+      if (!core::isImplicit(body.lastIntegrator()))
+        detail << "; " << core::toString(body.lastIntegrator()) << ", " << body.lastSubsteps() << " substeps";
+      else if (chosen[b]->integrator == core::kAutoIntegrator)
+        detail << "; " << core::toString(body.lastIntegrator());
+      if (body.frozen()) detail << "; FROZE: " << body.frozenReason();
+      row.detail = detail.str();
+      writeRow(out, row);
+    }
+    Row ratio;
+    ratio.case_name = "auto_paired";
+    ratio.variant = "ratio" + at;
+    ratio.size = 64;
+    ratio.elements = 64 * 64;
+    ratio.timing = summarize(ratios);
+    ratio.detail = "auto's time over the fastest fixed choice's, round by round (" + std::to_string(rounds) +
+                   " rounds of " + std::to_string(steps) + " steps): min, median and max in the time columns";
+    writeRow(out, ratio);
   }
 }
 
@@ -963,6 +1078,7 @@ int main(int argc, char** argv)
   if (wanted("rope")) ropes(out, quick);
   if (wanted("cloth")) cloths(out, quick);
   if (wanted("hang64")) hang(out, quick);
+  if (wanted("auto")) autoSideBySide(out, quick);
   if (wanted("stopping")) stoppingRule(out, quick);
   if (wanted("springs")) explicitSprings(out, quick);
   if (wanted("emitters")) emitters(out, quick);
