@@ -809,7 +809,8 @@ void writeTwoThreadCeiling(std::ostream& out, bool quick, const char* when)
 
 // --- Two threads (goal 6): squareCloth at 128² and 256² stepped by one thread and by two
 // (WorkerPool), each method from rest over the same steps; the two runs must end in the same bits.
-// Implicit Euler with CG (relative tolerance 1e-6, as in "Cloth") at 128² only: seconds a step at 256².
+// Implicit Euler with CG (relative tolerance 1e-6, as in "Cloth") at 128² only: seconds a step at 256²;
+// and with the multigrid, whose passes over a level's nodes the threads share, at both sizes.
 // Verlet at dt = 1/60 with the substeps its stability needs (191 at 128²: more than the default
 // cap, so `auto` runs implicit Euler there), and symplectic Euler at half its limit (one force
 // pass a step, like the explicit springs' case).
@@ -820,18 +821,22 @@ void threads(std::ostream& out, bool quick)
   {
     const char* name;
     core::IntegratorType type;
+    core::LinearSolverType solver;
   };
   for (const Method& method :
-       {Method{"verlet", core::kVerletIntegrator}, Method{"symplectic_euler", core::kSymplecticEulerIntegrator},
-        Method{"implicit_euler cg", core::kImplicitEulerIntegrator}})
+       {Method{"verlet", core::kVerletIntegrator, core::LinearSolverType::Auto},
+        Method{"symplectic_euler", core::kSymplecticEulerIntegrator, core::LinearSolverType::Auto},
+        Method{"implicit_euler cg", core::kImplicitEulerIntegrator, core::LinearSolverType::ConjugateGradient},
+        Method{"implicit_euler multigrid", core::kImplicitEulerIntegrator, core::LinearSolverType::Multigrid}})
   {
     for (int n : quick ? std::vector<int>{128} : std::vector<int>{128, 256})
     {
       const bool verlet = method.type == core::kVerletIntegrator;
       const bool implicit = method.type == core::kImplicitEulerIntegrator;
-      if (implicit && n > 128) continue;  // seconds a step
-      core::ClothGridDef def =
-          squareCloth(n, implicit ? core::LinearSolverType::ConjugateGradient : core::LinearSolverType::Auto);
+      // Block Jacobi's CG takes seconds a step at 256² (its iterations grow with n; the multigrid's
+      // hardly do).
+      if (method.solver == core::LinearSolverType::ConjugateGradient && n > 128) continue;
+      core::ClothGridDef def = squareCloth(n, method.solver);
       def.integrator.type = method.type;
       def.integrator.max_substeps = verlet ? 100000 : 1;
       // The two bodies' repeats alternate (one thread, two threads, one, ...), so that a spell of

@@ -340,6 +340,23 @@ TEST(WorkerPool, AClothsEnergyIsTheSameBitsAtTwoThreadsAndTheSumOfItsParts)
   EXPECT_TRUE(sameDouble(energies[0], energies[1])) << energies[0] << " J against " << energies[1] << " J";
 }
 
+// An 80 × 80 spring cloth of the default constants (6400 particles, about 38,000 springs), a 1 m
+// square at 2 m, hanging from two adjacent corners.
+namespace
+{
+core::ClothGridDef hangingCloth80()
+{
+  core::ClothGridDef def(core::ClothModel::Springs);
+  def.name = "cloth";
+  def.nu = def.nv = 80;
+  def.origin = {0.0, 0.0, 2.0};
+  def.edge_u = {1.0, 0.0, 0.0};
+  def.edge_v = {0.0, 1.0, 0.0};
+  def.named_pins = {"corner_00", "corner_10"};
+  return def;
+}
+}  // namespace
+
 // Every method of the core (and `auto`) steps an 80 × 80 spring cloth (6400 particles, about 38,000
 // springs: its spring forces, its vector updates and, for the implicit methods, its conjugate
 // gradient with its sums are shared, in two chunks or more each) to the same bits at two threads as
@@ -353,13 +370,7 @@ TEST(WorkerPool, EveryMethodStepsAClothToTheSameBitsAtTwoThreads)
   env.ground.enabled = false;
   for (core::IntegratorType type : types)
   {
-    core::ClothGridDef def(core::ClothModel::Springs);
-    def.name = "cloth";
-    def.nu = def.nv = 80;
-    def.origin = {0.0, 0.0, 2.0};
-    def.edge_u = {1.0, 0.0, 0.0};
-    def.edge_v = {0.0, 1.0, 0.0};
-    def.named_pins = {"corner_00", "corner_10"};
+    core::ClothGridDef def = hangingCloth80();
     def.integrator.type = type;
     def.integrator.linear_solver = core::LinearSolverType::ConjugateGradient;
     def.integrator.max_substeps = 100000;  // the explicit methods take the substeps they need
@@ -381,6 +392,43 @@ TEST(WorkerPool, EveryMethodStepsAClothToTheSameBitsAtTwoThreads)
     EXPECT_GT((end[0].leftCols(6400).row(2).array() - 2.0).abs().maxCoeff(), 1e-3)
         << core::toString(type) << ": the cloth did not move";
   }
+}
+
+// The multigrid solver shares its passes over a level's nodes: an 80 × 80 spring cloth (6400
+// particles: four chunks of the finest level, about 700 aggregates below it, two chunks) steps to the
+// same bits at two threads as at one. Its CG's own vector passes are serial, so the loops the two
+// threads shared count the multigrid's: each iteration has the finest product and, on each of the
+// two levels above the coarse ones, the smoothing twice, two residuals, the restriction and the
+// prolongation (twelve or so), where the step's own shared loops (forces, updates) are a few a step.
+TEST(WorkerPool, TheMultigridSolverStepsAClothToTheSameBitsAtTwoThreads)
+{
+  core::Environment env;
+  env.ground.enabled = false;
+  core::ClothGridDef def = hangingCloth80();
+  def.integrator.type = core::kImplicitEulerIntegrator;
+  def.integrator.linear_solver = core::LinearSolverType::Multigrid;
+  Eigen::Matrix3Xd end[2];
+  long long iterations = 0;
+  std::uint64_t shared = 0;
+  for (int threads : {1, 2})
+  {
+    core::WorkerPool pool(threads);
+    core::SpringNetworkBody body(core::buildClothGrid(def));
+    body.setWorkers(&pool);
+    iterations = 0;
+    for (int k = 0; k < 5; ++k)
+    {
+      body.step(1.0 / 60.0, env);
+      iterations += body.lastSolve().iterations;
+    }
+    ASSERT_FALSE(body.frozen()) << body.frozenReason();
+    end[threads - 1] = positionsAndVelocities(body.particles());
+    shared = pool.sharedLoops();
+  }
+  EXPECT_GT(iterations, 5);
+  EXPECT_TRUE(sameBits(end[0], end[1]));
+  EXPECT_GT((end[0].leftCols(6400).row(2).array() - 2.0).abs().maxCoeff(), 1e-3) << "the cloth did not move";
+  EXPECT_GE(shared, 10u * static_cast<std::uint64_t>(iterations)) << iterations << " iterations";
 }
 
 TEST(WorkerPool, CollisionsWithEveryKindOfColliderGiveTheSameBitsAtTwoThreads)

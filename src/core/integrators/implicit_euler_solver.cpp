@@ -741,6 +741,7 @@ void ImplicitEulerSolver::multigridConjugateGradient(const std::vector<char>& pi
     multigrid_.setPattern(static_cast<int>(diagonal_block_.size()), row_start_, block_column_);
     multigrid_planned_ = true;
   }
+  multigrid_.setWorkers(workers_);  // its passes over nodes shared, the same bits at any thread count
   // A new hierarchy every solve: kept over later solves, its rigid-body modes turn away from a
   // swinging cloth's within a few steps at h = 1/60 (hang64: 24 iterations a step with a new one
   // each solve, 36 with one every second solve, 136 every tenth; README, "Or by multigrid").

@@ -58,27 +58,41 @@ void compressRows(std::vector<std::vector<int>>& rows, std::vector<int>& start, 
   }
 }
 
+// Nodes per chunk of a loop over a level's nodes that `workers` share: some 2048 3x3 block rows of
+// a cloth (13 blocks each with its bend springs), a quarter as many 6x6 rows, about 50 µs of work
+// each, so that a loop's handover costs a few per cent of it; a level smaller than one chunk runs on
+// the calling thread.
+template <int B>
+constexpr int kNodesPerChunk = B == 3 ? 2048 : 512;
+
 // y = A x for a matrix of B x B row-major blocks in block-sparse rows (start, column), x and y B
-// numbers a node: each row's blocks summed in their order. Block k of row i multiplies the node
-// sourceOf(k, i) of x (its column, or another node for a matrix with blocks moved).
+// numbers a node: each row's blocks summed in their order, the rows shared with `workers` (each row
+// alone: the same bits at any thread count). Block k of row i multiplies the node sourceOf(k, i) of
+// x (its column, or another node for a matrix with blocks moved). With `rhs` not null, y = rhs − A x
+// instead (the residual, in the same operations as the product and then the difference: its bits).
 template <int B, typename Source>
-void blockSparseProduct(int nodes, const std::vector<int>& start, const std::vector<double>& a, const double* x,
-                        double* y, const Source& sourceOf)
+void blockSparseProduct(WorkerPool* workers, int nodes, const std::vector<int>& start, const std::vector<double>& a,
+                        const double* x, const double* rhs, double* y, const Source& sourceOf)
 {
-  for (int i = 0; i < nodes; ++i)
-  {
-    Eigen::Matrix<double, B, 1> sum = Eigen::Matrix<double, B, 1>::Zero();
-    for (int k = start[i]; k < start[i + 1]; ++k)
-      sum.noalias() += ConstBlockMap<B, B>(a.data() + B * B * k) * ConstSegmentMap<B>(x + B * sourceOf(k, i));
-    SegmentMap<B>(y + B * i) = sum;
-  }
+  shareLoop(workers, nodes, kNodesPerChunk<B>, [&](int begin, int end) {
+    for (int i = begin; i < end; ++i)
+    {
+      Eigen::Matrix<double, B, 1> sum = Eigen::Matrix<double, B, 1>::Zero();
+      for (int k = start[i]; k < start[i + 1]; ++k)
+        sum.noalias() += ConstBlockMap<B, B>(a.data() + B * B * k) * ConstSegmentMap<B>(x + B * sourceOf(k, i));
+      if (rhs)
+        SegmentMap<B>(y + B * i) = ConstSegmentMap<B>(rhs + B * i) - sum;
+      else
+        SegmentMap<B>(y + B * i) = sum;
+    }
+  });
 }
 
 template <int B>
-void blockSparseProduct(int nodes, const std::vector<int>& start, const std::vector<int>& column,
-                        const std::vector<double>& a, const double* x, double* y)
+void blockSparseProduct(WorkerPool* workers, int nodes, const std::vector<int>& start, const std::vector<int>& column,
+                        const std::vector<double>& a, const double* x, double* y, const double* rhs = nullptr)
 {
-  blockSparseProduct<B>(nodes, start, a, x, y, [&](int k, int) { return column[k]; });
+  blockSparseProduct<B>(workers, nodes, start, a, x, rhs, y, [&](int k, int) { return column[k]; });
 }
 }  // namespace
 
@@ -218,6 +232,25 @@ void SmoothedAggregation::planNextLevel(int index)
     for (int k = level.start[i]; k < level.start[i + 1]; ++k)
       if (strong[k]) rows[i].push_back(aggregate[level.column[k]]);
   compressRows(rows, level.p_start, level.p_column);
+  // Pᵀ's rows: for each aggregate, the blocks of P in its column, by ascending row (the restriction's
+  // gather, in the order in which the rows of P would add into it).
+  level.pt_start.assign(aggregates + 1, 0);
+  for (const int column : level.p_column)
+    ++level.pt_start[column + 1];
+  for (int a = 0; a < aggregates; ++a)
+    level.pt_start[a + 1] += level.pt_start[a];
+  level.pt_block.resize(level.p_column.size());
+  level.pt_row.resize(level.p_column.size());
+  {
+    std::vector<int> filled(level.pt_start.begin(), level.pt_start.end() - 1);
+    for (int i = 0; i < n; ++i)
+      for (int q = level.p_start[i]; q < level.p_start[i + 1]; ++q)
+      {
+        const int slot = filled[level.p_column[q]]++;
+        level.pt_block[slot] = q;
+        level.pt_row[slot] = i;
+      }
+  }
   for (int i = 0; i < n; ++i)
   {
     rows[i].clear();
@@ -301,20 +334,22 @@ void SmoothedAggregation::copyFinest(const std::vector<Eigen::Matrix3d>& blocks,
   // The finest matrix, filtered: a pinned particle's row and column cleared but for an identity on
   // the diagonal (it decouples; the residual is zero there).
   Level& finest = levels_[0];
-  for (int i = 0; i < finest.nodes; ++i)
-  {
-    for (int k = finest.start[i]; k < finest.start[i + 1]; ++k)
+  shareLoop(workers_, finest.nodes, kNodesPerChunk<3>, [&](int begin, int end) {
+    for (int i = begin; i < end; ++i)
     {
-      const int j = finest.column[k];
-      BlockMap<3, 3> a(finest.a.data() + 9 * k);
-      if (!pinned[i] && !pinned[j])
-        a = blocks[k];
-      else if (j == i)
-        a.setIdentity();
-      else
-        a.setZero();
+      for (int k = finest.start[i]; k < finest.start[i + 1]; ++k)
+      {
+        const int j = finest.column[k];
+        BlockMap<3, 3> a(finest.a.data() + 9 * k);
+        if (!pinned[i] && !pinned[j])
+          a = blocks[k];
+        else if (j == i)
+          a.setIdentity();
+        else
+          a.setZero();
+      }
     }
-  }
+  });
 }
 
 bool SmoothedAggregation::setup(const std::vector<Eigen::Matrix3d>& blocks, const Eigen::Matrix3Xd& x,
@@ -382,13 +417,15 @@ void SmoothedAggregation::setupLevel(int index)
   const int n = level.nodes;
   // The inverse of each diagonal block. A mode dropped on the level above left its row and column
   // empty: its diagonal is set to one, so that it decouples.
-  for (int i = 0; i < n; ++i)
-  {
-    BlockMap<B, B> diagonal(level.a.data() + B * B * level.diagonal[i]);
-    for (int d = 0; d < B; ++d)
-      if (diagonal(d, d) == 0.0) diagonal(d, d) = 1.0;
-    BlockMap<B, B>(level.inverse_diagonal.data() + B * B * i) = diagonal.inverse();
-  }
+  shareLoop(workers_, n, kNodesPerChunk<B>, [&](int begin, int end) {
+    for (int i = begin; i < end; ++i)
+    {
+      BlockMap<B, B> diagonal(level.a.data() + B * B * level.diagonal[i]);
+      for (int d = 0; d < B; ++d)
+        if (diagonal(d, d) == 0.0) diagonal(d, d) = 1.0;
+      BlockMap<B, B>(level.inverse_diagonal.data() + B * B * i) = diagonal.inverse();
+    }
+  });
   if (static_cast<std::size_t>(index) + 1 == levels_.size()) return;
 
   // The smoother's damping; and the lumped matrix's inverse diagonal blocks D_L,i = A_ii + Σ of the
@@ -468,30 +505,33 @@ void SmoothedAggregation::setupLevel(int index)
   const std::vector<double>& smoothing_inverse =
       level.has_weak ? level.lumped_inverse_diagonal : level.inverse_diagonal;
   const double smoothing_omega = level.has_weak ? level.lumped_omega : level.omega;
-  std::fill(level.p.begin(), level.p.end(), 0.0);
-  for (int i = 0; i < n; ++i)
-  {
-    const int first = level.p_start[i], last = level.p_start[i + 1];
-    for (int k = level.start[i]; k < level.start[i + 1]; ++k)
+  // Each row of P alone (its own blocks), so the rows are shared with the workers.
+  shareLoop(workers_, n, kNodesPerChunk<B>, [&](int begin, int end) {
+    for (int i = begin; i < end; ++i)
     {
-      const int j = level.strong[k] ? level.column[k] : i;
-      if (!level.strong[k] && !level.has_weak) continue;  // a zero block
-      const int q = positionIn(level.p_column, first, last, level.aggregate[j]);
-      BlockMap<B, kModes>(level.p.data() + B * kModes * q).noalias() +=
-          ConstBlockMap<B, B>(level.a.data() + B * B * k) *
-          ConstBlockMap<B, kModes>(level.tentative.data() + B * kModes * j);
+      const int first = level.p_start[i], last = level.p_start[i + 1];
+      std::fill(level.p.begin() + B * kModes * first, level.p.begin() + B * kModes * last, 0.0);
+      for (int k = level.start[i]; k < level.start[i + 1]; ++k)
+      {
+        const int j = level.strong[k] ? level.column[k] : i;
+        if (!level.strong[k] && !level.has_weak) continue;  // a zero block
+        const int q = positionIn(level.p_column, first, last, level.aggregate[j]);
+        BlockMap<B, kModes>(level.p.data() + B * kModes * q).noalias() +=
+            ConstBlockMap<B, B>(level.a.data() + B * B * k) *
+            ConstBlockMap<B, kModes>(level.tentative.data() + B * kModes * j);
+      }
+      const ConstBlockMap<B, B> inverse(smoothing_inverse.data() + B * B * i);
+      for (int q = first; q < last; ++q)
+      {
+        BlockMap<B, kModes> block(level.p.data() + B * kModes * q);
+        const Eigen::Matrix<double, B, kModes> smoothed = -smoothing_omega * (inverse * block);
+        block = smoothed;
+      }
+      const int own = positionIn(level.p_column, first, last, level.aggregate[i]);
+      BlockMap<B, kModes>(level.p.data() + B * kModes * own) +=
+          ConstBlockMap<B, kModes>(level.tentative.data() + B * kModes * i);
     }
-    const ConstBlockMap<B, B> inverse(smoothing_inverse.data() + B * B * i);
-    for (int q = first; q < last; ++q)
-    {
-      BlockMap<B, kModes> block(level.p.data() + B * kModes * q);
-      const Eigen::Matrix<double, B, kModes> smoothed = -smoothing_omega * (inverse * block);
-      block = smoothed;
-    }
-    const int own = positionIn(level.p_column, first, last, level.aggregate[i]);
-    BlockMap<B, kModes>(level.p.data() + B * kModes * own) +=
-        ConstBlockMap<B, kModes>(level.tentative.data() + B * kModes * i);
-  }
+  });
 
   // A_c = Pᵀ (A P) by the plans, a row of A P at a time; then its lower blocks from the upper ones.
   std::fill(next.a.begin(), next.a.end(), 0.0);
@@ -546,13 +586,20 @@ bool SmoothedAggregation::factorCoarsest()
 template <int B>
 void SmoothedAggregation::multiply(const Level& level, const Eigen::VectorXd& x, Eigen::VectorXd& y) const
 {
-  blockSparseProduct<B>(level.nodes, level.start, level.column, level.a, x.data(), y.data());
+  blockSparseProduct<B>(workers_, level.nodes, level.start, level.column, level.a, x.data(), y.data());
+}
+
+template <int B>
+void SmoothedAggregation::residualOf(const Level& level, const Eigen::VectorXd& x, Eigen::VectorXd& residual) const
+{
+  blockSparseProduct<B>(workers_, level.nodes, level.start, level.column, level.a, x.data(), residual.data(),
+                        level.rhs.data());
 }
 
 template <int B>
 void SmoothedAggregation::multiplyLumped(const Level& level, const Eigen::VectorXd& x, Eigen::VectorXd& y) const
 {
-  blockSparseProduct<B>(level.nodes, level.start, level.a, x.data(), y.data(),
+  blockSparseProduct<B>(workers_, level.nodes, level.start, level.a, x.data(), nullptr, y.data(),
                         [&](int k, int i) { return level.strong[k] ? level.column[k] : i; });
 }
 
@@ -594,34 +641,45 @@ double SmoothedAggregation::smootherDamping(int nodes, const std::vector<double>
 template <int B>
 void SmoothedAggregation::smooth(const Level& level, const Eigen::VectorXd& residual, Eigen::VectorXd& x) const
 {
-  for (int i = 0; i < level.nodes; ++i)
-    SegmentMap<B>(x.data() + B * i).noalias() +=
-        level.omega *
-        (ConstBlockMap<B, B>(level.inverse_diagonal.data() + B * B * i) * ConstSegmentMap<B>(residual.data() + B * i));
+  shareLoop(workers_, level.nodes, kNodesPerChunk<B>, [&](int begin, int end) {
+    for (int i = begin; i < end; ++i)
+      SegmentMap<B>(x.data() + B * i).noalias() +=
+          level.omega * (ConstBlockMap<B, B>(level.inverse_diagonal.data() + B * B * i) *
+                         ConstSegmentMap<B>(residual.data() + B * i));
+  });
 }
 
 template <int B>
 void SmoothedAggregation::restrictResidual(const Level& level, Eigen::VectorXd& coarse_rhs) const
 {
-  coarse_rhs.setZero();
-  for (int i = 0; i < level.nodes; ++i)
-    for (int q = level.p_start[i]; q < level.p_start[i + 1]; ++q)
-      SegmentMap<kModes>(coarse_rhs.data() + kModes * level.p_column[q]).noalias() +=
-          ConstBlockMap<B, kModes>(level.p.data() + B * kModes * q).transpose() *
-          ConstSegmentMap<B>(level.residual.data() + B * i);
+  // Each aggregate gathers P_qᵀ r_i over its column's blocks, by ascending row i: the sums of a
+  // scatter row after row, so the aggregates are shared with the workers.
+  const int aggregates = static_cast<int>(level.pt_start.size()) - 1;
+  shareLoop(workers_, aggregates, kNodesPerChunk<kModes>, [&](int begin, int end) {
+    for (int a = begin; a < end; ++a)
+    {
+      Eigen::Matrix<double, kModes, 1> sum = Eigen::Matrix<double, kModes, 1>::Zero();
+      for (int t = level.pt_start[a]; t < level.pt_start[a + 1]; ++t)
+        sum.noalias() += ConstBlockMap<B, kModes>(level.p.data() + B * kModes * level.pt_block[t]).transpose() *
+                         ConstSegmentMap<B>(level.residual.data() + B * level.pt_row[t]);
+      SegmentMap<kModes>(coarse_rhs.data() + kModes * a) = sum;
+    }
+  });
 }
 
 template <int B>
 void SmoothedAggregation::prolongAdd(const Level& level, const Eigen::VectorXd& coarse, Eigen::VectorXd& x) const
 {
-  for (int i = 0; i < level.nodes; ++i)
-  {
-    Eigen::Matrix<double, B, 1> sum = Eigen::Matrix<double, B, 1>::Zero();
-    for (int q = level.p_start[i]; q < level.p_start[i + 1]; ++q)
-      sum.noalias() += ConstBlockMap<B, kModes>(level.p.data() + B * kModes * q) *
-                       ConstSegmentMap<kModes>(coarse.data() + kModes * level.p_column[q]);
-    SegmentMap<B>(x.data() + B * i) += sum;
-  }
+  shareLoop(workers_, level.nodes, kNodesPerChunk<B>, [&](int begin, int end) {
+    for (int i = begin; i < end; ++i)
+    {
+      Eigen::Matrix<double, B, 1> sum = Eigen::Matrix<double, B, 1>::Zero();
+      for (int q = level.p_start[i]; q < level.p_start[i + 1]; ++q)
+        sum.noalias() += ConstBlockMap<B, kModes>(level.p.data() + B * kModes * q) *
+                         ConstSegmentMap<kModes>(coarse.data() + kModes * level.p_column[q]);
+      SegmentMap<B>(x.data() + B * i) += sum;
+    }
+  });
 }
 
 void SmoothedAggregation::cycle(int index)
@@ -647,17 +705,13 @@ void SmoothedAggregation::cycle(int index)
   Level& next = levels_[index + 1];
   auto vCycle = [&](auto block_size) {
     constexpr int B = decltype(block_size)::value;
-    auto residualOfX = [&] {
-      multiply<B>(level, level.x, level.residual);
-      level.residual = level.rhs - level.residual;
-    };
     level.x.setZero();
     smooth<B>(level, level.rhs, level.x);
-    residualOfX();
+    residualOf<B>(level, level.x, level.residual);
     restrictResidual<B>(level, next.rhs);
     cycle(index + 1);
     prolongAdd<B>(level, next.x, level.x);
-    residualOfX();
+    residualOf<B>(level, level.x, level.residual);
     smooth<B>(level, level.residual, level.x);
   };
   if (level.block == 3)
@@ -677,7 +731,7 @@ void SmoothedAggregation::apply(const Eigen::Matrix3Xd& r, Eigen::Matrix3Xd& z)
 void SmoothedAggregation::multiplyFinest(const Eigen::Matrix3Xd& x, Eigen::Matrix3Xd& y) const
 {
   const Level& finest = levels_[0];
-  blockSparseProduct<3>(finest.nodes, finest.start, finest.column, finest.a, x.data(), y.data());
+  blockSparseProduct<3>(workers_, finest.nodes, finest.start, finest.column, finest.a, x.data(), y.data());
 }
 
 Eigen::VectorXd SmoothedAggregation::tentativeTimesCoarseModes(int index, int mode) const

@@ -5,6 +5,8 @@
 #include <array>
 #include <vector>
 
+#include "particle_sim/core/worker_pool.h"
+
 namespace particle_sim
 {
 namespace core
@@ -36,8 +38,13 @@ namespace core
 /// setPattern() takes the finest level's pattern; the first setup() after it aggregates each level
 /// by the strength of its couplings in that first system and lays out every level's patterns and the
 /// plans of its Galerkin products (allocates); every setup() computes the numbers for one system and
-/// apply() runs a V-cycle: neither allocates after the first setup(). Everything is serial, so the
-/// same bits at any thread count.
+/// apply() runs a V-cycle: neither allocates after the first setup(). The passes over a level's
+/// nodes in which each node's result is computed alone (the products, the residuals, the smoothing,
+/// the prolongation, the restriction (gathered by aggregate), P's rows, the finest level's copy and
+/// the inverse diagonal blocks) are shared with setWorkers()' threads
+/// by chunks of nodes; the rest is serial (the Galerkin product, which sums into shared coarse
+/// blocks, the power iterations' norms, the coarsest solve). So the same bits at any
+/// thread count.
 class SmoothedAggregation
 {
 public:
@@ -48,6 +55,9 @@ public:
   /// pinned rows and columns are filtered out. False when the coarsest matrix cannot be factored
   /// (A not positive definite or not finite): apply() must not be called then.
   bool setup(const std::vector<Eigen::Matrix3d>& blocks, const Eigen::Matrix3Xd& x, const std::vector<char>& pinned);
+  /// Threads to share the passes over nodes with (null: the calling thread alone); the bits do not
+  /// depend on them.
+  void setWorkers(WorkerPool* workers) { workers_ = workers; }
   /// Starts the next setup's estimates of ρ(D⁻¹ A) afresh (after a reset: the same bits as a new
   /// solver).
   void forgetHistory();
@@ -104,6 +114,8 @@ private:
     std::vector<double> tentative;  // b x 6 per node: its rows of P̂ (columns of its aggregate)
     std::vector<int> p_start, p_column;
     std::vector<double> p;  // b x 6 per block of P
+    // Pᵀ by rows (aggregates): each one's blocks of P (pt_block) and their rows (pt_row), ascending.
+    std::vector<int> pt_start, pt_block, pt_row;
     // A P: rows of this level, columns of the next (its pattern), made a row at a time into `ap` (a
     // row's blocks, slot t its t-th column), planned as (block of A, block of P, slot) per product,
     // row after row.
@@ -141,6 +153,9 @@ private:
   void setupLevel(int level);
   template <int B>
   void multiply(const Level& level, const Eigen::VectorXd& x, Eigen::VectorXd& y) const;
+  // residual = the level's rhs − A x.
+  template <int B>
+  void residualOf(const Level& level, const Eigen::VectorXd& x, Eigen::VectorXd& residual) const;
   // y = A_L x, the level's lumped matrix (its weak blocks applied to x_i instead of x_j).
   template <int B>
   void multiplyLumped(const Level& level, const Eigen::VectorXd& x, Eigen::VectorXd& y) const;
@@ -165,6 +180,7 @@ private:
   bool planned_ = false;      // the levels below the finest are laid out (at the first setup())
   Eigen::MatrixXd coarsest_;  // the coarsest level's matrix, dense
   Eigen::LDLT<Eigen::MatrixXd> coarsest_factor_;
+  WorkerPool* workers_ = nullptr;
 };
 
 }  // namespace core
