@@ -130,6 +130,20 @@ def step_of(variant):
     return 1.0 / int(m.group(1)) if m else 1.0 / 60.0
 
 
+def implicit_methods_text(thread_rows):
+    """The threads case's implicit rows in words (older runs have CG's alone, runs since 2026-12-03 the
+    multigrid's too), for its prose: '' when it has none."""
+    cg = any(r['variant'].startswith('implicit_euler cg') for r in thread_rows)
+    multigrid = any(r['variant'].startswith('implicit_euler multigrid') for r in thread_rows)
+    parts = []
+    if cg:
+        parts.append('with block Jacobi\'s CG (at 128² only: seconds a step at 256²)')
+    if multigrid:
+        parts.append('with the multigrid (its passes over each level\'s nodes shared; its Galerkin products, coarsest '
+                     'solve and CG vector passes not)')
+    return '; implicit Euler at dt = 1/60 to a relative 1e-6 ' + ' and '.join(parts) if parts else ''
+
+
 def side_by_side_table(lines, rows_by_variant):
     """A table of rows timed side by side: each body's times per step, and the rows of ratios."""
     lines.append('| row | ms per step (or ratio), min (median–max) | CG iterations per step | detail |')
@@ -892,13 +906,14 @@ def main():
                      '256², stepped from rest by one thread and by two (`WorkerPool`, README "Threads") over the same '
                      'steps; the two runs must end in the same bits. Verlet at dt = 1/60 with the substeps its '
                      'stability needs (191 at 128², more than the default cap of 64, so `auto` runs implicit Euler '
-                     'there), and symplectic Euler at half its limit (one force pass a step). The two bodies\' repeats '
+                     'there), and symplectic Euler at half its limit (one force pass a step)%s. The two bodies\' '
+                     'repeats '
                      'alternate (one thread, two threads, one, ...), so that load on the other core slows both alike. '
                      'This machine has 2 cores; the ratio is min against min. Each thread takes its home range of '
                      'every loop\'s chunks first (thread t of T: the t-th of T equal runs), so that the particles it '
                      'integrates stay in its core\'s cache; run side by side with the earlier queue of chunks, this '
                      'raised symplectic Euler at 128² from 1.53–1.57× to 1.80–1.88× and Verlet from 1.55–1.74× to '
-                     '1.99–2.02× (two runs of each build in turn, 2026-11-28).')
+                     '1.99–2.02× (two runs of each build in turn, 2026-11-28).' % implicit_methods_text(thread_rows))
         lines.append('')
         if ceiling:
             lines.append('Before and after the cloths, the bench measures %s. On this virtual machine the '
