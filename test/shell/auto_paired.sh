@@ -21,7 +21,7 @@ echo "$out"
 import csv, math, re, sys
 rows = [r for r in csv.DictReader(open(sys.argv[1])) if r['case'] == 'auto_paired']
 for suffix in ('', ' dt 1/1000'):
-    at = [r for r in rows if r['variant'].endswith(suffix) and (suffix or 'dt 1/' not in r['variant'])]
+    at = [r for r in rows if ('dt 1/1000' in r['variant']) == bool(suffix)]  # that dt's bodies and ratio
     names = [r['variant'] for r in at]
     assert 'auto' + suffix in names and 'ratio' + suffix in names, 'no auto or ratio row%s in %s' % (suffix, names)
     times = {r['variant']: [float(r[k]) for k in ('ms_min', 'ms_median', 'ms_max')] for r in at}
