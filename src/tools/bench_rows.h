@@ -55,6 +55,26 @@ inline Timing timeSteps(const std::function<void()>& step, int warmup, int steps
   return summarize(per_step);
 }
 
+// Side by side: `rounds` rounds in which each of the step functions runs `steps` times, one after the
+// other, the order shifted by one each round (round r starts with function r mod N), so that a spell
+// of load on the machine falls on all of them alike. times[f][r]: function f's time per step [ms] in
+// round r.
+inline std::vector<std::vector<double>> timeInRounds(const std::vector<std::function<void()>>& step, int steps,
+                                                     int rounds)
+{
+  const int functions = static_cast<int>(step.size());
+  std::vector<std::vector<double>> times(functions);
+  for (int round = 0; round < rounds; ++round)
+  {
+    for (int k = 0; k < functions; ++k)
+    {
+      const int f = (round + k) % functions;
+      times[f].push_back(timeRepeat(step[f], steps));
+    }
+  }
+  return times;
+}
+
 // One CSV row: case, variant, size (the sweep's parameter), elements (what the cost should grow
 // with: particles, segments, springs), timing [ms per step], and free-form detail.
 struct Row

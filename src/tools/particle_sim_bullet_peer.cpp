@@ -612,33 +612,24 @@ void paired(std::ostream& out, bool quick)
     core::Environment env;
     env.ground.enabled = false;
     long long iterations[2] = {0, 0}, counted[2] = {0, 0};
-    const std::function<void()> step[2] = {[&] {
-                                             bullet->step();
-                                             iterations[0] += bullet->lastIterations();
-                                             ++counted[0];
-                                           },
-                                           [&] {
-                                             ours.step(dt, env);
-                                             iterations[1] += ours.lastSolve().iterations;
-                                             ++counted[1];
-                                           }};
+    const std::vector<std::function<void()>> step = {[&] {
+                                                       bullet->step();
+                                                       iterations[0] += bullet->lastIterations();
+                                                       ++counted[0];
+                                                     },
+                                                     [&] {
+                                                       ours.step(dt, env);
+                                                       iterations[1] += ours.lastSolve().iterations;
+                                                       ++counted[1];
+                                                     }};
     for (int e = 0; e < 2; ++e)
       for (int i = 0; i < warmup; ++i)
         step[e]();
     iterations[0] = iterations[1] = counted[0] = counted[1] = 0;
-    std::vector<double> times[2], ratios;
+    const std::vector<std::vector<double>> times = particle_sim_bench::timeInRounds(step, steps, rounds);
+    std::vector<double> ratios;
     for (int round = 0; round < rounds; ++round)
-    {
-      double time[2];
-      for (int k = 0; k < 2; ++k)
-      {
-        const int e = (round + k) % 2;
-        time[e] = particle_sim_bench::timeRepeat(step[e], steps);
-      }
-      times[0].push_back(time[0]);
-      times[1].push_back(time[1]);
-      ratios.push_back(time[0] / time[1]);
-    }
+      ratios.push_back(times[0][round] / times[1][round]);
     // As particle_sim_perf names its rows: "3.45e-4" (three digits, the exponent without padding).
     const int exponent = static_cast<int>(std::floor(std::log10(tolerance)));
     const std::string tolerance_name =

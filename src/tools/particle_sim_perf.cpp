@@ -55,6 +55,7 @@ namespace core = particle_sim::core;
 using particle_sim_bench::hang64;
 using particle_sim_bench::Row;
 using particle_sim_bench::summarize;
+using particle_sim_bench::timeInRounds;
 using particle_sim_bench::timeRepeat;
 using particle_sim_bench::timeSteps;
 using particle_sim_bench::writeRow;
@@ -448,58 +449,48 @@ void hang(std::ostream& out, bool quick)
 void autoSideBySide(std::ostream& out, bool quick)
 {
   const std::vector<HangVariant> variants = hangVariants();
-  std::vector<double> steps_of;
-  for (const HangVariant& variant : variants)
-  {
-    if (std::find(steps_of.begin(), steps_of.end(), variant.dt) == steps_of.end()) steps_of.push_back(variant.dt);
-  }
   const core::Environment env = noGround();
-  for (const double dt : steps_of)
+  for (const HangVariant& auto_variant : variants)
   {
-    // The auto body first, then the fixed choices, as hangVariants() lists them.
-    std::vector<const HangVariant*> chosen;
+    if (auto_variant.integrator != core::kAutoIntegrator) continue;
+    // The auto body first, then the fixed choices of its dt, as hangVariants() lists them.
+    const double dt = auto_variant.dt;
+    std::vector<const HangVariant*> chosen = {&auto_variant};
     for (const HangVariant& variant : variants)
     {
-      if (variant.dt == dt && variant.integrator == core::kAutoIntegrator)
-        chosen.insert(chosen.begin(), &variant);
-      else if (variant.dt == dt)
-        chosen.push_back(&variant);
+      if (variant.dt == dt && variant.integrator != core::kAutoIntegrator) chosen.push_back(&variant);
     }
-    if (chosen.size() < 2 || chosen.front()->integrator != core::kAutoIntegrator) continue;
+    const int bodies_count = static_cast<int>(chosen.size());
     std::vector<std::unique_ptr<core::SpringNetworkBody>> bodies;
-    for (const HangVariant* variant : chosen)
-      bodies.push_back(std::make_unique<core::SpringNetworkBody>(hangDef(*variant)));
-    const int bodies_count = static_cast<int>(bodies.size());
+    std::vector<long long> iterations(bodies_count, 0);
+    std::vector<std::function<void()>> step;
+    for (int b = 0; b < bodies_count; ++b)
+    {
+      bodies.push_back(std::make_unique<core::SpringNetworkBody>(hangDef(*chosen[b])));
+      step.push_back([&, b] {
+        bodies[b]->step(dt, env);
+        iterations[b] += bodies[b]->lastSolve().iterations;
+      });
+    }
     const int warmup = quick ? 2 : 10;
     const int rounds = quick ? 3 : 15;
     const int steps = quick ? 2 : (dt < 0.01 ? 40 : 8);
-    for (auto& body : bodies)
+    for (const std::function<void()>& warm_up_step : step)
     {
       for (int i = 0; i < warmup; ++i)
-        body->step(dt, env);
+        warm_up_step();
     }
-    std::vector<std::vector<double>> times(bodies_count);
-    std::vector<long long> iterations(bodies_count, 0);
+    std::fill(iterations.begin(), iterations.end(), 0);
+    const std::vector<std::vector<double>> times = timeInRounds(step, steps, rounds);
     std::vector<double> ratios;
     std::vector<int> fastest_rounds(bodies_count, 0);  // rounds in which each fixed choice was the fastest
     for (int round = 0; round < rounds; ++round)
     {
-      std::vector<double> round_time(bodies_count);
-      for (int k = 0; k < bodies_count; ++k)
-      {
-        const int b = (k + round) % bodies_count;
-        round_time[b] = timeRepeat(
-            [&] {
-              bodies[b]->step(dt, env);
-              iterations[b] += bodies[b]->lastSolve().iterations;
-            },
-            steps);
-        times[b].push_back(round_time[b]);
-      }
-      const int best =
-          static_cast<int>(std::min_element(round_time.begin() + 1, round_time.end()) - round_time.begin());
+      int best = 1;
+      for (int b = 2; b < bodies_count; ++b)
+        if (times[b][round] < times[best][round]) best = b;
       ++fastest_rounds[best];
-      ratios.push_back(round_time[0] / round_time[best]);
+      ratios.push_back(times[0][round] / times[best][round]);
     }
     const std::string at = dt < 0.01 ? " dt 1/" + std::to_string(static_cast<int>(std::lround(1.0 / dt))) : "";
     for (int b = 0; b < bodies_count; ++b)
