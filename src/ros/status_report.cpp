@@ -85,7 +85,9 @@ SimStatus buildSimStatus(const core::World& world, const ros::Time& stamp, const
         b.pin_force = toVector3(spring_body.pinLoad({}, Eigen::Vector3d::Zero()).force);
       }
       if (core::isImplicit(integratorThatRan(spring_body)))
-        b.linear_solver = spring_body.lastSolve().direct ? "direct" : "cg";
+        b.linear_solver = spring_body.lastSolve().direct      ? "direct"
+                          : spring_body.lastSolve().multigrid ? "multigrid"
+                                                              : "cg";
       b.solver_iterations = static_cast<std::uint32_t>(std::max(0, spring_body.lastSolve().iterations));
       b.solver_residual = spring_body.lastSolve().relative_residual;
       b.solver_velocity_error = spring_body.lastSolve().velocity_error;
@@ -148,7 +150,7 @@ void buildDiagnostics(const core::World& world, const LoopFigures& loop, double 
 
   // Over the spring bodies: the last implicit solves (how many, how many direct, most CG iterations,
   // worst residual), strain, springs and triangles torn and frozen bodies.
-  int iterations = 0, not_converged = 0, implicit_solves = 0, direct_solves = 0;
+  int iterations = 0, not_converged = 0, implicit_solves = 0, direct_solves = 0, multigrid_solves = 0;
   double residual = 0.0, velocity_error = 0.0, max_strain = 0.0;
   long long torn_springs = 0, torn_triangles = 0, split_particles = 0;
   std::string strained_body;
@@ -170,6 +172,7 @@ void buildDiagnostics(const core::World& world, const LoopFigures& loop, double 
     {
       ++implicit_solves;
       direct_solves += spring_body.lastSolve().direct ? 1 : 0;
+      multigrid_solves += spring_body.lastSolve().multigrid ? 1 : 0;
       iterations = std::max(iterations, spring_body.lastSolve().iterations);
       residual = std::max(residual, spring_body.lastSolve().relative_residual);
       velocity_error = std::max(velocity_error, spring_body.lastSolve().velocity_error);
@@ -227,6 +230,7 @@ void buildDiagnostics(const core::World& world, const LoopFigures& loop, double 
   stat.add("bodies", static_cast<int>(world.bodies().size()));
   stat.add("implicit solves (last step)", implicit_solves);
   stat.add("direct solves (last step)", direct_solves);
+  stat.add("multigrid solves (last step)", multigrid_solves);
   stat.add("solver iterations (max, last step)", iterations);
   stat.add("solver residual (max, last step)", residual);
   stat.add("solver velocity error [m/s] (max, last step)", velocity_error);
@@ -246,7 +250,7 @@ std::string statusLine(const core::World& world, double real_time_factor, double
 {
   // The implicit solves of the last step: how many were direct, most CG iterations, worst relative
   // residual and worst velocity error.
-  int cg_iterations = 0, direct_solves = 0, implicit_solves = 0;
+  int cg_iterations = 0, direct_solves = 0, multigrid_solves = 0, implicit_solves = 0;
   double cg_residual = 0.0, velocity_error = 0.0;
   bool any_implicit = false;
   for (const auto& body : world.bodies())
@@ -257,6 +261,7 @@ std::string statusLine(const core::World& world, double real_time_factor, double
     any_implicit = true;
     ++implicit_solves;
     direct_solves += spring_body.lastSolve().direct ? 1 : 0;
+    multigrid_solves += spring_body.lastSolve().multigrid ? 1 : 0;
     cg_iterations = std::max(cg_iterations, spring_body.lastSolve().iterations);
     cg_residual = std::max(cg_residual, spring_body.lastSolve().relative_residual);
     velocity_error = std::max(velocity_error, spring_body.lastSolve().velocity_error);
@@ -268,8 +273,11 @@ std::string statusLine(const core::World& world, double real_time_factor, double
     std::snprintf(solver, sizeof(solver), " | %d of %d solves direct, CG %d iterations, residual %.1e, %.1e m/s",
                   direct_solves, implicit_solves, cg_iterations, cg_residual, velocity_error);
   else if (any_implicit)
-    std::snprintf(solver, sizeof(solver), " | CG %d iterations, residual %.1e, %.1e m/s", cg_iterations, cg_residual,
-                  velocity_error);
+    std::snprintf(solver, sizeof(solver), " | CG%s %d iterations, residual %.1e, %.1e m/s",
+                  multigrid_solves == implicit_solves ? " (multigrid)"
+                  : multigrid_solves > 0              ? " (some multigrid)"
+                                                      : "",
+                  cg_iterations, cg_residual, velocity_error);
   // Springs (and Baraff–Witkin triangles) torn since build or reset, of each body that can tear
   // (tear_strain > 0) only.
   std::string torn;

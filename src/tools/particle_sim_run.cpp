@@ -226,7 +226,8 @@ int main(int argc, char** argv)
     double worst_residual = 0.0;
     double worst_velocity_error = 0.0;  // [m/s]
     long long unconverged = 0;
-    long long direct = 0;  // steps whose last solve was direct
+    long long direct = 0;     // steps whose last solve was direct
+    long long multigrid = 0;  // steps whose last solve was preconditioned by the multigrid
   };
   // A body that enables self_collision also sums the counts of its collision passes (and the world
   // those of the passes and impact zones), over the run.
@@ -275,6 +276,7 @@ int main(int argc, char** argv)
       method->worst_velocity_error = std::max(method->worst_velocity_error, report.velocity_error);
       method->unconverged += report.converged ? 0 : 1;
       method->direct += report.direct ? 1 : 0;
+      method->multigrid += report.multigrid ? 1 : 0;
     }
     if (any_self_collision)
     {
@@ -371,6 +373,7 @@ int main(int argc, char** argv)
             "not converged; %lld of %lld solved directly",
             static_cast<double>(method.iterations) / method.steps, method.max_iterations, method.worst_residual,
             method.worst_velocity_error, method.unconverged, method.direct, method.steps);
+      if (implicit && method.multigrid > 0) std::printf(", %lld by the multigrid", method.multigrid);
       std::printf("\n");
     }
   }

@@ -274,6 +274,28 @@ Environment noGround()
 }
 }  // namespace
 
+TEST(SmoothedAggregation, ItsFlopCountsGrowLinearlyWithTheSheet)
+{
+  // The V-cycle's and the setup's flop counts (the `auto` linear solver's comparison with CG): the
+  // V-cycle smooths and takes two residuals on the finest level, at least 2 · 2 · 9 flops a block of
+  // A there, and the hierarchy's levels shrink geometrically, so both counts grow like the sheet's
+  // particles (a 64² sheet has four times a 32² sheet's), and a setup costs more than a V-cycle.
+  auto counts = [](int n) {
+    const SheetSystem s = crumpledSheet(n, 5, true);
+    SmoothedAggregation multigrid;
+    multigrid.setPattern(s.particles, s.row_start, s.column);
+    EXPECT_EQ(multigrid.cycleFlops(), 0.0) << "before the first setup";
+    EXPECT_TRUE(multigrid.setup(s.blocks, s.x, s.pinned));
+    EXPECT_GE(multigrid.cycleFlops(), 2.0 * 2.0 * 9.0 * static_cast<double>(s.column.size())) << n;
+    EXPECT_GT(multigrid.setupFlops(), multigrid.cycleFlops()) << n;
+    return std::make_pair(multigrid.cycleFlops(), multigrid.setupFlops());
+  };
+  const auto [cycle32, setup32] = counts(32);
+  const auto [cycle64, setup64] = counts(64);
+  EXPECT_NEAR(cycle64 / cycle32, 4.0, 0.6);
+  EXPECT_NEAR(setup64 / setup32, 4.0, 0.6);
+}
+
 TEST(MultigridSolver, StepsTheClothAsTheDirectSolveDoes)
 {
   // The same steps of a hanging cloth, solved directly and by the multigrid's CG to a relative
@@ -326,4 +348,59 @@ TEST(MultigridSolver, ItsIterationsGrowFarSlowerWithTheClothThanBlockJacobis)
   EXPECT_GT(jacobi64, 1.8 * jacobi32);
   EXPECT_LT(multigrid64, 1.4 * multigrid32);
   EXPECT_LT(10.0 * multigrid64, jacobi64);
+}
+
+TEST(MultigridSolver, AutoTriesItOnceCgTakesOverAHundredIterationsAndKeepsItWhenCheaper)
+{
+  // A 64² cloth on `auto` (the direct solver dearer than kDirectSolverCgIterations) at a relative
+  // 1e-6: CG first, and from rest a few iterations; once a CG solve takes more than
+  // kMultigridTrialCgIterations, the next solve is the multigrid's, which costs less than that CG
+  // solve (its iterations more than ten times fewer): from then on every solve is the multigrid's,
+  // converged, never direct.
+  const auto cloth = hangingCloth(64, LinearSolverType::Auto, 1e-6);
+  SpringNetworkBody& body = *cloth;
+  const Environment env = noGround();
+  int first_multigrid = -1, trigger = 0;
+  for (int step = 0; step < 8; ++step)
+  {
+    body.step(1.0 / 60.0, env);
+    const SolverReport report = body.lastSolve();
+    EXPECT_TRUE(report.converged) << "step " << step;
+    EXPECT_FALSE(report.direct) << "step " << step;
+    if (first_multigrid < 0 && report.multigrid) first_multigrid = step;
+    if (first_multigrid < 0)
+    {
+      trigger = report.iterations;
+      continue;
+    }
+    EXPECT_TRUE(report.multigrid) << "back to CG at step " << step;
+    EXPECT_LT(10 * report.iterations, trigger) << "step " << step;
+  }
+  ASSERT_GT(first_multigrid, 0) << "auto never tried the multigrid";
+  EXPECT_GT(trigger, kMultigridTrialCgIterations);
+}
+
+TEST(MultigridSolver, AutoGoesBackToCgForGoodWhenTheMultigridCostsMore)
+{
+  // A 40² cloth on `auto` at a relative 1e-6: its first CG solve over kMultigridTrialCgIterations
+  // (about 160) brings the multigrid's trial, which converges in about a dozen iterations but costs
+  // more than those CG iterations there (its setup and V-cycles, at kMultigridFlopWeight): CG is back
+  // for good, converged, and the direct solver still dearer.
+  const auto cloth = hangingCloth(40, LinearSolverType::Auto, 1e-6);
+  SpringNetworkBody& body = *cloth;
+  const Environment env = noGround();
+  int multigrid_solves = 0, first_multigrid = -1;
+  for (int step = 0; step < 8; ++step)
+  {
+    body.step(1.0 / 60.0, env);
+    const SolverReport report = body.lastSolve();
+    EXPECT_TRUE(report.converged) << "step " << step;
+    EXPECT_FALSE(report.direct) << "step " << step;
+    if (!report.multigrid) continue;
+    ++multigrid_solves;
+    first_multigrid = step;
+  }
+  EXPECT_EQ(multigrid_solves, 1) << "the multigrid was tried once (or not at all)";
+  EXPECT_GT(first_multigrid, 0);
+  EXPECT_LT(first_multigrid, 7) << "tried in the last step: no step after it tells that CG is back";
 }

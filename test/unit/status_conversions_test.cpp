@@ -219,9 +219,9 @@ TEST(StatusConversions, DiagnosticsAreOkWhenRunningOnTimeAndListEveryFigure)
   EXPECT_EQ(*findValue(stat, "paused"), "False");
   for (const char* key :
        {"sim time [s]", "real-time factor", "target real-time factor", "step time [us]", "implicit solves (last step)",
-        "direct solves (last step)", "solver iterations (max, last step)", "solver residual (max, last step)",
-        "solver velocity error [m/s] (max, last step)", "max strain", "torn springs", "torn triangles",
-        "split particles", "stability events since last report"})
+        "direct solves (last step)", "multigrid solves (last step)", "solver iterations (max, last step)",
+        "solver residual (max, last step)", "solver velocity error [m/s] (max, last step)", "max strain",
+        "torn springs", "torn triangles", "split particles", "stability events since last report"})
     EXPECT_NE(findValue(stat, key), nullptr) << key;
   EXPECT_EQ(*findValue(stat, "torn springs"), "0");  // the rope cannot tear
 }
@@ -351,19 +351,28 @@ TEST(StatusConversions, BodiesWithoutSelfCollisionShowNoCollisionEntries)
 
 TEST(StatusConversions, DiagnosticsCountTheImplicitSolvesAndThoseSolvedDirectly)
 {
-  // The rope is the only implicit body: solved directly by auto and direct, iteratively by cg.
-  for (const auto solver :
-       {core::LinearSolverType::Auto, core::LinearSolverType::Direct, core::LinearSolverType::ConjugateGradient})
+  // The rope is the only implicit body: solved directly by auto and direct, iteratively by cg and by
+  // the multigrid's CG.
+  for (const auto solver : {core::LinearSolverType::Auto, core::LinearSolverType::Direct,
+                            core::LinearSolverType::ConjugateGradient, core::LinearSolverType::Multigrid})
   {
+    SCOPED_TRACE(core::toString(solver));
     core::World world = makeWorld(core::kImplicitEulerIntegrator, solver);
     world.step();
     diagnostic_updater::DiagnosticStatusWrapper stat;
     buildDiagnostics(world, runningOnTime(), 0.9, stat);
-    const bool direct = solver != core::LinearSolverType::ConjugateGradient;
+    const bool direct = solver == core::LinearSolverType::Auto || solver == core::LinearSolverType::Direct;
+    const bool multigrid = solver == core::LinearSolverType::Multigrid;
     ASSERT_NE(findValue(stat, "implicit solves (last step)"), nullptr);
     EXPECT_EQ(*findValue(stat, "implicit solves (last step)"), "1");
     EXPECT_EQ(*findValue(stat, "direct solves (last step)"), direct ? "1" : "0");
+    ASSERT_NE(findValue(stat, "multigrid solves (last step)"), nullptr);
+    EXPECT_EQ(*findValue(stat, "multigrid solves (last step)"), multigrid ? "1" : "0");
     EXPECT_EQ(*findValue(stat, "solver iterations (max, last step)") == "0", direct);
+    EXPECT_EQ(buildSimStatus(world, ros::Time(), "sim", false, 1.0).bodies[1].linear_solver, direct      ? "direct"
+                                                                                             : multigrid ? "multigrid"
+                                                                                                         : "cg");
+    EXPECT_EQ(statusLine(world, 1.0, 1.0, false).find("(multigrid)") != std::string::npos, multigrid);
     // The velocity error of the one solve, in ~status and the diagnostics alike.
     const auto& rope = static_cast<const core::SpringNetworkBody&>(*world.bodies()[1]);
     const double velocity_error = rope.lastSolve().velocity_error;

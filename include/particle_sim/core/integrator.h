@@ -59,7 +59,7 @@ std::string integratorTypeNames();
 /// How the implicit methods solve their linear system each step.
 enum class LinearSolverType
 {
-  Auto,               ///< the cheaper of the two, from flop counts and the CG iterations measured (see below)
+  Auto,               ///< the cheapest of the three, from flop counts and the iterations measured (see below)
   ConjugateGradient,  ///< Baraff & Witkin's modified preconditioned conjugate gradient, to cg_velocity_tolerance
                       ///< or cg_tolerance
   Direct,             ///< sparse block L D Lᵀ in a fill-reducing order (exact; O(n) on a rope)
@@ -77,6 +77,19 @@ enum class LinearSolverType
 /// has spent that many too, and a solve stopped there short of both tolerances is solved again
 /// directly.
 inline constexpr double kDirectSolverCgIterations = 40.0;
+/// `auto` tries the multigrid (LinearSolverType::Multigrid) for one solve once a converged CG solve
+/// took more than this many iterations while the direct solver was dearer: a sheet whose slow
+/// bending and swinging modes block Jacobi needs hundreds of iterations for. It keeps the multigrid
+/// for good when that solve cost fewer flops than the CG solve did (its setup, V-cycles, products and
+/// vector passes, counted from the hierarchy's sizes), and otherwise goes back to CG for good; the
+/// multigrid kept gives way to the direct solver as CG does, and to CG when a solve stops short.
+inline constexpr int kMultigridTrialCgIterations = 100;
+/// What a flop of the multigrid's hierarchy (its setup and V-cycles) costs in flops of CG, in that
+/// comparison: its 6x6 blocks, its Galerkin products' scattered sums and its serial setup run at
+/// about half the rate of CG's streamed pair product (one thread, spring cloths of 32² to 96² at
+/// dt = 1/60: at 32² and 48² CG is the faster, 1.3x; at 64² the two tie; from 96² on the multigrid
+/// is the faster, README "Or by multigrid").
+inline constexpr double kMultigridFlopWeight = 2.0;
 
 /// "auto", "cg", "direct", "multigrid".
 const char* toString(LinearSolverType type);
@@ -143,6 +156,7 @@ Status validate(const BodyIntegratorDef& def);
 struct SolverReport
 {
   bool direct = false;             ///< the direct solver factorized and solved (CG iterations may follow it, to polish)
+  bool multigrid = false;          ///< CG was preconditioned by the multigrid (LinearSolverType::Multigrid)
   int iterations = 0;              ///< conjugate-gradient iterations
   double relative_residual = 0.0;  ///< |r| / |b| at the end
   /// [m/s] sqrt(Σ |r_i|² / m_i / Σ m_i) over the free particles at the end: a bound on the mass-weighted

@@ -184,6 +184,7 @@ void ImplicitEulerSolver::setPattern(int particles, const std::vector<std::pair<
   direct_ = SparseBlockLdlt();
   auto_choice_ = DirectChoice::Undecided;
   direct_in_cg_iterations_ = 0.0;
+  multigrid_choice_ = MultigridChoice::Untried;
   inverse_diagonal_.assign(particles, Eigen::Matrix3d::Identity());
   inverse_mass_.assign(particles, 0.0);
   curvature_chunks_.assign((particles + kRowsPerChunk - 1) / kRowsPerChunk, 0.0);
@@ -362,14 +363,28 @@ void ImplicitEulerSolver::precondition(const Eigen::Matrix3Xd& r, Eigen::Matrix3
     out.col(i).noalias() = inverse_diagonal_[i] * r.col(i);
 }
 
+double ImplicitEulerSolver::cgIterationFlops() const
+{
+  // A product with A (18 flops a block) and about 40 flops a particle of vector passes (residual,
+  // direction, preconditioner, dots).
+  return 18.0 * static_cast<double>(blocks_.size()) + 40.0 * static_cast<double>(diagonal_block_.size());
+}
+
 double ImplicitEulerSolver::directCostInCgIterations(bool* supernodal) const
 {
-  // One CG iteration: a product with A (18 flops a block) and about 40 flops a particle of vector
-  // passes (residual, direction, preconditioner, dots).
   const SparseBlockLdlt::Cost direct = SparseBlockLdlt::estimateCost(row_start_, block_column_);
   if (supernodal) *supernodal = direct.supernodal;
-  const double cg_iteration = 18.0 * static_cast<double>(blocks_.size()) + 40.0 * diagonal_block_.size();
-  return (direct.factor_flops + direct.solve_flops) / cg_iteration;
+  return (direct.factor_flops + direct.solve_flops) / cgIterationFlops();
+}
+
+double ImplicitEulerSolver::multigridCostInCgIterations(int iterations) const
+{
+  // The hierarchy's numbers, then a V-cycle before the first iteration and one more with each
+  // iteration's product and vector passes (the last iteration's V-cycle is skipped when it converges;
+  // counted all the same); the hierarchy's flops weighted by kMultigridFlopWeight.
+  const double cg_iteration = cgIterationFlops();
+  const double cycle = kMultigridFlopWeight * multigrid_.cycleFlops();
+  return (kMultigridFlopWeight * multigrid_.setupFlops() + cycle + iterations * (cycle + cg_iteration)) / cg_iteration;
 }
 
 bool ImplicitEulerSolver::usesDirect(LinearSolverType solver)
@@ -550,6 +565,16 @@ SolverReport ImplicitEulerSolver::solveLinear(const std::vector<char>& pinned, c
     return report;
   }
   report.direct = usesDirect(settings.linear_solver) && solveDirectly(pinned);
+  // `auto`'s multigrid, on trial or chosen (see below); when it does not converge, CG takes over
+  // from where it left Δv, and the multigrid is not tried again.
+  int multigrid_iterations = 0;
+  if (settings.linear_solver == LinearSolverType::Auto && !report.direct &&
+      (multigrid_choice_ == MultigridChoice::Trying || multigrid_choice_ == MultigridChoice::Chosen))
+  {
+    if (autoMultigrid(pinned, settings, report)) return report;
+    multigrid_iterations = report.iterations;
+    report = SolverReport{};
+  }
   // Under `auto`, CG may go on past the cap until it has spent what the direct solve costs: until
   // then, stopping for the direct solve would only add its cost to the iterations already spent.
   // So a solve costs at most about twice the cheaper of the two (the rent-or-buy bound), and a
@@ -577,7 +602,42 @@ SolverReport ImplicitEulerSolver::solveLinear(const std::vector<char>& pinned, c
       report.iterations += capped_iterations;  // the work done, the capped CG's included
     }
   }
+  // `auto` tries the multigrid in the next solve once a converged CG solve took more than
+  // kMultigridTrialCgIterations iterations and the direct solver is still dearer (autoMultigrid()).
+  if (settings.linear_solver == LinearSolverType::Auto && !report.direct && report.converged &&
+      auto_choice_ == DirectChoice::Dearer && multigrid_choice_ == MultigridChoice::Untried &&
+      report.iterations > kMultigridTrialCgIterations)
+  {
+    multigrid_choice_ = MultigridChoice::Trying;
+    trial_cg_iterations_ = report.iterations;
+  }
+  report.iterations += multigrid_iterations;  // the work done, the multigrid's included
   return report;
+}
+
+bool ImplicitEulerSolver::autoMultigrid(const std::vector<char>& pinned, const IntegratorDef& settings,
+                                        SolverReport& report)
+{
+  // The multigrid's cost in CG iterations (flops: its setup, V-cycles, products and vector passes)
+  // decides. On trial it is kept for good when it is below the CG solve's that led to the trial, else
+  // CG is back for good. Kept, it gives way to the direct solver for good once a solve costs more
+  // than the direct solve (as CG does). A solve short of the tolerance (or a hierarchy that is not
+  // definite) ends the multigrid for good, and CG finishes the solve.
+  multigridConjugateGradient(pinned, settings, report);
+  if (!report.multigrid || !report.converged)
+  {
+    multigrid_choice_ = MultigridChoice::Rejected;
+    return report.converged;
+  }
+  const double cost = multigridCostInCgIterations(report.iterations);
+  if (multigrid_choice_ == MultigridChoice::Trying)
+    multigrid_choice_ = cost < trial_cg_iterations_ ? MultigridChoice::Chosen : MultigridChoice::Rejected;
+  if (multigrid_choice_ == MultigridChoice::Chosen && cost > direct_in_cg_iterations_)
+  {
+    multigrid_choice_ = MultigridChoice::Rejected;
+    auto_choice_ = DirectChoice::Cheaper;
+  }
+  return true;
 }
 
 bool ImplicitEulerSolver::solveDirectly(const std::vector<char>& pinned)
@@ -741,7 +801,6 @@ void ImplicitEulerSolver::multigridConjugateGradient(const std::vector<char>& pi
     multigrid_.setPattern(static_cast<int>(diagonal_block_.size()), row_start_, block_column_);
     multigrid_planned_ = true;
   }
-  multigrid_.setWorkers(workers_);  // its passes over nodes shared, the same bits at any thread count
   // A new hierarchy every solve: kept over later solves, its rigid-body modes turn away from a
   // swinging cloth's within a few steps at h = 1/60 (hang64: 24 iterations a step with a new one
   // each solve, 36 with one every second solve, 136 every tenth; README, "Or by multigrid").
@@ -751,6 +810,7 @@ void ImplicitEulerSolver::multigridConjugateGradient(const std::vector<char>& pi
     conjugateGradient(pinned, settings, settings.cg_max_iterations, report);
     return;
   }
+  report.multigrid = true;
   // Preconditioned CG from the warm start on the filtered system, which the hierarchy's finest level
   // holds (pinned rows and columns cleared): its product is zero on pinned rows of a filtered
   // direction, and so is a V-cycle of a filtered residual (filtered again all the same).

@@ -557,6 +557,52 @@ void SmoothedAggregation::setupLevel(int index)
         ConstBlockMap<kModes, kModes>(next.a.data() + kModes * kModes * upper).transpose();
 }
 
+double SmoothedAggregation::cycleFlops() const
+{
+  if (!planned_) return 0.0;
+  double flops = 0.0;
+  for (std::size_t l = 0; l + 1 < levels_.size(); ++l)
+  {
+    const Level& level = levels_[l];
+    const double b = level.block, nodes = level.nodes;
+    const double blocks = level.start.back(), p_blocks = level.p_start.back();
+    flops += 2.0 * 2.0 * b * b * nodes;          // two smoothings: D⁻¹ r
+    flops += 2.0 * 2.0 * b * b * blocks;         // two residuals: r − A x
+    flops += 2.0 * 2.0 * b * kModes * p_blocks;  // restriction and prolongation
+  }
+  const Level& coarsest = levels_.back();
+  const double unknowns = coarsest_.rows() > 0 ? static_cast<double>(coarsest_.rows()) : 0.0;
+  flops += unknowns > 0.0 ? 2.0 * unknowns * unknowns
+                          : 2.0 * coarsest.block * coarsest.block * static_cast<double>(coarsest.nodes);
+  return flops;
+}
+
+double SmoothedAggregation::setupFlops() const
+{
+  if (!planned_) return 0.0;
+  double flops = 0.0;
+  for (std::size_t l = 0; l < levels_.size(); ++l)
+  {
+    const Level& level = levels_[l];
+    const double b = level.block, nodes = level.nodes, blocks = level.start.back();
+    flops += 2.0 * b * b * b * nodes;  // the inverse diagonal blocks
+    if (l + 1 == levels_.size()) break;
+    // The power iterations (warm: from the last setup's vector), of A and of the lumped matrix.
+    const double power = kWarmPowerIterations * (2.0 * b * b * (blocks + nodes) + 3.0 * b * nodes);
+    flops += level.has_weak ? 2.0 * power + b * b * blocks + 2.0 * b * b * b * nodes : power;
+    // P̂ by Gram–Schmidt (two passes over the modes' pairs, a dot and an update each), then P's
+    // smoothing: A_L P̂ by blocks of A, and D_L⁻¹ times each block of P.
+    flops += 2.0 * 15.0 * 2.0 * 2.0 * b * nodes;
+    flops += 2.0 * b * b * kModes * (blocks + static_cast<double>(level.p_start.back()));
+    // A P and Pᵀ (A P), by their plans.
+    flops += 2.0 * b * b * kModes * static_cast<double>(level.ap_plan.size());
+    flops += 2.0 * kModes * b * kModes * static_cast<double>(level.galerkin_plan.size());
+  }
+  const double unknowns = static_cast<double>(coarsest_.rows());
+  flops += unknowns * unknowns * unknowns / 3.0;  // the coarsest L D Lᵀ
+  return flops;
+}
+
 void SmoothedAggregation::forgetHistory()
 {
   for (Level& level : levels_)

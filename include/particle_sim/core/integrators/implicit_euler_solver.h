@@ -131,6 +131,10 @@ public:
   /// solver takes its supernodal form there (`supernodal`, if not null). Analyses the pattern
   /// (allocates): for decisions taken once.
   double directCostInCgIterations(bool* supernodal = nullptr) const;
+  /// A multigrid solve of `iterations` iterations for this pattern, in CG iterations (flops:
+  /// SmoothedAggregation::setupFlops() and cycleFlops(), and per iteration a CG iteration's product
+  /// and vector passes), from the hierarchy of the last multigrid solve.
+  double multigridCostInCgIterations(int iterations) const;
   /// The pairs kept by addPairBlocks() in this step, not yet in the blocks of A (for tests).
   int keptPairs() const { return pairs_in_blocks_ ? 0 : kept_pairs_; }
   /// Forgets the warm start (after a reset or a jump of the state).
@@ -142,7 +146,12 @@ public:
   /// Threads to share the conjugate gradient's per-particle loops with (null: none). Its products,
   /// vector updates and sums are shared by rows; each sum is taken in fixed chunks of rows and then
   /// chunk after chunk, so that the result is the same bits at any thread count.
-  void setWorkers(WorkerPool* workers) { workers_ = workers; }
+  /// The multigrid's passes over nodes are shared with them too (SmoothedAggregation::setWorkers()).
+  void setWorkers(WorkerPool* workers)
+  {
+    workers_ = workers;
+    multigrid_.setWorkers(workers);
+  }
   /// Whether the conjugate gradient's passes run a particle's three coordinates in one 256-bit
   /// register (cg_avx2.h), which they do where the processor has AVX2, with the same bits as the
   /// scalar passes. Off forces the scalar passes (for the test that compares the two, and for
@@ -206,6 +215,11 @@ private:
   // velocity error it bounds within cg_velocity_tolerance, or `max_iterations`.
   void conjugateGradient(const std::vector<char>& pinned, const IntegratorDef& settings, int max_iterations,
                          SolverReport& report);
+  // Flops of one CG iteration (directCostInCgIterations()).
+  double cgIterationFlops() const;
+  // `auto`'s multigrid solve (solveLinear()): false, with the multigrid rejected for good, when it
+  // did not converge (CG then finishes the solve).
+  bool autoMultigrid(const std::vector<char>& pinned, const IntegratorDef& settings, SolverReport& report);
   // The same conjugate gradient and stopping rule, preconditioned by a V-cycle of multigrid_ (set up
   // for this system first) instead of block Jacobi; block Jacobi's when the hierarchy is not definite.
   void multigridConjugateGradient(const std::vector<char>& pinned, const IntegratorDef& settings, SolverReport& report);
@@ -284,6 +298,15 @@ private:
     Dearer
   } auto_choice_ = DirectChoice::Undecided;
   double direct_in_cg_iterations_ = 0.0;  // one factorization and solve, in CG iterations (flops)
+  // `auto`'s multigrid: not tried yet; on trial in the next solve; chosen; or not (for good).
+  enum class MultigridChoice
+  {
+    Untried,
+    Trying,
+    Chosen,
+    Rejected
+  } multigrid_choice_ = MultigridChoice::Untried;
+  int trial_cg_iterations_ = 0;  // the CG solve's iterations that led to the multigrid's trial
   double h_ = 0.0;
   const Eigen::Matrix3Xd* v0_ = nullptr;
   const Eigen::VectorXd* mass_ = nullptr;

@@ -66,6 +66,14 @@ public:
   /// y = Ã x with Ã the filtered matrix of the last setup() (pinned rows and columns cleared, an
   /// identity on their diagonal).
   void multiplyFinest(const Eigen::Matrix3Xd& x, Eigen::Matrix3Xd& y) const;
+  /// Floating-point operations of one apply() (a V-cycle: two smoothings, two residuals, the
+  /// restriction and prolongation on every level above the coarsest, the coarsest's solve) and of
+  /// one setup() after the first (the numbers of every level: inverse diagonals, the power
+  /// iterations, P̂ and P, A P and Pᵀ A P, the coarsest factorization), a multiply and an add counted
+  /// as two, from the hierarchy's sizes: for ImplicitEulerSolver's `auto`, which compares them with
+  /// the conjugate gradient's flops. 0 before the first setup().
+  double cycleFlops() const;
+  double setupFlops() const;
   /// The number of levels, the finest included (0 before setPattern(), 1 until the first setup()).
   int levels() const { return static_cast<int>(levels_.size()); }
   /// Nodes of level `level` (particles on the finest, aggregates below).
