@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """The node bench of issue 13, goals 3 and 4: particle_sim_node measured through ROS.
 
-    node_bench.py --devel DEVEL --out CSV [--warmup S] [--duration S]
+    node_bench.py --devel DEVEL --out CSV [--warmup S] [--duration S] [--only TEXT]
 
 For each case it starts a roscore of its own on a free port, the node at ~rate 60 Hz with the
 case's scene (written to a temporary folder, printed below), and particle_sim_node_probe, which
@@ -139,13 +139,17 @@ def main():
     parser.add_argument('--out', required=True, help='the CSV to write')
     parser.add_argument('--warmup', type=float, default=5.0)
     parser.add_argument('--duration', type=float, default=15.0)
+    parser.add_argument('--only', default='', help="run only the cases whose name contains TEXT (e.g. 'cloth')")
     args = parser.parse_args()
+    cases = [case for case in CASES if args.only in case[0]]
+    if not cases:
+        parser.error('no case contains %r: %s' % (args.only, ', '.join(case[0] for case in CASES)))
     work = tempfile.mkdtemp(prefix='particle_sim_node_bench.')
     rows = []
     failed = False
     try:
-        for k, (variant, size, particles, scene, topics, params) in enumerate(CASES):
-            print('node bench %d/%d: %s (%s)' % (k + 1, len(CASES), variant, topics), flush=True)
+        for k, (variant, size, particles, scene, topics, params) in enumerate(cases):
+            print('node bench %d/%d: %s (%s)' % (k + 1, len(cases), variant, topics), flush=True)
             try:
                 v = run_case(args.devel, work, variant, scene, topics, params, args.warmup, args.duration)
             except (RuntimeError, subprocess.TimeoutExpired) as error:
