@@ -373,7 +373,9 @@ TEST(SparseBlockLdlt, AutoTurnsDirectWhenCgTakesMoreIterationsThanTheFactorizati
 {
   // A stiff 48 x 48 spring cloth at dt = 1/60: too large for `auto` to start directly, but CG needs
   // hundreds of iterations to a relative residual of 1e-8 (the velocity rule alone would stop it
-  // sooner), more than one factorization costs; from the next step on it is direct.
+  // sooner), more than one factorization costs; from the next step on it is direct. (On the way, its
+  // first CG solve over kMultigridTrialCgIterations brings one solve by the multigrid, which costs
+  // more than CG here and is not kept: MultigridSolver.AutoGoesBackToCgForGood...)
   ClothGridDef def = stiffSheetOnAuto();
   def.integrator.cg_velocity_tolerance = 0.0;
   SpringNetworkBody body(buildClothGrid(def));
