@@ -141,6 +141,54 @@ void addCollisionFigures(const core::World& world, diagnostic_updater::Diagnosti
     stat.add("collisions of " + name + " (last step)", counts.collisions);
   }
 }
+
+// The last implicit solves of the spring bodies: how many, how many of them direct and by the
+// multigrid, how many short of their tolerance, the most CG iterations and the worst relative
+// residual and velocity error.
+struct ImplicitSolves
+{
+  int solves = 0, direct = 0, multigrid = 0, not_converged = 0, iterations = 0;
+  double residual = 0.0, velocity_error = 0.0;
+
+  void add(const core::SolverReport& solve)
+  {
+    ++solves;
+    direct += solve.direct ? 1 : 0;
+    multigrid += solve.multigrid ? 1 : 0;
+    not_converged += solve.converged ? 0 : 1;
+    iterations = std::max(iterations, solve.iterations);
+    residual = std::max(residual, solve.relative_residual);
+    velocity_error = std::max(velocity_error, solve.velocity_error);
+  }
+};
+
+// The status line's part on the implicit solves ("" when there were none): all direct; some direct
+// and CG; or CG alone, all, some or none of its solves preconditioned by the multigrid.
+std::string solverText(const ImplicitSolves& solves)
+{
+  char text[160] = "";
+  if (solves.solves == 0) return text;
+  if (solves.direct == solves.solves && solves.iterations == 0)
+  {
+    std::snprintf(text, sizeof(text), " | direct solve, residual %.1e, %.1e m/s", solves.residual,
+                  solves.velocity_error);
+    return text;
+  }
+  if (solves.direct > 0)
+  {
+    std::snprintf(text, sizeof(text), " | %d of %d solves direct, CG %d iterations, residual %.1e, %.1e m/s",
+                  solves.direct, solves.solves, solves.iterations, solves.residual, solves.velocity_error);
+    return text;
+  }
+  const char* preconditioner = "";
+  if (solves.multigrid == solves.solves)
+    preconditioner = " (multigrid)";
+  else if (solves.multigrid > 0)
+    preconditioner = " (some multigrid)";
+  std::snprintf(text, sizeof(text), " | CG%s %d iterations, residual %.1e, %.1e m/s", preconditioner, solves.iterations,
+                solves.residual, solves.velocity_error);
+  return text;
+}
 }  // namespace
 
 void buildDiagnostics(const core::World& world, const LoopFigures& loop, double max_strain_warn,
@@ -150,8 +198,8 @@ void buildDiagnostics(const core::World& world, const LoopFigures& loop, double 
 
   // Over the spring bodies: the last implicit solves (how many, how many direct, most CG iterations,
   // worst residual), strain, springs and triangles torn and frozen bodies.
-  int iterations = 0, not_converged = 0, implicit_solves = 0, direct_solves = 0, multigrid_solves = 0;
-  double residual = 0.0, velocity_error = 0.0, max_strain = 0.0;
+  ImplicitSolves solves;
+  double max_strain = 0.0;
   long long torn_springs = 0, torn_triangles = 0, split_particles = 0;
   std::string strained_body;
   std::vector<std::string> frozen;
@@ -168,16 +216,7 @@ void buildDiagnostics(const core::World& world, const LoopFigures& loop, double 
                        core::toString(integratorThatRan(spring_body)) + ": " + spring_body.frozenReason() + ")");
       continue;
     }
-    if (core::isImplicit(integratorThatRan(spring_body)))
-    {
-      ++implicit_solves;
-      direct_solves += spring_body.lastSolve().direct ? 1 : 0;
-      multigrid_solves += spring_body.lastSolve().multigrid ? 1 : 0;
-      iterations = std::max(iterations, spring_body.lastSolve().iterations);
-      residual = std::max(residual, spring_body.lastSolve().relative_residual);
-      velocity_error = std::max(velocity_error, spring_body.lastSolve().velocity_error);
-      if (!spring_body.lastSolve().converged) ++not_converged;
-    }
+    if (core::isImplicit(integratorThatRan(spring_body))) solves.add(spring_body.lastSolve());
     const double strain = spring_body.maxStrain();
     if (strain > max_strain)
     {
@@ -203,9 +242,9 @@ void buildDiagnostics(const core::World& world, const LoopFigures& loop, double 
                   100.0 * kRealTimeFactorWarnRatio, loop.target_real_time_factor);
     stat.mergeSummary(DiagnosticStatus::WARN, text);
   }
-  if (not_converged > 0)
+  if (solves.not_converged > 0)
     stat.mergeSummary(DiagnosticStatus::WARN,
-                      std::to_string(not_converged) +
+                      std::to_string(solves.not_converged) +
                           " implicit solves did not converge in their last step (neither cg_tolerance nor "
                           "cg_velocity_tolerance reached, or "
                           "resting contacts still changing after " +
@@ -228,12 +267,12 @@ void buildDiagnostics(const core::World& world, const LoopFigures& loop, double 
   stat.add("steps per tick", loop.steps_per_tick);
   stat.add("live particles", world.particleCount());
   stat.add("bodies", static_cast<int>(world.bodies().size()));
-  stat.add("implicit solves (last step)", implicit_solves);
-  stat.add("direct solves (last step)", direct_solves);
-  stat.add("multigrid solves (last step)", multigrid_solves);
-  stat.add("solver iterations (max, last step)", iterations);
-  stat.add("solver residual (max, last step)", residual);
-  stat.add("solver velocity error [m/s] (max, last step)", velocity_error);
+  stat.add("implicit solves (last step)", solves.solves);
+  stat.add("direct solves (last step)", solves.direct);
+  stat.add("multigrid solves (last step)", solves.multigrid);
+  stat.add("solver iterations (max, last step)", solves.iterations);
+  stat.add("solver residual (max, last step)", solves.residual);
+  stat.add("solver velocity error [m/s] (max, last step)", solves.velocity_error);
   stat.add("max strain", max_strain);
   stat.add("torn springs", torn_springs);
   stat.add("torn triangles", torn_triangles);
@@ -248,36 +287,16 @@ void buildDiagnostics(const core::World& world, const LoopFigures& loop, double 
 
 std::string statusLine(const core::World& world, double real_time_factor, double step_time_us, bool paused)
 {
-  // The implicit solves of the last step: how many were direct, most CG iterations, worst relative
-  // residual and worst velocity error.
-  int cg_iterations = 0, direct_solves = 0, multigrid_solves = 0, implicit_solves = 0;
-  double cg_residual = 0.0, velocity_error = 0.0;
-  bool any_implicit = false;
+  // The implicit solves of the last step: how many were direct or by the multigrid, most CG
+  // iterations, worst relative residual and worst velocity error.
+  ImplicitSolves solves;
   for (const auto& body : world.bodies())
   {
     if (body->kind() != core::BodyKind::SpringNetwork) continue;
     const auto& spring_body = static_cast<const core::SpringNetworkBody&>(*body);
-    if (!core::isImplicit(integratorThatRan(spring_body))) continue;
-    any_implicit = true;
-    ++implicit_solves;
-    direct_solves += spring_body.lastSolve().direct ? 1 : 0;
-    multigrid_solves += spring_body.lastSolve().multigrid ? 1 : 0;
-    cg_iterations = std::max(cg_iterations, spring_body.lastSolve().iterations);
-    cg_residual = std::max(cg_residual, spring_body.lastSolve().relative_residual);
-    velocity_error = std::max(velocity_error, spring_body.lastSolve().velocity_error);
+    if (core::isImplicit(integratorThatRan(spring_body))) solves.add(spring_body.lastSolve());
   }
-  char solver[160] = "";
-  if (any_implicit && direct_solves == implicit_solves && cg_iterations == 0)
-    std::snprintf(solver, sizeof(solver), " | direct solve, residual %.1e, %.1e m/s", cg_residual, velocity_error);
-  else if (any_implicit && direct_solves > 0)
-    std::snprintf(solver, sizeof(solver), " | %d of %d solves direct, CG %d iterations, residual %.1e, %.1e m/s",
-                  direct_solves, implicit_solves, cg_iterations, cg_residual, velocity_error);
-  else if (any_implicit)
-    std::snprintf(solver, sizeof(solver), " | CG%s %d iterations, residual %.1e, %.1e m/s",
-                  multigrid_solves == implicit_solves ? " (multigrid)"
-                  : multigrid_solves > 0              ? " (some multigrid)"
-                                                      : "",
-                  cg_iterations, cg_residual, velocity_error);
+  const std::string solver = solverText(solves);
   // Springs (and Baraff–Witkin triangles) torn since build or reset, of each body that can tear
   // (tear_strain > 0) only.
   std::string torn;
@@ -302,7 +321,7 @@ std::string statusLine(const core::World& world, double real_time_factor, double
   }
   char line[512];
   std::snprintf(line, sizeof(line), "sim time %.3f s | real-time factor %.2f | live particles %d | step %.1f us%s",
-                world.simTime(), real_time_factor, world.particleCount(), step_time_us, solver);
+                world.simTime(), real_time_factor, world.particleCount(), step_time_us, solver.c_str());
   return line + torn + contacts + (paused ? " | paused" : "");
 }
 

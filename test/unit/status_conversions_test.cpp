@@ -391,6 +391,32 @@ TEST(StatusConversions, DiagnosticsCountTheImplicitSolvesAndThoseSolvedDirectly)
   EXPECT_EQ(*findValue(stat, "direct solves (last step)"), "0");
 }
 
+TEST(StatusConversions, TheStatusLineSaysWhenOnlySomeCgSolvesHadTheMultigrid)
+{
+  // Two implicit ropes, the first on the multigrid's CG and the second on block Jacobi's: one of the
+  // two solves had the multigrid, which the line and the diagnostics both say.
+  core::World world = makeWorld(core::kImplicitEulerIntegrator, core::LinearSolverType::Multigrid);
+  core::RopeDef rope;
+  rope.name = "plain";
+  rope.particles = 10;
+  rope.start = {0.0, 1.0, 2.0};
+  rope.end = {3.0, 1.0, 2.0};
+  rope.rest_length = 2.0;
+  rope.pins = {0, -1};
+  rope.integrator.type = core::kImplicitEulerIntegrator;
+  rope.integrator.linear_solver = core::LinearSolverType::ConjugateGradient;
+  ASSERT_TRUE(world.addRope(rope).ok);
+  world.step();
+  const std::string line = statusLine(world, 1.0, 1.0, false);
+  EXPECT_NE(line.find("| CG (some multigrid) "), std::string::npos) << line;
+  diagnostic_updater::DiagnosticStatusWrapper stat;
+  buildDiagnostics(world, runningOnTime(), 0.9, stat);
+  ASSERT_NE(findValue(stat, "implicit solves (last step)"), nullptr);
+  EXPECT_EQ(*findValue(stat, "implicit solves (last step)"), "2");
+  EXPECT_EQ(*findValue(stat, "multigrid solves (last step)"), "1");
+  EXPECT_EQ(*findValue(stat, "direct solves (last step)"), "0");
+}
+
 TEST(StatusConversions, DiagnosticsWarnBelowNinetyPercentOfTheTargetRealTimeFactorOnlyWhileRunning)
 {
   core::World world = makeWorld();

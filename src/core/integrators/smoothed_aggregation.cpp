@@ -571,7 +571,8 @@ double SmoothedAggregation::cycleFlops() const
     flops += 2.0 * 2.0 * b * kModes * p_blocks;  // restriction and prolongation
   }
   const Level& coarsest = levels_.back();
-  const double unknowns = coarsest_.rows() > 0 ? static_cast<double>(coarsest_.rows()) : 0.0;
+  // The coarsest level's solve: with its dense factor (two triangular solves), else its block Jacobi.
+  const double unknowns = static_cast<double>(coarsest_.rows());
   flops += unknowns > 0.0 ? 2.0 * unknowns * unknowns
                           : 2.0 * coarsest.block * coarsest.block * static_cast<double>(coarsest.nodes);
   return flops;
