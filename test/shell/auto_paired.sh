@@ -13,9 +13,7 @@ set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/helpers.bash"
 : "${PARTICLE_SIM_ROOT:?run me through scripts/test}"
 
-out="$(rosrun particle_sim particle_sim_perf --only auto --quick --out "$work/auto.csv" 2>&1)" ||
-  { echo "$out"; fail "particle_sim_perf --only auto --quick"; }
-echo "$out"
+run_quick_case particle_sim_perf auto "$work/auto.csv"
 
 /usr/bin/python3 - "$work/auto.csv" <<'PY'
 import csv, math, re, sys
@@ -42,11 +40,7 @@ for suffix in ('', ' dt 1/1000'):
 PY
 
 # The report on the committed run with these rows in place of its own: goal 8's figures come from the rounds.
-grep -v '^auto_paired,' "$PARTICLE_SIM_ROOT/docs/performance/performance.csv" >"$work/report.csv"
-tail -n +2 "$work/auto.csv" >>"$work/report.csv"
-mkdir -p "$work/plots"
-/usr/bin/python3 "$PARTICLE_SIM_ROOT/scripts/performance_report.py" --csv "$work/report.csv" \
-  --doc "$work/report.md" --plots "$work/plots" >/dev/null
+report_with_rows auto_paired "$work/auto.csv"
 goal8="$(grep '^| 8 |' "$work/report.md")"
 contains "$goal8" "dt 1/60: [0-9.]+× side by side \(median of 3 rounds' ratios" ||
   fail "goal 8 does not take the rounds at dt 1/60: $goal8"

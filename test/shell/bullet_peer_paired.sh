@@ -13,9 +13,7 @@ source "$(dirname "${BASH_SOURCE[0]}")/helpers.bash"
 : "${PARTICLE_SIM_ROOT:?run me through scripts/test}"
 
 [ -f /usr/include/bullet/btBulletDynamicsCommon.h ] || fail "libbullet-dev is missing (scripts/common.sh installs it)"
-out="$(rosrun particle_sim particle_sim_bullet_peer --only paired --quick --out "$work/paired.csv" 2>&1)" ||
-  { echo "$out"; fail "particle_sim_bullet_peer --only paired --quick"; }
-echo "$out"
+run_quick_case particle_sim_bullet_peer paired "$work/paired.csv"
 
 /usr/bin/python3 - "$work/paired.csv" <<'PY'
 import csv, math, sys
@@ -36,11 +34,7 @@ for tol, bullet in (('3.45e-4', 'bullet implicit dt 1/1000'), ('1e-6', 'bullet i
 PY
 
 # The report on the committed run plus these rows: goal 7's same-dt figure comes from the rounds.
-cp "$PARTICLE_SIM_ROOT/docs/performance/performance.csv" "$work/report.csv"
-tail -n +2 "$work/paired.csv" >>"$work/report.csv"
-mkdir -p "$work/plots"
-/usr/bin/python3 "$PARTICLE_SIM_ROOT/scripts/performance_report.py" --csv "$work/report.csv" --doc "$work/report.md" \
-  --plots "$work/plots" >/dev/null
+report_with_rows "" "$work/paired.csv"
 goal7="$(grep '^| 7 |' "$work/report.md")"
 contains "$goal7" "dt 1/1000, both to a relative residual of 0.000345, side by side \(2 rounds of 5 steps" ||
   fail "goal 7 does not take the paired rounds at 3.45e-4: $goal7"

@@ -78,6 +78,29 @@ background() {
 nodelet_manager=(rosrun nodelet nodelet manager)
 [ -z "${PARTICLE_SIM_MANAGER_PREFIX:-}" ] || nodelet_manager=(rosrun --prefix "$PARTICLE_SIM_MANAGER_PREFIX" nodelet nodelet manager)
 
+# Runs the bench program $1 (particle_sim_perf or particle_sim_bullet_peer) on its case $2 with
+# --quick, its CSV into the file $3; prints what it printed, and fails the test with that if it fails.
+run_quick_case() {
+  local out
+  out="$(rosrun particle_sim "$1" --only "$2" --quick --out "$3" 2>&1)" || { echo "$out"; fail "$1 --only $2 --quick"; }
+  echo "$out"
+}
+
+# scripts/performance_report.py on the committed run (docs/performance/performance.csv) without its
+# rows of the case $1 (none left out when $1 is empty) and with the rows of the CSV $2 added; the page
+# goes to $work/report.md, its plots to $work/plots.
+report_with_rows() {
+  if [ -n "$1" ]; then
+    grep -v "^$1," "$PARTICLE_SIM_ROOT/docs/performance/performance.csv" >"$work/report.csv"
+  else
+    cp "$PARTICLE_SIM_ROOT/docs/performance/performance.csv" "$work/report.csv"
+  fi
+  tail -n +2 "$2" >>"$work/report.csv"
+  mkdir -p "$work/plots"
+  /usr/bin/python3 "$PARTICLE_SIM_ROOT/scripts/performance_report.py" --csv "$work/report.csv" \
+    --doc "$work/report.md" --plots "$work/plots" >/dev/null
+}
+
 # True if text $1 has a line matching the extended regex $2 (no pipe: under pipefail, grep -q
 # ending a pipe early fails the writer).
 contains() { grep -Eq -- "$2" <<<"$1"; }
