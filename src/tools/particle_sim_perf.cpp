@@ -67,8 +67,8 @@ const char* kUsage =
     "usage: particle_sim_perf [--out FILE] [--quick] [--only CASE,...]\n"
     "  --out FILE    CSV output (default performance.csv)\n"
     "  --quick       fewer sizes, steps and repeats: a smoke run, not a report\n"
-    "  --only CASES  run only these cases: rope, cloth, hang64, auto, stopping, springs, emitters,\n"
-    "                selfcollision, threads\n";
+    "  --only CASES  run only these cases: rope, cloth, sizes, hang64, auto, stopping, springs,\n"
+    "                emitters, selfcollision, threads\n";
 
 core::Environment noGround()
 {
@@ -113,6 +113,19 @@ core::RopeDef longRope(int segments)
   return def;
 }
 
+// That rope under implicit Euler with `solver`, to a relative 1e-8 (the relative rule alone: goal 9
+// has its own case).
+core::SpringNetworkDef implicitRope(int segments, core::LinearSolverType solver)
+{
+  core::RopeDef def = longRope(segments);
+  def.integrator.type = core::kImplicitEulerIntegrator;
+  def.integrator.linear_solver = solver;
+  def.integrator.cg_tolerance = 1e-8;
+  def.integrator.cg_velocity_tolerance = 0.0;
+  def.integrator.cg_max_iterations = 100000;
+  return core::buildRope(def);
+}
+
 void ropes(std::ostream& out, bool quick)
 {
   const std::vector<int> sizes = quick ? std::vector<int>{100, 1000} : std::vector<int>{100, 300, 1000, 3000, 10000};
@@ -122,13 +135,8 @@ void ropes(std::ostream& out, bool quick)
     {
       const bool cg = std::strcmp(solver, "cg") == 0;
       if (cg && segments > (quick ? 1000 : 3000)) continue;  // seconds per step
-      core::RopeDef def = longRope(segments);
-      def.integrator.type = core::kImplicitEulerIntegrator;
-      def.integrator.linear_solver = cg ? core::LinearSolverType::ConjugateGradient : core::LinearSolverType::Direct;
-      def.integrator.cg_tolerance = 1e-8;
-      def.integrator.cg_velocity_tolerance = 0.0;  // the relative rule alone (goal 9 has its own case)
-      def.integrator.cg_max_iterations = 100000;
-      core::SpringNetworkBody body(core::buildRope(def));
+      core::SpringNetworkBody body(
+          implicitRope(segments, cg ? core::LinearSolverType::ConjugateGradient : core::LinearSolverType::Direct));
       const int steps = quick ? 5 : (cg ? std::max(5, 20000 / segments) : std::max(30, 300000 / segments));
       Row row = timeBody(body, 1.0 / 60.0, 10, steps, quick ? 2 : 5);
       row.case_name = "rope";
@@ -187,6 +195,109 @@ void cloths(std::ostream& out, bool quick)
       row.elements = static_cast<double>(n) * n;
       writeRow(out, row);
     }
+  }
+}
+
+// Bodies timed side by side (goals 2 and 8): built from `defs`, each warmed up by `warmup` steps of
+// dt from rest, then timed in rounds (timeInRounds(): each round steps every body `steps` times, one
+// after the other, the order shifted by one each round), so that a spell of load on the virtual
+// machine falls on all of them alike and each round times them over the same span of simulated time.
+struct SideBySide
+{
+  std::vector<std::unique_ptr<core::SpringNetworkBody>> bodies;
+  std::vector<std::vector<double>> times;  // [body][round]: ms per step
+  std::vector<double> iterations;          // per body: mean CG iterations per timed step
+};
+
+SideBySide timeSideBySide(const std::vector<core::SpringNetworkDef>& defs, double dt, int warmup, int steps, int rounds)
+{
+  const core::Environment env = noGround();
+  SideBySide timed;
+  std::vector<long long> iterations(defs.size(), 0);
+  std::vector<std::function<void()>> step;
+  for (std::size_t b = 0; b < defs.size(); ++b)
+  {
+    timed.bodies.push_back(std::make_unique<core::SpringNetworkBody>(defs[b]));
+    step.push_back([&, b] {
+      timed.bodies[b]->step(dt, env);
+      iterations[b] += timed.bodies[b]->lastSolve().iterations;
+    });
+  }
+  for (const std::function<void()>& warm_up_step : step)
+  {
+    for (int i = 0; i < warmup; ++i)
+      warm_up_step();
+  }
+  std::fill(iterations.begin(), iterations.end(), 0);
+  timed.times = timeInRounds(step, steps, rounds);
+  for (const long long sum : iterations)
+    timed.iterations.push_back(static_cast<double>(sum) / (static_cast<double>(rounds) * steps));
+  return timed;
+}
+
+// --- Goal 2's ratios side by side: for each ratio, the body at both sizes (the spring cloth at 64²
+// and 128² with each iterative solver, the rope of 100 and of 1000 segments solved directly) timed
+// side by side (timeSideBySide()); each round gives the larger size's time over the smaller's. The
+// ratio row's three figures are those ratios' min, median and max, and each size's row its rounds'
+// times. The rows of cloths() and ropes() are timed a minute or more apart, so their ratios also carry
+// how the machine's load moved in between.
+void sizesSideBySide(std::ostream& out, bool quick)
+{
+  struct Ratio
+  {
+    std::string case_name, variant;
+    int small, large;
+    std::function<core::SpringNetworkDef(int)> build;
+  };
+  const int cloth_small = quick ? 16 : 64, cloth_large = quick ? 32 : 128;
+  std::vector<Ratio> ratios;
+  for (const core::LinearSolverType solver :
+       {core::LinearSolverType::ConjugateGradient, core::LinearSolverType::Multigrid})
+    ratios.push_back({"cloth", std::string("implicit_euler ") + core::toString(solver), cloth_small, cloth_large,
+                      [solver](int n) { return core::buildClothGrid(squareCloth(n, solver)); }});
+  ratios.push_back({"rope", "implicit_euler direct", 100, 1000,
+                    [](int segments) { return implicitRope(segments, core::LinearSolverType::Direct); }});
+  for (const Ratio& ratio : ratios)
+  {
+    const std::vector<int> sizes = {ratio.small, ratio.large};
+    const bool rope_case = ratio.case_name == "rope";
+    const int warmup = quick ? 2 : 10;
+    const int rounds = quick ? 3 : 9;
+    const int steps = quick ? 2 : (rope_case ? 200 : 4);
+    const SideBySide timed =
+        timeSideBySide({ratio.build(ratio.small), ratio.build(ratio.large)}, 1.0 / 60.0, warmup, steps, rounds);
+    const std::vector<std::vector<double>>& times = timed.times;
+    std::vector<double> round_ratios;
+    for (int round = 0; round < rounds; ++round)
+      round_ratios.push_back(times[1][round] / times[0][round]);
+    auto elements = [&](int size) { return rope_case ? size : static_cast<double>(size) * size; };
+    for (std::size_t b = 0; b < sizes.size(); ++b)
+    {
+      Row row;
+      row.case_name = "size_paired";
+      row.variant = ratio.case_name + " " + ratio.variant + " " + std::to_string(sizes[b]);
+      row.size = sizes[b];
+      row.elements = elements(sizes[b]);
+      row.timing = summarize(times[b]);
+      row.iterations = timed.iterations[b];
+      std::ostringstream detail;
+      detail << rounds << " rounds of " << steps << " steps after " << warmup << " warm-up steps, in turn with size "
+             << sizes[1 - b];
+      if (timed.bodies[b]->frozen()) detail << "; FROZE: " << timed.bodies[b]->frozenReason();
+      row.detail = detail.str();
+      writeRow(out, row);
+    }
+    Row row;
+    row.case_name = "size_paired";
+    row.variant = "ratio " + ratio.case_name + " " + ratio.variant + " " + std::to_string(ratio.large) + "/" +
+                  std::to_string(ratio.small);
+    row.size = ratio.large;
+    row.elements = elements(ratio.large);
+    row.timing = summarize(round_ratios);
+    row.detail = "size " + std::to_string(ratio.large) + "'s time over size " + std::to_string(ratio.small) +
+                 "'s, round by round (" + std::to_string(rounds) + " rounds of " + std::to_string(steps) +
+                 " steps): min, median and max in the time columns";
+    writeRow(out, row);
   }
 }
 
@@ -439,17 +550,13 @@ void hang(std::ostream& out, bool quick)
 }
 
 // --- `auto` side by side (goal 8): at each dt of hang64's variants, `auto` and every fixed choice of
-// that dt, built in one process and warmed up, then timed in rounds: each round steps every body
-// `steps` times, one after the other, the order shifted by one each round, so that a spell of load on
-// the virtual machine falls on all of them alike. The bodies start from rest together, so every
-// round times each of them over the same span of simulated time. Each round gives auto's time over
+// that dt, timed side by side (timeSideBySide()). Each round gives auto's time over
 // the fastest fixed choice's in that round; the ratio row's three figures are those ratios' min,
 // median and max, and each body's row its rounds' times. The separate rows of hang() are timed
 // seconds to minutes apart, so their ratios also carry how the machine's load moved in between.
 void autoSideBySide(std::ostream& out, bool quick)
 {
   const std::vector<HangVariant> variants = hangVariants();
-  const core::Environment env = noGround();
   for (const HangVariant& auto_variant : variants)
   {
     if (auto_variant.integrator != core::kAutoIntegrator) continue;
@@ -461,27 +568,14 @@ void autoSideBySide(std::ostream& out, bool quick)
       if (variant.dt == dt && variant.integrator != core::kAutoIntegrator) chosen.push_back(&variant);
     }
     const int bodies_count = static_cast<int>(chosen.size());
-    std::vector<std::unique_ptr<core::SpringNetworkBody>> bodies;
-    std::vector<long long> iterations(bodies_count, 0);
-    std::vector<std::function<void()>> step;
-    for (int b = 0; b < bodies_count; ++b)
-    {
-      bodies.push_back(std::make_unique<core::SpringNetworkBody>(hangDef(*chosen[b])));
-      step.push_back([&, b] {
-        bodies[b]->step(dt, env);
-        iterations[b] += bodies[b]->lastSolve().iterations;
-      });
-    }
+    std::vector<core::SpringNetworkDef> defs;
+    for (const HangVariant* variant : chosen)
+      defs.push_back(hangDef(*variant));
     const int warmup = quick ? 2 : 10;
     const int rounds = quick ? 3 : 15;
     const int steps = quick ? 2 : (dt < 0.01 ? 40 : 8);
-    for (const std::function<void()>& warm_up_step : step)
-    {
-      for (int i = 0; i < warmup; ++i)
-        warm_up_step();
-    }
-    std::fill(iterations.begin(), iterations.end(), 0);
-    const std::vector<std::vector<double>> times = timeInRounds(step, steps, rounds);
+    const SideBySide timed = timeSideBySide(defs, dt, warmup, steps, rounds);
+    const std::vector<std::vector<double>>& times = timed.times;
     std::vector<double> ratios;
     std::vector<int> fastest_rounds(bodies_count, 0);  // rounds in which each fixed choice was the fastest
     for (int round = 0; round < rounds; ++round)
@@ -495,14 +589,14 @@ void autoSideBySide(std::ostream& out, bool quick)
     const std::string at = dt < 0.01 ? " dt 1/" + std::to_string(static_cast<int>(std::lround(1.0 / dt))) : "";
     for (int b = 0; b < bodies_count; ++b)
     {
-      const core::SpringNetworkBody& body = *bodies[b];
+      const core::SpringNetworkBody& body = *timed.bodies[b];
       Row row;
       row.case_name = "auto_paired";
       row.variant = chosen[b]->name;
       row.size = 64;
       row.elements = 64 * 64;
       row.timing = summarize(times[b]);
-      row.iterations = static_cast<double>(iterations[b]) / (static_cast<double>(rounds) * steps);
+      row.iterations = timed.iterations[b];
       std::ostringstream detail;
       detail << rounds << " rounds of " << steps << " steps after " << warmup << " warm-up steps, in turn with "
              << bodies_count - 1 << " other bodies";
@@ -1073,6 +1167,7 @@ int main(int argc, char** argv)
   auto wanted = [&options](const char* name) { return options.wanted(name); };
   if (wanted("rope")) ropes(out, quick);
   if (wanted("cloth")) cloths(out, quick);
+  if (wanted("sizes")) sizesSideBySide(out, quick);
   if (wanted("hang64")) hang(out, quick);
   if (wanted("auto")) autoSideBySide(out, quick);
   if (wanted("stopping")) stoppingRule(out, quick);
