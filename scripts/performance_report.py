@@ -376,9 +376,9 @@ def main():
     # also carries how the machine's load moved between the rows.
     cloth_ratios = []
     for solver in ('cg', 'multigrid'):
-        paired = size_paired_ratio(rows, 'cloth', 'implicit_euler ' + solver, 64, 128)
-        if paired:
-            r, small_row, large_row = paired
+        cloth_pair = size_paired_ratio(rows, 'cloth', 'implicit_euler ' + solver, 64, 128)
+        if cloth_pair:
+            r, small_row, large_row = cloth_pair
             cloth_ratios.append((r['ms_median'], '%s: %.1f× side by side (median of %s rounds\' ratios, %.1f–%.1f; '
                                  'iterations %.0f → %.0f)' % (
                                      solver, r['ms_median'], paired_rounds(r), r['ms_min'], r['ms_max'],
@@ -393,10 +393,10 @@ def main():
         goals.append(('2', 'implicit cloth 128² against 64², fixed relative tolerance', '≤ 5×',
                       '; '.join(text for _, text in cloth_ratios),
                       'yes' if min(ratio for ratio, _ in cloth_ratios) <= 5 else 'no'))
-    paired = size_paired_ratio(rows, 'rope', 'implicit_euler direct', 100, 1000)
+    rope_pair = size_paired_ratio(rows, 'rope', 'implicit_euler direct', 100, 1000)
     r100, r1000 = find(rows, 'rope', 'implicit_euler direct', 100), find(rows, 'rope', 'implicit_euler direct', 1000)
-    if paired:
-        r = paired[0]
+    if rope_pair:
+        r = rope_pair[0]
         goals.append(('2', 'rope of 1000 segments against 100', '≤ 15×',
                       '%.1f× (direct) side by side (median of %s rounds\' ratios, %.1f–%.1f)'
                       % (r['ms_median'], paired_rounds(r), r['ms_min'], r['ms_max']),
