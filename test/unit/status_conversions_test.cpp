@@ -21,9 +21,25 @@ using diagnostic_msgs::DiagnosticStatus;
 
 namespace
 {
+// A rope of 10 particles pinned at both ends, 2 m long at rest but stretched to 3 m (strain 0.5)
+// along x at height 2 m and at `y` [m], stepped by `integrator` with `linear_solver`.
+core::RopeDef tautRope(const std::string& name, double y, core::IntegratorType integrator,
+                       core::LinearSolverType linear_solver)
+{
+  core::RopeDef rope;
+  rope.name = name;
+  rope.particles = 10;
+  rope.start = {0.0, y, 2.0};
+  rope.end = {3.0, y, 2.0};
+  rope.rest_length = 2.0;
+  rope.pins = {0, -1};
+  rope.integrator.type = integrator;
+  rope.integrator.linear_solver = linear_solver;
+  return rope;
+}
+
 // A world without ground (free flight) holding a fountain that bursts 5 particles straight up at
-// 2 m/s from 1 m high, mass 0.01 kg each, and a rope of 10 particles pinned at both ends, 2 m long
-// at rest but stretched to 3 m (strain 0.5).
+// 2 m/s from 1 m high, mass 0.01 kg each, and the taut rope "taut" at y = 0 (tautRope()).
 core::World makeWorld(core::IntegratorType rope_integrator = core::kImplicitEulerIntegrator,
                       core::LinearSolverType linear_solver = core::LinearSolverType::Auto)
 {
@@ -40,16 +56,7 @@ core::World makeWorld(core::IntegratorType rope_integrator = core::kImplicitEule
   fountain.lifetime = 100.0;
   fountain.particle_mass = 0.01;
   EXPECT_TRUE(world.addEmitter(fountain).ok);
-  core::RopeDef rope;
-  rope.name = "taut";
-  rope.particles = 10;
-  rope.start = {0.0, 0.0, 2.0};
-  rope.end = {3.0, 0.0, 2.0};
-  rope.rest_length = 2.0;
-  rope.pins = {0, -1};
-  rope.integrator.type = rope_integrator;
-  rope.integrator.linear_solver = linear_solver;
-  EXPECT_TRUE(world.addRope(rope).ok);
+  EXPECT_TRUE(world.addRope(tautRope("taut", 0.0, rope_integrator, linear_solver)).ok);
   return world;
 }
 
@@ -396,16 +403,9 @@ TEST(StatusConversions, TheStatusLineSaysWhenOnlySomeCgSolvesHadTheMultigrid)
   // Two implicit ropes, the first on the multigrid's CG and the second on block Jacobi's: one of the
   // two solves had the multigrid, which the line and the diagnostics both say.
   core::World world = makeWorld(core::kImplicitEulerIntegrator, core::LinearSolverType::Multigrid);
-  core::RopeDef rope;
-  rope.name = "plain";
-  rope.particles = 10;
-  rope.start = {0.0, 1.0, 2.0};
-  rope.end = {3.0, 1.0, 2.0};
-  rope.rest_length = 2.0;
-  rope.pins = {0, -1};
-  rope.integrator.type = core::kImplicitEulerIntegrator;
-  rope.integrator.linear_solver = core::LinearSolverType::ConjugateGradient;
-  ASSERT_TRUE(world.addRope(rope).ok);
+  ASSERT_TRUE(
+      world.addRope(tautRope("plain", 1.0, core::kImplicitEulerIntegrator, core::LinearSolverType::ConjugateGradient))
+          .ok);
   world.step();
   const std::string line = statusLine(world, 1.0, 1.0, false);
   EXPECT_NE(line.find("| CG (some multigrid) "), std::string::npos) << line;
