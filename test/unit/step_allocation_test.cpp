@@ -316,9 +316,8 @@ TEST(StepAllocations, TheMultigridSolverAllocatesNothingInAWarmedUpStep)
 // by the copies and its implicit pattern is rebuilt (rare steps, counted apart; every other step
 // of the tear, with springs breaking and triangles going, allocates nothing). cloth_tear's grippers stand still for 1 s
 // and move apart from 1 s to 4 s; the cloth tears from about 1.3 s to 3.3 s. So the steps up to 1 s warm up and those
-// from 1 s to 4 s are counted, in every build. It is a suite of its own, not StepAllocations, because six methods
-// stepped through the tear take minutes under the sanitizers: CI runs it in the normal build only, with the other unit
-// tests of 2 s or more.
+// from 1 s to 4 s are counted, in every build. Six methods stepped through the tear take minutes under the
+// sanitizers: CI runs it in the normal build only, with the other unit tests of 1 s or more (.ci/run).
 TEST(TearAllocations, TearingAllocatesNothingUnderAnyMethod)
 {
   const double grippers_start = 1.0;  // [s]
