@@ -59,11 +59,13 @@ void compressRows(std::vector<std::vector<int>>& rows, std::vector<int>& start, 
 }
 
 // Nodes per chunk of a loop over a level's nodes that `workers` share: some 2048 3x3 block rows of
-// a cloth (13 blocks each with its bend springs), a quarter as many 6x6 rows, about 50 µs of work
-// each, so that a loop's handover costs a few per cent of it; a level smaller than one chunk runs on
-// the calling thread.
+// a cloth (13 blocks each with its bend springs), about 50 µs of work, and 128 6x6 rows, some 10 µs,
+// so that the second coarse level of a 128² cloth (about 200 nodes) is shared too and the first
+// (about 1800) splits evenly (its step at two threads, side by side: 6 % slower with 512 6x6 rows a
+// chunk, the same with 64, or with 1024 3x3 rows); a loop's handover, a few microseconds, is a few per
+// cent of a chunk; a level smaller than one chunk runs on the calling thread.
 template <int B>
-constexpr int kNodesPerChunk = B == 3 ? 2048 : 512;
+constexpr int kNodesPerChunk = B == 3 ? 2048 : 128;
 
 // y = A x for a matrix of B x B row-major blocks in block-sparse rows (start, column), x and y B
 // numbers a node: each row's blocks summed in their order, the rows shared with `workers` (each row
@@ -275,38 +277,39 @@ void SmoothedAggregation::planNextLevel(int index)
   next.block = kModes;
   compressRows(coarse_rows, next.start, next.column);
 
-  // The plans: every block product of A P and of Pᵀ (A P), row after row, with where it goes. A P is
-  // made a row at a time in a few blocks of scratch (slot t of the row: its t-th column), which the
-  // Galerkin products of that row then read; of A_c only the blocks on and above the diagonal are
-  // summed (A_c is symmetric), the ones below copied from them after.
+  // The plans: every block product of A P, row after row, and of Pᵀ (A P), by the row of A_c it adds
+  // into (a column of P) and within that by ascending row of A P (Pᵀ's rows, pt_block and pt_row,
+  // are in that order). Each row of A P and each row of A_c is so made by one plan range alone, which
+  // the workers share; of A_c only the blocks on and above the diagonal are summed (A_c is symmetric),
+  // the ones below copied from them after.
   level.ap_plan.clear();
   level.ap_plan_start.assign(n + 1, 0);
-  level.galerkin_plan.clear();
-  level.galerkin_plan_start.assign(n + 1, 0);
-  int widest_row = 0;
   for (int i = 0; i < n; ++i)
   {
     const int first = level.ap_start[i], last = level.ap_start[i + 1];
-    widest_row = std::max(widest_row, last - first);
     for (int k = level.start[i]; k < level.start[i + 1]; ++k)
     {
       const int j = level.column[k];
       for (int q = level.p_start[j]; q < level.p_start[j + 1]; ++q)
-        level.ap_plan.push_back({k, q, positionIn(level.ap_column, first, last, level.p_column[q]) - first});
+        level.ap_plan.push_back({k, q, positionIn(level.ap_column, first, last, level.p_column[q])});
     }
     level.ap_plan_start[i + 1] = static_cast<int>(level.ap_plan.size());
-    for (int q = level.p_start[i]; q < level.p_start[i + 1]; ++q)
+  }
+  level.galerkin_plan.clear();
+  level.galerkin_plan_start.assign(aggregates + 1, 0);
+  for (int coarse_row = 0; coarse_row < aggregates; ++coarse_row)
+  {
+    for (int slot = level.pt_start[coarse_row]; slot < level.pt_start[coarse_row + 1]; ++slot)
     {
-      const int coarse_row = level.p_column[q];
-      for (int t = first; t < last; ++t)
+      const int q = level.pt_block[slot], i = level.pt_row[slot];
+      for (int t = level.ap_start[i]; t < level.ap_start[i + 1]; ++t)
       {
         if (level.ap_column[t] < coarse_row) continue;
         level.galerkin_plan.push_back(
-            {q, t - first,
-             positionIn(next.column, next.start[coarse_row], next.start[coarse_row + 1], level.ap_column[t])});
+            {q, t, positionIn(next.column, next.start[coarse_row], next.start[coarse_row + 1], level.ap_column[t])});
       }
     }
-    level.galerkin_plan_start[i + 1] = static_cast<int>(level.galerkin_plan.size());
+    level.galerkin_plan_start[coarse_row + 1] = static_cast<int>(level.galerkin_plan.size());
   }
   for (int row = 0; row < next.nodes; ++row)
     for (int k = next.start[row]; k < next.start[row + 1]; ++k)
@@ -324,7 +327,7 @@ void SmoothedAggregation::planNextLevel(int index)
   }
   level.tentative.assign(static_cast<std::size_t>(n) * b * kModes, 0.0);
   level.p.assign(level.p_column.size() * b * kModes, 0.0);
-  level.ap.assign(static_cast<std::size_t>(widest_row) * b * kModes, 0.0);
+  level.ap.assign(level.ap_column.size() * b * kModes, 0.0);
   levels_.push_back(std::move(next));
   layOut(levels_.back());
 }
@@ -431,73 +434,79 @@ void SmoothedAggregation::setupLevel(int index)
   // The smoother's damping; and the lumped matrix's inverse diagonal blocks D_L,i = A_ii + Σ of the
   // row's weak blocks (where one is not invertible, A_ii's inverse stands in) and its damping.
   level.omega = smootherDamping<B>(
-      n, level.inverse_diagonal, [&](const Eigen::VectorXd& x, Eigen::VectorXd& y) { multiply<B>(level, x, y); },
-      level.power, level.power_product, level.power_started);
+      workers_, n, level.inverse_diagonal,
+      [&](const Eigen::VectorXd& x, Eigen::VectorXd& y) { multiply<B>(level, x, y); }, level.power, level.power_product,
+      level.power_started);
   if (level.has_weak)
   {
-    for (int i = 0; i < n; ++i)
-    {
-      Eigen::Matrix<double, B, B> diagonal = ConstBlockMap<B, B>(level.a.data() + B * B * level.diagonal[i]);
-      for (int k = level.start[i]; k < level.start[i + 1]; ++k)
-        if (!level.strong[k]) diagonal += ConstBlockMap<B, B>(level.a.data() + B * B * k);
-      const Eigen::Matrix<double, B, B> inverse = diagonal.inverse();
-      BlockMap<B, B>(level.lumped_inverse_diagonal.data() + B * B * i) =
-          inverse.allFinite() ? inverse : ConstBlockMap<B, B>(level.inverse_diagonal.data() + B * B * i);
-    }
+    shareLoop(workers_, n, kNodesPerChunk<B>, [&](int begin, int end) {
+      for (int i = begin; i < end; ++i)
+      {
+        Eigen::Matrix<double, B, B> diagonal = ConstBlockMap<B, B>(level.a.data() + B * B * level.diagonal[i]);
+        for (int k = level.start[i]; k < level.start[i + 1]; ++k)
+          if (!level.strong[k]) diagonal += ConstBlockMap<B, B>(level.a.data() + B * B * k);
+        const Eigen::Matrix<double, B, B> inverse = diagonal.inverse();
+        BlockMap<B, B>(level.lumped_inverse_diagonal.data() + B * B * i) =
+            inverse.allFinite() ? inverse : ConstBlockMap<B, B>(level.inverse_diagonal.data() + B * B * i);
+      }
+    });
     level.lumped_omega = smootherDamping<B>(
-        n, level.lumped_inverse_diagonal,
+        workers_, n, level.lumped_inverse_diagonal,
         [&](const Eigen::VectorXd& x, Eigen::VectorXd& y) { multiplyLumped<B>(level, x, y); }, level.lumped_power,
         level.lumped_power_product, level.lumped_power_started);
   }
 
   // The tentative prolongator: each aggregate's modes, orthonormalised by modified Gram–Schmidt
-  // (twice, for orthogonality to rounding), as Q; R is the next level's modes of that node.
+  // (twice, for orthogonality to rounding), as Q; R is the next level's modes of that node. Each
+  // aggregate alone (its members' rows of P̂, its node's modes), so the aggregates are shared.
   Level& next = levels_[index + 1];
-  for (int a = 0; a < next.nodes; ++a)
-  {
-    const std::vector<int>& members = level.members[a];
-    BlockMap<kModes, kModes> r(next.modes.data() + kModes * kModes * a);
-    r.setZero();
-    for (const int i : members)
-      BlockMap<B, kModes>(level.tentative.data() + B * kModes * i) =
-          ConstBlockMap<B, kModes>(level.modes.data() + B * kModes * i);
-    for (int c = 0; c < kModes; ++c)
+  shareLoop(workers_, next.nodes, kNodesPerChunk<kModes>, [&](int begin, int end) {
+    for (int a = begin; a < end; ++a)
     {
-      double before = 0.0;
+      const std::vector<int>& members = level.members[a];
+      BlockMap<kModes, kModes> r(next.modes.data() + kModes * kModes * a);
+      r.setZero();
       for (const int i : members)
-        before += BlockMap<B, kModes>(level.tentative.data() + B * kModes * i).col(c).squaredNorm();
-      for (int pass = 0; pass < 2; ++pass)
-        for (int e = 0; e < c; ++e)
-        {
-          double projection = 0.0;
-          for (const int i : members)
-          {
-            const BlockMap<B, kModes> q(level.tentative.data() + B * kModes * i);
-            projection += q.col(e).dot(q.col(c));
-          }
-          for (const int i : members)
-          {
-            BlockMap<B, kModes> q(level.tentative.data() + B * kModes * i);
-            q.col(c) -= projection * q.col(e);
-          }
-          r(e, c) += projection;
-        }
-      double after = 0.0;
-      for (const int i : members)
-        after += BlockMap<B, kModes>(level.tentative.data() + B * kModes * i).col(c).squaredNorm();
-      const bool dropped = !(after > kDroppedMode * kDroppedMode * before) || !(before > 0.0);
-      const double norm = std::sqrt(after);
-      r(c, c) = dropped ? 0.0 : norm;
-      for (const int i : members)
+        BlockMap<B, kModes>(level.tentative.data() + B * kModes * i) =
+            ConstBlockMap<B, kModes>(level.modes.data() + B * kModes * i);
+      for (int c = 0; c < kModes; ++c)
       {
-        BlockMap<B, kModes> q(level.tentative.data() + B * kModes * i);
-        if (dropped)
-          q.col(c).setZero();
-        else
-          q.col(c) /= norm;
+        double before = 0.0;
+        for (const int i : members)
+          before += BlockMap<B, kModes>(level.tentative.data() + B * kModes * i).col(c).squaredNorm();
+        for (int pass = 0; pass < 2; ++pass)
+          for (int e = 0; e < c; ++e)
+          {
+            double projection = 0.0;
+            for (const int i : members)
+            {
+              const BlockMap<B, kModes> q(level.tentative.data() + B * kModes * i);
+              projection += q.col(e).dot(q.col(c));
+            }
+            for (const int i : members)
+            {
+              BlockMap<B, kModes> q(level.tentative.data() + B * kModes * i);
+              q.col(c) -= projection * q.col(e);
+            }
+            r(e, c) += projection;
+          }
+        double after = 0.0;
+        for (const int i : members)
+          after += BlockMap<B, kModes>(level.tentative.data() + B * kModes * i).col(c).squaredNorm();
+        const bool dropped = !(after > kDroppedMode * kDroppedMode * before) || !(before > 0.0);
+        const double norm = std::sqrt(after);
+        r(c, c) = dropped ? 0.0 : norm;
+        for (const int i : members)
+        {
+          BlockMap<B, kModes> q(level.tentative.data() + B * kModes * i);
+          if (dropped)
+            q.col(c).setZero();
+          else
+            q.col(c) /= norm;
+        }
       }
     }
-  }
+  });
 
   // P = (I − ω_L D_L⁻¹ A_L) P̂: row i's blocks first collect Σ_j A_L,ij P̂_j by the aggregate of j
   // (the strong blocks of A; the weak ones' part, A_ij P̂_i, is in i's own aggregate), then become
@@ -533,25 +542,29 @@ void SmoothedAggregation::setupLevel(int index)
     }
   });
 
-  // A_c = Pᵀ (A P) by the plans, a row of A P at a time; then its lower blocks from the upper ones.
-  std::fill(next.a.begin(), next.a.end(), 0.0);
-  for (int i = 0; i < n; ++i)
-  {
-    std::fill(level.ap.begin(), level.ap.begin() + B * kModes * (level.ap_start[i + 1] - level.ap_start[i]), 0.0);
-    for (int e = level.ap_plan_start[i]; e < level.ap_plan_start[i + 1]; ++e)
+  // A P by its plan, each row alone; then A_c = Pᵀ (A P) by its plan, each row of A_c alone (its
+  // blocks on and above the diagonal); then its lower blocks from the upper ones.
+  shareLoop(workers_, n, kNodesPerChunk<B>, [&](int begin, int end) {
+    std::fill(level.ap.begin() + B * kModes * level.ap_start[begin],
+              level.ap.begin() + B * kModes * level.ap_start[end], 0.0);
+    for (int e = level.ap_plan_start[begin]; e < level.ap_plan_start[end]; ++e)
     {
       const auto& [k, q, t] = level.ap_plan[e];
       BlockMap<B, kModes>(level.ap.data() + B * kModes * t).noalias() +=
           ConstBlockMap<B, B>(level.a.data() + B * B * k) * ConstBlockMap<B, kModes>(level.p.data() + B * kModes * q);
     }
-    for (int e = level.galerkin_plan_start[i]; e < level.galerkin_plan_start[i + 1]; ++e)
+  });
+  shareLoop(workers_, next.nodes, kNodesPerChunk<kModes>, [&](int begin, int end) {
+    std::fill(next.a.begin() + kModes * kModes * next.start[begin], next.a.begin() + kModes * kModes * next.start[end],
+              0.0);
+    for (int e = level.galerkin_plan_start[begin]; e < level.galerkin_plan_start[end]; ++e)
     {
       const auto& [q, t, c] = level.galerkin_plan[e];
       BlockMap<kModes, kModes>(next.a.data() + kModes * kModes * c).noalias() +=
           ConstBlockMap<B, kModes>(level.p.data() + B * kModes * q).transpose() *
           ConstBlockMap<B, kModes>(level.ap.data() + B * kModes * t);
     }
-  }
+  });
   for (const auto& [lower, upper] : next.mirrored)
     BlockMap<kModes, kModes>(next.a.data() + kModes * kModes * lower) =
         ConstBlockMap<kModes, kModes>(next.a.data() + kModes * kModes * upper).transpose();
@@ -651,7 +664,7 @@ void SmoothedAggregation::multiplyLumped(const Level& level, const Eigen::Vector
 }
 
 template <int B, typename Product>
-double SmoothedAggregation::smootherDamping(int nodes, const std::vector<double>& inverse_diagonal,
+double SmoothedAggregation::smootherDamping(WorkerPool* workers, int nodes, const std::vector<double>& inverse_diagonal,
                                             const Product& product, Eigen::VectorXd& power,
                                             Eigen::VectorXd& power_product, bool& power_started)
 {
@@ -670,9 +683,11 @@ double SmoothedAggregation::smootherDamping(int nodes, const std::vector<double>
   for (int iteration = 0; iteration < iterations; ++iteration)
   {
     product(power, power_product);
-    for (int i = 0; i < nodes; ++i)
-      SegmentMap<B>(power.data() + B * i).noalias() =
-          ConstBlockMap<B, B>(inverse_diagonal.data() + B * B * i) * ConstSegmentMap<B>(power_product.data() + B * i);
+    shareLoop(workers, nodes, kNodesPerChunk<B>, [&](int begin, int end) {
+      for (int i = begin; i < end; ++i)
+        SegmentMap<B>(power.data() + B * i).noalias() =
+            ConstBlockMap<B, B>(inverse_diagonal.data() + B * B * i) * ConstSegmentMap<B>(power_product.data() + B * i);
+    });
     const double norm = power.norm();
     if (!(norm > 0.0) || !std::isfinite(norm))
     {

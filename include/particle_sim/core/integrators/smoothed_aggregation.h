@@ -40,11 +40,12 @@ namespace core
 /// plans of its Galerkin products (allocates); every setup() computes the numbers for one system and
 /// apply() runs a V-cycle: neither allocates after the first setup(). The passes over a level's
 /// nodes in which each node's result is computed alone (the products, the residuals, the smoothing,
-/// the prolongation, the restriction (gathered by aggregate), P's rows, the finest level's copy and
-/// the inverse diagonal blocks) are shared with setWorkers()' threads
-/// by chunks of nodes; the rest is serial (the Galerkin product, which sums into shared coarse
-/// blocks, the power iterations' norms, the coarsest solve). So the same bits at any
-/// thread count.
+/// the prolongation, the restriction (gathered by aggregate), P's rows, the finest level's copy,
+/// the inverse diagonal blocks of A and of the lumped matrix, the power iterations' D⁻¹ products, the
+/// tentative prolongator (by aggregate), A P and the Galerkin product
+/// Pᵀ (A P) (by row of A_c, each block summed in the order of the rows of A P)) are shared with
+/// setWorkers()' threads by chunks of nodes; the rest is serial (the power iterations' norms, the
+/// coarsest solve). So the same bits at any thread count.
 class SmoothedAggregation
 {
 public:
@@ -124,17 +125,17 @@ private:
     std::vector<double> p;  // b x 6 per block of P
     // Pᵀ by rows (aggregates): each one's blocks of P (pt_block) and their rows (pt_row), ascending.
     std::vector<int> pt_start, pt_block, pt_row;
-    // A P: rows of this level, columns of the next (its pattern), made a row at a time into `ap` (a
-    // row's blocks, slot t its t-th column), planned as (block of A, block of P, slot) per product,
-    // row after row.
+    // A P: rows of this level, columns of the next (its pattern, its blocks in `ap`), planned as
+    // (block of A, block of P, block of A P) per product, row after row.
     std::vector<int> ap_start, ap_column;
     std::vector<double> ap;
     std::vector<std::array<int, 3>> ap_plan;
     std::vector<int> ap_plan_start;  // per row
-    // Pᵀ (A P) into the next level's blocks on and above the diagonal: (block of P, slot of the row
-    // of A P, block of A_c) per product, row after row.
+    // Pᵀ (A P) into the next level's blocks on and above the diagonal: (block of P, block of A P,
+    // block of A_c) per product, by the row of A_c (a row of P's column) and within it by ascending
+    // row of A P: each block of A_c sums its products in the order of the rows of A P.
     std::vector<std::array<int, 3>> galerkin_plan;
-    std::vector<int> galerkin_plan_start;  // per row
+    std::vector<int> galerkin_plan_start;  // per row of A_c (per node of the next level)
     // This level's blocks below the diagonal with their mirror above it (lower = upperᵀ).
     std::vector<std::array<int, 2>> mirrored;
     double omega = 0.0;          // the smoother's damping, 4 / (3 ρ(D⁻¹ A))
@@ -168,10 +169,12 @@ private:
   template <int B>
   void multiplyLumped(const Level& level, const Eigen::VectorXd& x, Eigen::VectorXd& y) const;
   // ω = 4 / (3 ρ(D⁻¹ A)) of the operator `product` (y = A x) whose inverse diagonal blocks are
-  // `inverse_diagonal`, ρ by power iterations in `power` and `power_product`.
+  // `inverse_diagonal`, ρ by power iterations in `power` and `power_product`; the per-node products
+  // shared with `workers`.
   template <int B, typename Product>
-  static double smootherDamping(int nodes, const std::vector<double>& inverse_diagonal, const Product& product,
-                                Eigen::VectorXd& power, Eigen::VectorXd& power_product, bool& power_started);
+  static double smootherDamping(WorkerPool* workers, int nodes, const std::vector<double>& inverse_diagonal,
+                                const Product& product, Eigen::VectorXd& power, Eigen::VectorXd& power_product,
+                                bool& power_started);
   template <int B>
   void smooth(const Level& level, const Eigen::VectorXd& residual, Eigen::VectorXd& x) const;
   template <int B>
