@@ -294,7 +294,7 @@ void resolveCollisions(const Environment& env, ParticlePool& pool, const Eigen::
                        const Eigen::Matrix3Xd* start_position, double thickness, double h, WorkerPool* workers)
 {
   // No collider, no pass over the particles.
-  if (!env.ground.enabled && env.spheres.empty() && env.boxes.empty() && env.capsules.empty()) return;
+  if (!env.hasColliders()) return;
   // Each particle is handled alone, so the particles may be shared between threads: the same bits.
   shareLoop(workers, pool.size(), kParticlesPerVectorChunk, [&](int begin, int end) {
     resolveCollisionsOf(begin, end, env, pool, start_velocity, start_position, thickness, h);

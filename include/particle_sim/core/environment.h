@@ -100,6 +100,9 @@ struct Environment
   std::vector<CapsuleColliderDef> capsules;
   AirDef air;
   double damping = 0.0;  ///< [N·s/m per kg = 1/s] >= 0: global damping, f = −damping · m · v on spring-body particles
+
+  /// Whether a particle can touch anything: the ground or any sphere, box or capsule.
+  bool hasColliders() const { return ground.enabled || !spheres.empty() || !boxes.empty() || !capsules.empty(); }
 };
 
 /// Moves every live, non-pinned particle of `pool` that ended a step inside a collider back out.

@@ -12,8 +12,9 @@ void findRestingContacts(const Environment& env, const ParticlePool& pool, doubl
                          std::vector<RestingContact>& out)
 {
   // For each particle, the signed distance to every collider grown by the thickness; the smallest
-  // one within kRestingContactDistance is its contact.
+  // one within kRestingContactDistance is its contact. No collider, no pass over the particles.
   out.clear();
+  if (!env.hasColliders()) return;
   const int n = pool.size();
   for (int i = 0; i < n; ++i)
   {
