@@ -394,9 +394,10 @@ TEST(WorkerPool, EveryMethodStepsAClothToTheSameBitsAtTwoThreads)
   }
 }
 
-// The multigrid solver shares its passes over a level's nodes: an 80 × 80 spring cloth (6400
-// particles: four chunks of the finest level, about 700 aggregates below it, two chunks) steps to
-// the same bits in three steps at two threads as at one. Its CG's own vector passes are serial, so
+// The multigrid solver shares its passes over a level's nodes, its setup's (the Galerkin product
+// among them) as well as the V-cycle's: an 80 × 80 spring cloth (6400 particles: four chunks of the
+// finest level, about 700 aggregates below it, six chunks) steps to the same bits in three steps at
+// two threads as at one. Its CG's own vector passes are serial, so
 // the loops the two threads shared count the multigrid's: each iteration has the finest product
 // and, on each of the two levels above the coarse ones, the smoothing twice, two residuals, the
 // restriction and the prolongation (twelve or so), where the step's own shared loops (forces,
