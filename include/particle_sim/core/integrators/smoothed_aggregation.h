@@ -39,13 +39,13 @@ namespace core
 /// by the strength of its couplings in that first system and lays out every level's patterns and the
 /// plans of its Galerkin products (allocates); every setup() computes the numbers for one system and
 /// apply() runs a V-cycle: neither allocates after the first setup(). The passes over a level's
-/// nodes in which each node's result is computed alone (the products, the residuals, the smoothing,
-/// the prolongation, the restriction (gathered by aggregate), P's rows, the finest level's copy,
-/// the inverse diagonal blocks of A and of the lumped matrix, the power iterations' D⁻¹ products, the
-/// tentative prolongator (by aggregate), A P and the Galerkin product
-/// Pᵀ (A P) (by row of A_c, each block summed in the order of the rows of A P)) are shared with
-/// setWorkers()' threads by chunks of nodes; the rest is serial (the power iterations' norms, the
-/// coarsest solve). So the same bits at any thread count.
+/// nodes in which each node's result is computed alone are shared with setWorkers()' threads by
+/// chunks of nodes: the products, the residuals, the smoothing, the prolongation, the restriction
+/// (gathered by aggregate), the finest level's copy, the inverse diagonal blocks of A and of the
+/// lumped matrix, the power iterations' D⁻¹ products, the tentative prolongator (by aggregate), P's
+/// rows, A P, and the Galerkin product Pᵀ (A P) (by row of A_c, each block summed in the order of
+/// the rows of A P). The rest is serial (the power iterations' norms, the coarsest solve). So the
+/// same bits at any thread count.
 class SmoothedAggregation
 {
 public:
