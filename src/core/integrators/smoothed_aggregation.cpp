@@ -816,6 +816,18 @@ Eigen::VectorXd SmoothedAggregation::tentativeTimesCoarseModes(int index, int mo
   return out;
 }
 
+SmoothedAggregation::BlockRows SmoothedAggregation::matrixOf(int index) const
+{
+  const Level& level = levels_[index];
+  return {level.nodes, level.nodes, level.block, level.block, level.start, level.column, level.a};
+}
+
+SmoothedAggregation::BlockRows SmoothedAggregation::prolongatorOf(int index) const
+{
+  const Level& level = levels_[index];
+  return {level.nodes, levels_[index + 1].nodes, level.block, kModes, level.p_start, level.p_column, level.p};
+}
+
 Eigen::VectorXd SmoothedAggregation::modes(int index, int mode) const
 {
   const Level& level = levels_[index];

@@ -93,6 +93,19 @@ public:
     return std::vector<int>(l.p_column.begin() + l.p_start[node], l.p_column.begin() + l.p_start[node + 1]);
   }
 
+  /// A matrix in block-sparse rows: `rows` x `columns` blocks of row_block x column_block numbers
+  /// (row-major), row r's blocks in [start[r], start[r + 1]) with their block columns in `column`.
+  struct BlockRows
+  {
+    int rows = 0, columns = 0, row_block = 0, column_block = 0;
+    std::vector<int> start, column;
+    std::vector<double> values;
+  };
+  /// The matrix of `level` as setup() left it (the finest level filtered): for tests.
+  BlockRows matrixOf(int level) const;
+  /// The smoothed prolongator P from `level` to the next (b x 6 blocks): for tests.
+  BlockRows prolongatorOf(int level) const;
+
   /// Nodes of the coarsest level at most (it is solved by a dense factorization).
   static constexpr int kCoarsestNodes = 24;
   /// The rigid-body modes of a node's aggregate: the coarse block size.
