@@ -414,6 +414,55 @@ bool SmoothedAggregation::setUpCoarsest()
 }
 
 template <int B>
+void SmoothedAggregation::tentativeOfAggregate(Level& level, Level& next, int a)
+{
+  // Aggregate a's modes, orthonormalised by modified Gram–Schmidt (twice, for orthogonality to
+  // rounding), as its members' rows of Q; R is the next level's modes of its node.
+  const std::vector<int>& members = level.members[a];
+  BlockMap<kModes, kModes> r(next.modes.data() + kModes * kModes * a);
+  r.setZero();
+  for (const int i : members)
+    BlockMap<B, kModes>(level.tentative.data() + B * kModes * i) =
+        ConstBlockMap<B, kModes>(level.modes.data() + B * kModes * i);
+  for (int c = 0; c < kModes; ++c)
+  {
+    double before = 0.0;
+    for (const int i : members)
+      before += BlockMap<B, kModes>(level.tentative.data() + B * kModes * i).col(c).squaredNorm();
+    for (int pass = 0; pass < 2; ++pass)
+      for (int e = 0; e < c; ++e)
+      {
+        double projection = 0.0;
+        for (const int i : members)
+        {
+          const BlockMap<B, kModes> q(level.tentative.data() + B * kModes * i);
+          projection += q.col(e).dot(q.col(c));
+        }
+        for (const int i : members)
+        {
+          BlockMap<B, kModes> q(level.tentative.data() + B * kModes * i);
+          q.col(c) -= projection * q.col(e);
+        }
+        r(e, c) += projection;
+      }
+    double after = 0.0;
+    for (const int i : members)
+      after += BlockMap<B, kModes>(level.tentative.data() + B * kModes * i).col(c).squaredNorm();
+    const bool dropped = !(after > kDroppedMode * kDroppedMode * before) || !(before > 0.0);
+    const double norm = std::sqrt(after);
+    r(c, c) = dropped ? 0.0 : norm;
+    for (const int i : members)
+    {
+      BlockMap<B, kModes> q(level.tentative.data() + B * kModes * i);
+      if (dropped)
+        q.col(c).setZero();
+      else
+        q.col(c) /= norm;
+    }
+  }
+}
+
+template <int B>
 void SmoothedAggregation::setupLevel(int index)
 {
   Level& level = levels_[index];
@@ -456,56 +505,12 @@ void SmoothedAggregation::setupLevel(int index)
         level.lumped_power_product, level.lumped_power_started);
   }
 
-  // The tentative prolongator: each aggregate's modes, orthonormalised by modified Gram–Schmidt
-  // (twice, for orthogonality to rounding), as Q; R is the next level's modes of that node. Each
-  // aggregate alone (its members' rows of P̂, its node's modes), so the aggregates are shared.
+  // The tentative prolongator, aggregate by aggregate (tentativeOfAggregate()): each aggregate alone
+  // (its members' rows of P̂, its node's modes), so the aggregates are shared.
   Level& next = levels_[index + 1];
   shareLoop(workers_, next.nodes, kNodesPerChunk<kModes>, [&](int begin, int end) {
     for (int a = begin; a < end; ++a)
-    {
-      const std::vector<int>& members = level.members[a];
-      BlockMap<kModes, kModes> r(next.modes.data() + kModes * kModes * a);
-      r.setZero();
-      for (const int i : members)
-        BlockMap<B, kModes>(level.tentative.data() + B * kModes * i) =
-            ConstBlockMap<B, kModes>(level.modes.data() + B * kModes * i);
-      for (int c = 0; c < kModes; ++c)
-      {
-        double before = 0.0;
-        for (const int i : members)
-          before += BlockMap<B, kModes>(level.tentative.data() + B * kModes * i).col(c).squaredNorm();
-        for (int pass = 0; pass < 2; ++pass)
-          for (int e = 0; e < c; ++e)
-          {
-            double projection = 0.0;
-            for (const int i : members)
-            {
-              const BlockMap<B, kModes> q(level.tentative.data() + B * kModes * i);
-              projection += q.col(e).dot(q.col(c));
-            }
-            for (const int i : members)
-            {
-              BlockMap<B, kModes> q(level.tentative.data() + B * kModes * i);
-              q.col(c) -= projection * q.col(e);
-            }
-            r(e, c) += projection;
-          }
-        double after = 0.0;
-        for (const int i : members)
-          after += BlockMap<B, kModes>(level.tentative.data() + B * kModes * i).col(c).squaredNorm();
-        const bool dropped = !(after > kDroppedMode * kDroppedMode * before) || !(before > 0.0);
-        const double norm = std::sqrt(after);
-        r(c, c) = dropped ? 0.0 : norm;
-        for (const int i : members)
-        {
-          BlockMap<B, kModes> q(level.tentative.data() + B * kModes * i);
-          if (dropped)
-            q.col(c).setZero();
-          else
-            q.col(c) /= norm;
-        }
-      }
-    }
+      tentativeOfAggregate<B>(level, next, a);
   });
 
   // P = (I − ω_L D_L⁻¹ A_L) P̂: row i's blocks first collect Σ_j A_L,ij P̂_j by the aggregate of j

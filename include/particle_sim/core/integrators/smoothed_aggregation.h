@@ -173,6 +173,10 @@ private:
   // A P and the next level's A. Templated on the block size.
   template <int B>
   void setupLevel(int level);
+  // The tentative prolongator's rows of aggregate `a`'s members on `level` (its modes orthonormalised,
+  // Q) and the modes of its node on `next` (R).
+  template <int B>
+  static void tentativeOfAggregate(Level& level, Level& next, int a);
   template <int B>
   void multiply(const Level& level, const Eigen::VectorXd& x, Eigen::VectorXd& y) const;
   // residual = the level's rhs − A x.
