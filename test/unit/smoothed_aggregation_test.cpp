@@ -255,6 +255,49 @@ TEST(SmoothedAggregation, EachCoarseMatrixIsTheGalerkinProductWithTheSameBitsAtT
   EXPECT_GT(pool.sharedLoops(), 0u);
 }
 
+// The finest level's product may come from outside (the implicit solver's product by the springs'
+// pairs): the V-cycle and multiplyFinest() then take it, twice a V-cycle and once a product, and give
+// what the hierarchy's own blocks give, to rounding. The product here is the sheet's filtered matrix
+// as an Eigen sparse matrix, its pinned rows zero (x is zero there).
+TEST(SmoothedAggregation, AFinestProductFromOutsideGivesTheBlocksVCycle)
+{
+  const SheetSystem s = crumpledSheet(40, 4, true);
+  SmoothedAggregation multigrid;
+  multigrid.setPattern(s.particles, s.row_start, s.column);
+  ASSERT_TRUE(multigrid.setup(s.blocks, s.x, s.pinned));
+  Eigen::SparseMatrix<double> filtered = toSparse(multigrid.matrixOf(0));
+  for (int k = 0; k < filtered.outerSize(); ++k)
+    for (Eigen::SparseMatrix<double>::InnerIterator entry(filtered, k); entry; ++entry)
+      if (s.pinned[entry.row() / 3]) entry.valueRef() = 0.0;
+  int calls = 0;
+  multigrid.setFinestProduct([&](const double* x, double* y) {
+    ++calls;
+    Eigen::Map<Eigen::VectorXd>(y, 3 * s.particles) = filtered * Eigen::Map<const Eigen::VectorXd>(x, 3 * s.particles);
+  });
+  Eigen::Matrix3Xd by_blocks(3, s.particles), outside(3, s.particles);
+  for (unsigned trial = 0; trial < 3; ++trial)
+  {
+    const Eigen::Matrix3Xd r = randomFiltered(s.particles, s.pinned, 30 + trial);
+    multigrid.useFinestProduct(false);
+    multigrid.apply(r, by_blocks);
+    multigrid.useFinestProduct(true);
+    calls = 0;
+    multigrid.apply(r, outside);
+    EXPECT_EQ(calls, 2) << "trial " << trial;
+    EXPECT_LE((outside - by_blocks).cwiseAbs().maxCoeff(), 1e-12 * by_blocks.cwiseAbs().maxCoeff())
+        << "trial " << trial;
+    EXPECT_GT(by_blocks.cwiseAbs().maxCoeff(), 0.0);
+
+    multigrid.useFinestProduct(false);
+    multigrid.multiplyFinest(r, by_blocks);
+    multigrid.useFinestProduct(true);
+    multigrid.multiplyFinest(r, outside);
+    EXPECT_EQ(calls, 3) << "trial " << trial;
+    EXPECT_LE((outside - by_blocks).cwiseAbs().maxCoeff(), 1e-12 * by_blocks.cwiseAbs().maxCoeff())
+        << "trial " << trial;
+  }
+}
+
 TEST(SmoothedAggregation, TheProlongatorSpreadsAnAggregateOverItsStrongCouplingsOnly)
 {
   // A sheet with weak bend springs beside its structural and shear ones: P is smoothed by the

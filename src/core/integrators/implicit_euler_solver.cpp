@@ -793,9 +793,16 @@ void ImplicitEulerSolver::conjugateGradient(const std::vector<char>& pinned, con
 void ImplicitEulerSolver::multigridConjugateGradient(const std::vector<char>& pinned, const IntegratorDef& settings,
                                                      SolverReport& report)
 {
-  // The hierarchy reads A whole, and so does the product: the pairs go into the blocks. Its
-  // aggregates and plans are laid out at the first solve of a pattern; its numbers every solve.
+  // The hierarchy reads A whole: the pairs go into the blocks. Its aggregates and plans are laid out
+  // at the first solve of a pattern; its numbers every solve. The products with A on the finest
+  // level (CG's, and the V-cycles' residuals there) take the kept pairs while there are any
+  // (multiplyFilteredPairs(): a third of the bytes of the blocks, which the products would read
+  // three times an iteration), else the hierarchy's blocks.
+  const bool pair_product = !pairs_in_blocks_ && preparePairProduct();
   movePairsIntoBlocks();
+  multigrid_pinned_ = &pinned;
+  multigrid_.setFinestProduct([this](const double* x, double* y) { multiplyFilteredPairs(x, y); });
+  multigrid_.useFinestProduct(pair_product);
   if (!multigrid_planned_)
   {
     multigrid_.setPattern(static_cast<int>(diagonal_block_.size()), row_start_, block_column_);
@@ -858,6 +865,27 @@ void ImplicitEulerSolver::multigridConjugateGradient(const std::vector<char>& pi
   report.relative_residual = rhs_norm > 0.0 ? norms.euclidean / rhs_norm : 0.0;
   report.velocity_error = norms.velocity;
   report.converged = withinTolerance(norms, rhs_norm, settings) && std::isfinite(norms.euclidean);
+}
+
+void ImplicitEulerSolver::multiplyFilteredPairs(const double* x, double* y)
+{
+  // Through the padded vectors of the pair product (which the multigrid's CG does not use otherwise).
+  const int rows = static_cast<int>(diagonal_block_.size());
+  const std::vector<char>& pinned = *multigrid_pinned_;
+  shareLoop(workers_, rows, kParticlesPerVectorChunk, [&](int begin, int end) {
+    for (int i = begin; i < end; ++i)
+      direction_.col(i) = Eigen::Vector3d::Map(x + 3 * i);
+  });
+  multiply(direction_, product_, true);
+  shareLoop(workers_, rows, kParticlesPerVectorChunk, [&](int begin, int end) {
+    for (int i = begin; i < end; ++i)
+    {
+      if (pinned[i])
+        Eigen::Vector3d::Map(y + 3 * i).setZero();
+      else
+        Eigen::Vector3d::Map(y + 3 * i) = product_.col(i);
+    }
+  });
 }
 
 double ImplicitEulerSolver::freeMass(const std::vector<char>& pinned) const

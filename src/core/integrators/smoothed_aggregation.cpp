@@ -772,13 +772,20 @@ void SmoothedAggregation::cycle(int index)
   Level& next = levels_[index + 1];
   auto vCycle = [&](auto block_size) {
     constexpr int B = decltype(block_size)::value;
+    const bool outside = index == 0 && use_finest_product_;
     level.x.setZero();
     smooth<B>(level, level.rhs, level.x);
-    residualOf<B>(level, level.x, level.residual);
+    if (outside)
+      finestResidualOutside(level.x, level.residual);
+    else
+      residualOf<B>(level, level.x, level.residual);
     restrictResidual<B>(level, next.rhs);
     cycle(index + 1);
     prolongAdd<B>(level, next.x, level.x);
-    residualOf<B>(level, level.x, level.residual);
+    if (outside)
+      finestResidualOutside(level.x, level.residual);
+    else
+      residualOf<B>(level, level.x, level.residual);
     smooth<B>(level, level.residual, level.x);
   };
   if (level.block == 3)
@@ -795,8 +802,23 @@ void SmoothedAggregation::apply(const Eigen::Matrix3Xd& r, Eigen::Matrix3Xd& z)
   Eigen::Map<Eigen::VectorXd>(z.data(), z.size()) = finest.x;
 }
 
+void SmoothedAggregation::finestResidualOutside(const Eigen::VectorXd& x, Eigen::VectorXd& residual) const
+{
+  const Level& finest = levels_[0];
+  finest_product_(x.data(), residual.data());
+  shareLoop(workers_, finest.nodes, kNodesPerChunk<3>, [&](int begin, int end) {
+    residual.segment(3 * begin, 3 * (end - begin)) =
+        finest.rhs.segment(3 * begin, 3 * (end - begin)) - residual.segment(3 * begin, 3 * (end - begin));
+  });
+}
+
 void SmoothedAggregation::multiplyFinest(const Eigen::Matrix3Xd& x, Eigen::Matrix3Xd& y) const
 {
+  if (use_finest_product_)
+  {
+    finest_product_(x.data(), y.data());
+    return;
+  }
   const Level& finest = levels_[0];
   blockSparseProduct<3>(workers_, finest.nodes, finest.start, finest.column, finest.a, x.data(), y.data());
 }

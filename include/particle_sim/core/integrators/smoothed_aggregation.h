@@ -3,6 +3,7 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
 #include <array>
+#include <functional>
 #include <vector>
 
 #include "particle_sim/core/worker_pool.h"
@@ -67,6 +68,14 @@ public:
   /// y = Ã x with Ã the filtered matrix of the last setup() (pinned rows and columns cleared, an
   /// identity on their diagonal).
   void multiplyFinest(const Eigen::Matrix3Xd& x, Eigen::Matrix3Xd& y) const;
+  /// The finest level's product y = Ã x from outside, on 3 x particles numbers each (x is zero on
+  /// pinned rows, and so must y be): the implicit solver's product by the springs' pairs, which reads
+  /// a third of the bytes of the 3x3 blocks. apply() (its two residuals on the finest level) and
+  /// multiplyFinest() take it while useFinestProduct(true) holds, else the blocks; the setup reads
+  /// the blocks either way.
+  using FinestProduct = std::function<void(const double* x, double* y)>;
+  void setFinestProduct(FinestProduct product) { finest_product_ = std::move(product); }
+  void useFinestProduct(bool use) { use_finest_product_ = use && finest_product_; }
   /// Floating-point operations of one apply() (a V-cycle: two smoothings, two residuals, the
   /// restriction and prolongation on every level above the coarsest, the coarsest's solve) and of
   /// one setup() after the first (the numbers of every level: inverse diagonals, the power
@@ -182,6 +191,8 @@ private:
   // residual = the level's rhs − A x.
   template <int B>
   void residualOf(const Level& level, const Eigen::VectorXd& x, Eigen::VectorXd& residual) const;
+  // residualOf() on the finest level through finest_product_.
+  void finestResidualOutside(const Eigen::VectorXd& x, Eigen::VectorXd& residual) const;
   // y = A_L x, the level's lumped matrix (its weak blocks applied to x_i instead of x_j).
   template <int B>
   void multiplyLumped(const Level& level, const Eigen::VectorXd& x, Eigen::VectorXd& y) const;
@@ -209,6 +220,8 @@ private:
   Eigen::MatrixXd coarsest_;  // the coarsest level's matrix, dense
   Eigen::LDLT<Eigen::MatrixXd> coarsest_factor_;
   WorkerPool* workers_ = nullptr;
+  FinestProduct finest_product_;     // setFinestProduct()
+  bool use_finest_product_ = false;  // useFinestProduct()
 };
 
 }  // namespace core
