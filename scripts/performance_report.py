@@ -804,7 +804,10 @@ def main():
                  '3 × 3 blocks (a third of the bytes, read three times an iteration): whole runs of the 128² cloth '
                  'side by side took 0.85 of the time before at one thread (0.91 at two; 64²: 0.91), at the same '
                  'iterations; in a profile of the 128² cloth the 6 × 6 level\'s products are now the largest part '
-                 '(about a fifth of the step). '
+                 '(about a fifth of the step). Tried that day and not kept: float copies of the prolongators and '
+                 'of the 6 × 6 levels\' matrices for the V-cycle (the same iterations; single whole runs 3 to 12 %% '
+                 'slower than the double ones at 64² and 128²), and the 6 × 6 products as AVX2 sums of rows (no '
+                 'faster): neither the bytes nor the arithmetic of those products bound them. '
                  'A block symmetric Gauss–Seidel preconditioner (SSOR with ω = 1 on the 3×3 blocks) was tried '
                  'outside the engine on hang64\'s implicit system on 2026-11-28. To 1e-6 it needs 2.0 to 2.8 '
                  'times fewer iterations than block Jacobi (h = 1/60: 138 against 381; h = 1/1000: 11 against 29; '
@@ -850,11 +853,31 @@ def main():
                     factorization_rate(direct64), roof_sentence(rows, direct64),
                     ' (%.0f iterations a step at 1e-6)' % cg_tol['cg_iterations'] if cg_tol else ''))
     lines.append('')
-    lines.append('What is left for goal 3, a 128² cloth in real time at 60 Hz: its implicit step is a CG solve of '
-                 'about 500 iterations (the table above; "The stopping rule" below), some ten times too dear, and '
-                 'neither multigrid '
-                 '(about three times fewer products, from the prototype above) nor a Gauss–Seidel preconditioner '
-                 'closes that. A method whose matrix does not change from step to step would: projective dynamics '
+    tick = 1000.0 / 60.0
+    mg_one = find(rows, 'threads', 'implicit_euler multigrid 1 thread', 128)
+    mg_two = find(rows, 'threads', 'implicit_euler multigrid 2 threads', 128)
+    springs_node = node.get('cloth 128 springs auto')
+    if mg_one and mg_two:
+        mg_text = ('the multigrid\'s step of the bench\'s 128² spring cloth alone (goal 6\'s case, to a relative '
+                   '1e-6) took %s ms on one thread and %s on two in this run, %.1f and %.1f ticks'
+                   % (ms(mg_one['ms_min']), ms(mg_two['ms_min']), mg_one['ms_min'] / tick, mg_two['ms_min'] / tick))
+    else:
+        mg_text = 'the multigrid\'s step of the 128² cloth takes several ticks (the Cloth table)'
+    node_text = ''
+    if springs_node:
+        ran = springs_node['integrators'].split(' (')[0]
+        node_text = (' In the node (goal 3\'s row) the spring cloth\'s status said `%s`, and a tick took %s ms.'
+                     % (ran, ms(springs_node['tick_ms_median'])) if ran else
+                     ' In the node (goal 3\'s row) a tick of the spring cloth took %s ms.'
+                     % ms(springs_node['tick_ms_median']))
+    lines.append('What is left for goal 3, a 128² cloth in real time at 60 Hz, a tick of 16.7 ms: since '
+                 '2026-12-03 `auto` hands such a cloth to the multigrid after its first hard step (README, "Or by '
+                 'multigrid"), some 20 iterations a step where block Jacobi\'s CG needs some 500 (the Cloth table). '
+                 'Still, ' + mg_text + '.' + node_text + ' In a profile of that step on one thread (2026-12-05) the '
+                 'setup takes about a quarter, the 6 × 6 level\'s products about a fifth, the springs\' pair '
+                 'products an eighth and the finest level\'s restriction and prolongation a tenth; with neither the '
+                 'bytes nor the arithmetic of the largest part bounding it (above), no factor of four or more is in '
+                 'sight from this solver. A method whose matrix does not change from step to step would: projective dynamics '
                  '(Bouaziz et al. 2014), where each step alternates a local projection of every spring onto its '
                  'rest length with a global solve whose matrix, M/h² + Σ k (e_i − e_j)(e_i − e_j)ᵀ, is one '
                  'scalar matrix for x, y and z, factored once. Counted outside the engine on 2026-11-30 (Eigen\'s '
