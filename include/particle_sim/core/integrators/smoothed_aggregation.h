@@ -95,12 +95,6 @@ public:
   Eigen::VectorXd modes(int level, int mode) const;
   /// The aggregate (the next level's node) that node `node` of `level` belongs to: for tests.
   int aggregateOf(int level, int node) const { return levels_[level].aggregate[node]; }
-  /// The columns (the next level's nodes) of row `node` of `level`'s prolongator P: for tests.
-  std::vector<int> prolongatorColumns(int level, int node) const
-  {
-    const Level& l = levels_[level];
-    return std::vector<int>(l.p_column.begin() + l.p_start[node], l.p_column.begin() + l.p_start[node + 1]);
-  }
 
   /// A matrix in block-sparse rows: `rows` x `columns` blocks of row_block x column_block numbers
   /// (row-major), row r's blocks in [start[r], start[r + 1]) with their block columns in `column`.
