@@ -11,6 +11,7 @@
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <memory>
 #include <random>
@@ -296,6 +297,69 @@ TEST(SmoothedAggregation, AFinestProductFromOutsideGivesTheBlocksVCycle)
     EXPECT_LE((outside - by_blocks).cwiseAbs().maxCoeff(), 1e-12 * by_blocks.cwiseAbs().maxCoeff())
         << "trial " << trial;
   }
+}
+
+// The implicit solver hands its kept pairs to setup() beside blocks whose off-diagonal blocks are
+// zero (FinestPairs) instead of adding them to its blocks first: every level's matrix and prolongator,
+// and a V-cycle, are then the same bits as from the blocks with the pairs added to them in their
+// order (the solver's movePairsIntoBlocks()). Each spring's C here is its off-diagonal block of the
+// sheet made symmetric bit for bit (its lower triangle), as the solver's are; the pinned corners are
+// filtered.
+TEST(SmoothedAggregation, PairsBesideTheBlocksGiveTheSameHierarchyAsPairsInThem)
+{
+  const SheetSystem s = crumpledSheet(40, 5, true);
+  auto blockIndex = [&](int i, int j) {
+    const auto first = s.column.begin() + s.row_start[i], last = s.column.begin() + s.row_start[i + 1];
+    return static_cast<int>(std::lower_bound(first, last, j) - s.column.begin());
+  };
+  std::vector<std::array<int, 2>> ends, blocks;
+  std::vector<std::array<double, 6>> cs;
+  std::vector<Eigen::Matrix3d> diagonal_only = s.blocks;
+  for (const auto* list : {&s.springs, &s.bends})
+    for (const auto& [i, j] : *list)
+    {
+      const Eigen::Matrix3d& c = s.blocks[blockIndex(i, j)];
+      ends.push_back({i, j});
+      blocks.push_back({blockIndex(i, j), blockIndex(j, i)});
+      cs.push_back({c(0, 0), c(1, 0), c(2, 0), c(1, 1), c(2, 1), c(2, 2)});
+      diagonal_only[blockIndex(i, j)].setZero();
+      diagonal_only[blockIndex(j, i)].setZero();
+    }
+  std::vector<Eigen::Matrix3d> pairs_added = diagonal_only;
+  for (std::size_t k = 0; k < cs.size(); ++k)
+  {
+    const std::array<double, 6>& c = cs[k];
+    Eigen::Matrix3d symmetric;
+    symmetric << c[0], c[1], c[2], c[1], c[3], c[4], c[2], c[4], c[5];
+    pairs_added[blocks[k][0]] += symmetric;
+    pairs_added[blocks[k][1]] += symmetric;
+  }
+  const FinestPairs pairs{static_cast<int>(ends.size()), ends.data(), blocks.data(), cs.data()};
+  SmoothedAggregation summed, beside;
+  summed.setPattern(s.particles, s.row_start, s.column);
+  beside.setPattern(s.particles, s.row_start, s.column);
+  for (int setup = 0; setup < 2; ++setup)  // the first lays out the levels, the second reuses them
+  {
+    ASSERT_TRUE(summed.setup(pairs_added, s.x, s.pinned));
+    ASSERT_TRUE(beside.setup(diagonal_only, s.x, s.pinned, pairs));
+  }
+  ASSERT_GE(summed.levels(), 3);
+  ASSERT_EQ(beside.levels(), summed.levels());
+  for (int level = 0; level < summed.levels(); ++level)
+  {
+    EXPECT_EQ(beside.matrixOf(level).values, summed.matrixOf(level).values) << "level " << level;
+
+    if (level + 1 < summed.levels())
+    {
+      EXPECT_EQ(beside.prolongatorOf(level).values, summed.prolongatorOf(level).values) << "level " << level;
+    }
+  }
+  const Eigen::Matrix3Xd r = randomFiltered(s.particles, s.pinned, 40);
+  Eigen::Matrix3Xd z_summed(3, s.particles), z_beside(3, s.particles);
+  summed.apply(r, z_summed);
+  beside.apply(r, z_beside);
+  EXPECT_EQ(z_beside, z_summed);
+  EXPECT_GT(z_summed.cwiseAbs().maxCoeff(), 0.0);
 }
 
 TEST(SmoothedAggregation, TheProlongatorSpreadsAnAggregateOverItsStrongCouplingsOnly)

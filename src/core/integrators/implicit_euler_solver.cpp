@@ -793,13 +793,18 @@ void ImplicitEulerSolver::conjugateGradient(const std::vector<char>& pinned, con
 void ImplicitEulerSolver::multigridConjugateGradient(const std::vector<char>& pinned, const IntegratorDef& settings,
                                                      SolverReport& report)
 {
-  // The hierarchy reads A whole: the pairs go into the blocks. Its aggregates and plans are laid out
-  // at the first solve of a pattern; its numbers every solve. The products with A on the finest
-  // level (CG's, and the V-cycles' residuals there) take the kept pairs while there are any
-  // (multiplyFilteredPairs(): a third of the bytes of the blocks, which the products would read
-  // three times an iteration), else the hierarchy's blocks.
+  // The hierarchy reads A whole: the kept pairs go into its copy of the blocks (not into blocks_,
+  // whose off-diagonal blocks then stay zero and need no clearing in the next step). Its aggregates
+  // and plans are laid out at the first solve of a pattern; its numbers every solve. The products
+  // with A on the finest level (CG's, and the V-cycles' residuals there) take the kept pairs while
+  // there are any (multiplyFilteredPairs(): a third of the bytes of the blocks, which the products
+  // would read three times an iteration), else the hierarchy's blocks.
   const bool pair_product = !pairs_in_blocks_ && preparePairProduct();
-  movePairsIntoBlocks();
+  FinestPairs pairs;
+  if (pair_product)
+    pairs = {kept_pairs_, pair_ends_.data(), pair_blocks_.data(), pair_c_.data()};
+  else
+    movePairsIntoBlocks();
   multigrid_pinned_ = &pinned;
   multigrid_.setFinestProduct([this](const double* x, double* y) { multiplyFilteredPairs(x, y); });
   multigrid_.useFinestProduct(pair_product);
@@ -811,7 +816,7 @@ void ImplicitEulerSolver::multigridConjugateGradient(const std::vector<char>& pi
   // A new hierarchy every solve: kept over later solves, its rigid-body modes turn away from a
   // swinging cloth's within a few steps at h = 1/60 (hang64: 24 iterations a step with a new one
   // each solve, 36 with one every second solve, 136 every tenth; README, "Or by multigrid").
-  if (!multigrid_.setup(blocks_, *positions_, pinned))
+  if (!multigrid_.setup(blocks_, *positions_, pinned, pairs))
   {
     // Not definite (or not finite): block Jacobi's CG meets it as it would and reports it.
     conjugateGradient(pinned, settings, settings.cg_max_iterations, report);

@@ -332,7 +332,8 @@ void SmoothedAggregation::planNextLevel(int index)
   layOut(levels_.back());
 }
 
-void SmoothedAggregation::copyFinest(const std::vector<Eigen::Matrix3d>& blocks, const std::vector<char>& pinned)
+void SmoothedAggregation::copyFinest(const std::vector<Eigen::Matrix3d>& blocks, const std::vector<char>& pinned,
+                                     const FinestPairs& pairs)
 {
   // The finest matrix, filtered: a pinned particle's row and column cleared but for an identity on
   // the diagonal (it decouples; the residual is zero there).
@@ -353,12 +354,29 @@ void SmoothedAggregation::copyFinest(const std::vector<Eigen::Matrix3d>& blocks,
       }
     }
   });
+  // The pairs, in their order, into the blocks of particles that are not pinned (the others are
+  // filtered above): 0 + C, then any later pair's C, as the solver's own blocks would sum them.
+  for (int k = 0; k < pairs.count; ++k)
+  {
+    if (pinned[pairs.ends[k][0]] || pinned[pairs.ends[k][1]]) continue;
+    const std::array<double, 6>& c = pairs.c[k];
+    Eigen::Matrix3d block;
+    block << c[0], c[1], c[2], c[1], c[3], c[4], c[2], c[4], c[5];
+    for (const int b : pairs.blocks[k])
+      BlockMap<3, 3>(finest.a.data() + 9 * b) += block;
+  }
 }
 
 bool SmoothedAggregation::setup(const std::vector<Eigen::Matrix3d>& blocks, const Eigen::Matrix3Xd& x,
                                 const std::vector<char>& pinned)
 {
-  copyFinest(blocks, pinned);
+  return setup(blocks, x, pinned, FinestPairs());
+}
+
+bool SmoothedAggregation::setup(const std::vector<Eigen::Matrix3d>& blocks, const Eigen::Matrix3Xd& x,
+                                const std::vector<char>& pinned, const FinestPairs& pairs)
+{
+  copyFinest(blocks, pinned, pairs);
   if (!planned_)
   {
     planned_ = true;

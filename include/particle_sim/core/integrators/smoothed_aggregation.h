@@ -12,6 +12,18 @@ namespace particle_sim
 {
 namespace core
 {
+/// Symmetric pairs of off-diagonal blocks that a setup() adds to A's blocks, in their order: pair k
+/// adds C_k to blocks (i, j) and (j, i) (`blocks[k]`, in the pattern's block order) of particles
+/// ends[k] = (i, j); C_k by its lower triangle (C00, C10, C20, C11, C21, C22). The implicit solver's
+/// kept pairs (one a spring), which it need not add to its own blocks first.
+struct FinestPairs
+{
+  int count = 0;
+  const std::array<int, 2>* ends = nullptr;
+  const std::array<int, 2>* blocks = nullptr;
+  const std::array<double, 6>* c = nullptr;
+};
+
 /// Smoothed-aggregation algebraic multigrid (Vaněk, Mandel & Brezina 1996) as the conjugate
 /// gradient's preconditioner for the implicit system of a body of particles: one symmetric V-cycle
 /// approximates A⁻¹ r. Each level lumps strongly coupled neighbouring nodes into aggregates (a
@@ -57,6 +69,10 @@ public:
   /// pinned rows and columns are filtered out. False when the coarsest matrix cannot be factored
   /// (A not positive definite or not finite): apply() must not be called then.
   bool setup(const std::vector<Eigen::Matrix3d>& blocks, const Eigen::Matrix3Xd& x, const std::vector<char>& pinned);
+  /// The same for the matrix whose blocks are `blocks` plus `pairs` (FinestPairs), summed as the
+  /// solver would sum them in its blocks, in the same order: the same bits.
+  bool setup(const std::vector<Eigen::Matrix3d>& blocks, const Eigen::Matrix3Xd& x, const std::vector<char>& pinned,
+             const FinestPairs& pairs);
   /// Threads to share the passes over nodes with (null: the calling thread alone); the bits do not
   /// depend on them.
   void setWorkers(WorkerPool* workers) { workers_ = workers; }
@@ -206,8 +222,9 @@ private:
   // x = V-cycle on `level`'s rhs.
   void cycle(int level);
   bool factorCoarsest();
-  // The finest level's matrix from the solver's blocks, pinned rows and columns filtered.
-  void copyFinest(const std::vector<Eigen::Matrix3d>& blocks, const std::vector<char>& pinned);
+  // The finest level's matrix from the solver's blocks and pairs, pinned rows and columns filtered.
+  void copyFinest(const std::vector<Eigen::Matrix3d>& blocks, const std::vector<char>& pinned,
+                  const FinestPairs& pairs);
 
   std::vector<Level> levels_;
   bool planned_ = false;      // the levels below the finest are laid out (at the first setup())
