@@ -328,9 +328,7 @@ TEST(SmoothedAggregation, PairsBesideTheBlocksGiveTheSameHierarchyAsPairsInThem)
   std::vector<Eigen::Matrix3d> pairs_added = diagonal_only;
   for (std::size_t k = 0; k < cs.size(); ++k)
   {
-    const std::array<double, 6>& c = cs[k];
-    Eigen::Matrix3d symmetric;
-    symmetric << c[0], c[1], c[2], c[1], c[3], c[4], c[2], c[4], c[5];
+    const Eigen::Matrix3d symmetric = symmetricBlock(cs[k]);
     pairs_added[blocks[k][0]] += symmetric;
     pairs_added[blocks[k][1]] += symmetric;
   }

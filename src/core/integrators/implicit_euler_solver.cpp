@@ -114,13 +114,6 @@ std::atomic<bool>& useAvx2Flag()
   return use;
 }
 
-// A kept pair's C as a full block.
-Eigen::Matrix3d pairBlock(const std::array<double, 6>& c)
-{
-  Eigen::Matrix3d block;
-  block << c[0], c[1], c[2], c[1], c[3], c[4], c[2], c[4], c[5];
-  return block;
-}
 }  // namespace
 
 bool ImplicitEulerSolver::useAvx2()
@@ -270,7 +263,7 @@ void ImplicitEulerSolver::movePairsIntoBlocks()
   if (pairs_in_blocks_) return;
   for (int k = 0; k < kept_pairs_; ++k)
   {
-    const Eigen::Matrix3d c = pairBlock(pair_c_[k]);
+    const Eigen::Matrix3d c = symmetricBlock(pair_c_[k]);
     blocks_[pair_blocks_[k][0]] += c;
     blocks_[pair_blocks_[k][1]] += c;
   }
@@ -805,8 +798,8 @@ void ImplicitEulerSolver::multigridConjugateGradient(const std::vector<char>& pi
     pairs = {kept_pairs_, pair_ends_.data(), pair_blocks_.data(), pair_c_.data()};
   else
     movePairsIntoBlocks();
-  multigrid_pinned_ = &pinned;
-  multigrid_.setFinestProduct([this](const double* x, double* y) { multiplyFilteredPairs(x, y); });
+  // Given again every solve: it holds this solver and this solve's pins.
+  multigrid_.setFinestProduct([this, &pinned](const double* x, double* y) { multiplyFilteredPairs(pinned, x, y); });
   multigrid_.useFinestProduct(pair_product);
   if (!multigrid_planned_)
   {
@@ -872,11 +865,10 @@ void ImplicitEulerSolver::multigridConjugateGradient(const std::vector<char>& pi
   report.converged = withinTolerance(norms, rhs_norm, settings) && std::isfinite(norms.euclidean);
 }
 
-void ImplicitEulerSolver::multiplyFilteredPairs(const double* x, double* y)
+void ImplicitEulerSolver::multiplyFilteredPairs(const std::vector<char>& pinned, const double* x, double* y)
 {
   // Through the padded vectors of the pair product (which the multigrid's CG does not use otherwise).
   const int rows = static_cast<int>(diagonal_block_.size());
-  const std::vector<char>& pinned = *multigrid_pinned_;
   shareLoop(workers_, rows, kParticlesPerVectorChunk, [&](int begin, int end) {
     for (int i = begin; i < end; ++i)
       direction_.col(i) = Eigen::Vector3d::Map(x + 3 * i);

@@ -359,9 +359,7 @@ void SmoothedAggregation::copyFinest(const std::vector<Eigen::Matrix3d>& blocks,
   for (int k = 0; k < pairs.count; ++k)
   {
     if (pinned[pairs.ends[k][0]] || pinned[pairs.ends[k][1]]) continue;
-    const std::array<double, 6>& c = pairs.c[k];
-    Eigen::Matrix3d block;
-    block << c[0], c[1], c[2], c[1], c[3], c[4], c[2], c[4], c[5];
+    const Eigen::Matrix3d block = symmetricBlock(pairs.c[k]);
     for (const int b : pairs.blocks[k])
       BlockMap<3, 3>(finest.a.data() + 9 * b) += block;
   }
@@ -790,20 +788,20 @@ void SmoothedAggregation::cycle(int index)
   Level& next = levels_[index + 1];
   auto vCycle = [&](auto block_size) {
     constexpr int B = decltype(block_size)::value;
-    const bool outside = index == 0 && use_finest_product_;
+    // The finest level's residuals through the product from outside when there is one.
+    auto residual = [&] {
+      if (index == 0 && use_finest_product_)
+        finestResidualOutside(level.x, level.residual);
+      else
+        residualOf<B>(level, level.x, level.residual);
+    };
     level.x.setZero();
     smooth<B>(level, level.rhs, level.x);
-    if (outside)
-      finestResidualOutside(level.x, level.residual);
-    else
-      residualOf<B>(level, level.x, level.residual);
+    residual();
     restrictResidual<B>(level, next.rhs);
     cycle(index + 1);
     prolongAdd<B>(level, next.x, level.x);
-    if (outside)
-      finestResidualOutside(level.x, level.residual);
-    else
-      residualOf<B>(level, level.x, level.residual);
+    residual();
     smooth<B>(level, level.residual, level.x);
   };
   if (level.block == 3)

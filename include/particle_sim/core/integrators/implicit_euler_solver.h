@@ -224,10 +224,9 @@ private:
   // for this system first) instead of block Jacobi; block Jacobi's when the hierarchy is not definite.
   void multigridConjugateGradient(const std::vector<char>& pinned, const IntegratorDef& settings, SolverReport& report);
   // y = Ã x for the multigrid (SmoothedAggregation::setFinestProduct()), on 3 x particles numbers,
-  // from the kept pairs: A x with the rows of the particles pinned in this solve (multigrid_pinned_)
-  // zero (x is zero there, so A's pinned columns do not count).
-  void multiplyFilteredPairs(const double* x, double* y);
-  const std::vector<char>* multigrid_pinned_ = nullptr;
+  // from the kept pairs: A x with the rows of the pinned particles zero (x is zero there, so A's
+  // pinned columns do not count).
+  void multiplyFilteredPairs(const std::vector<char>& pinned, const double* x, double* y);
   struct ResidualNorms
   {
     double euclidean;  // |r|

@@ -24,6 +24,14 @@ struct FinestPairs
   const std::array<double, 6>* c = nullptr;
 };
 
+/// The symmetric 3x3 block of a lower triangle (C00, C10, C20, C11, C21, C22): a pair's C.
+inline Eigen::Matrix3d symmetricBlock(const std::array<double, 6>& c)
+{
+  Eigen::Matrix3d block;
+  block << c[0], c[1], c[2], c[1], c[3], c[4], c[2], c[4], c[5];
+  return block;
+}
+
 /// Smoothed-aggregation algebraic multigrid (Vaněk, Mandel & Brezina 1996) as the conjugate
 /// gradient's preconditioner for the implicit system of a body of particles: one symmetric V-cycle
 /// approximates A⁻¹ r. Each level lumps strongly coupled neighbouring nodes into aggregates (a
