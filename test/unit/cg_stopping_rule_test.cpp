@@ -92,11 +92,9 @@ IntegratorDef cgSettings(double relative, double velocity)
 // Δv from ImplicitEulerSolver with `settings` (h = 1, v0 = 0, so that A = M + K and b = rhs), each
 // pair added as four single blocks, or with addPairBlocks() when `as_pairs`; `kept` (if given) gets
 // how many pairs the solver still kept aside after the solve.
-Eigen::Matrix3Xd solveWith(const RandomSystem& system, const IntegratorDef& settings, SolverReport& report,
-                           bool as_pairs = false, int* kept = nullptr)
+Eigen::Matrix3Xd solveOnce(ImplicitEulerSolver& solver, const RandomSystem& system, const IntegratorDef& settings,
+                           SolverReport& report, bool as_pairs = false, int* kept = nullptr)
 {
-  ImplicitEulerSolver solver;
-  solver.setPattern(system.particles, system.pairs);
   solver.begin(1.0, system.mass, system.rhs, nullptr);
   for (std::size_t p = 0; p < system.pairs.size(); ++p)
   {
@@ -121,6 +119,15 @@ Eigen::Matrix3Xd solveWith(const RandomSystem& system, const IntegratorDef& sett
   report = solver.solve(system.pinned, contacts, settings, x, v);
   if (kept) *kept = solver.keptPairs();
   return v;
+}
+
+// solveOnce() with a new solver.
+Eigen::Matrix3Xd solveWith(const RandomSystem& system, const IntegratorDef& settings, SolverReport& report,
+                           bool as_pairs = false, int* kept = nullptr)
+{
+  ImplicitEulerSolver solver;
+  solver.setPattern(system.particles, system.pairs);
+  return solveOnce(solver, system, settings, report, as_pairs, kept);
 }
 
 // The exact Δv: a dense LU of the free rows and columns of A = M + K (+ D_i on each particle's
@@ -168,6 +175,47 @@ double massWeightedRms(const RandomSystem& system, const Eigen::Matrix3Xd& error
   return std::sqrt(weighted / mass);
 }
 }  // namespace
+
+TEST(ImplicitEulerSolver, CgStartsAlongTheChangeBetweenTheLastTwoSolves)
+{
+  // One solver, three solves of the same matrix with right-hand sides b0, b0 + c, b0 + 2c: their
+  // solutions change linearly, so the third starts (Δv_1 + β (Δv_1 − Δv_0), β = 1 at the minimum)
+  // at its own solution and takes no iteration, where the second, which has no such history (its
+  // start is along Δv_0 alone), takes many. Each Δv is the dense solve's. Then a right-hand side
+  // unrelated to the last ones: the start moved along a useless change still ends at the dense
+  // solution.
+  for (const bool as_pairs : {false, true})
+  {
+    RandomSystem system = randomSystem(10, 7u);
+    const Eigen::Matrix3Xd first = system.rhs;
+    const Eigen::Matrix3Xd change = randomSystem(10, 8u).rhs;
+    ImplicitEulerSolver solver;
+    solver.setPattern(system.particles, system.pairs);
+    std::vector<int> iterations;
+    for (int k = 0; k < 3; ++k)
+    {
+      system.rhs = first + k * change;
+      const Eigen::Matrix3Xd exact = solveDense(system);
+      SolverReport report;
+      const Eigen::Matrix3Xd dv = solveOnce(solver, system, cgSettings(k < 2 ? 1e-13 : 1e-8, 0.0), report, as_pairs);
+      ASSERT_TRUE(report.converged) << "solve " << k;
+      EXPECT_LT((dv - exact).norm(), 1e-6 * exact.norm()) << "solve " << k;
+      iterations.push_back(report.iterations);
+    }
+    EXPECT_GT(iterations[1], 10) << "pairs " << as_pairs;
+    EXPECT_EQ(iterations[2], 0) << "pairs " << as_pairs;
+
+    system.rhs = randomSystem(10, 9u).rhs;
+    const Eigen::Matrix3Xd exact = solveDense(system);
+    SolverReport report, fresh;
+    const Eigen::Matrix3Xd dv = solveOnce(solver, system, cgSettings(1e-10, 0.0), report, as_pairs);
+    solveWith(system, cgSettings(1e-10, 0.0), fresh, as_pairs);
+    ASSERT_TRUE(report.converged);
+    EXPECT_LT((dv - exact).norm(), 1e-8 * exact.norm());
+    std::printf("pairs %d: iterations %d, %d, %d; after an unrelated right-hand side %d (a new solver %d)\n", as_pairs,
+                iterations[0], iterations[1], iterations[2], report.iterations, fresh.iterations);
+  }
+}
 
 TEST(CgStoppingRule, VelocityErrorBoundsTheTrueErrorOfAStoppedSolve)
 {

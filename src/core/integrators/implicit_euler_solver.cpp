@@ -18,6 +18,10 @@ double dot(const Eigen::Matrix3Xd& a, const Eigen::Matrix3Xd& b)
   return a.cwiseProduct(b).sum();
 }
 
+// How many times the tolerance CG's start must be from it to be moved along the last solves' change
+// (ImplicitEulerSolver::extrapolateStart()).
+constexpr double kExtrapolateBeyond = 100.0;
+
 // Rows per chunk of a shared product with the block matrix (about ten blocks a row).
 constexpr int kRowsPerChunk = 2048;
 
@@ -182,8 +186,8 @@ void ImplicitEulerSolver::setPattern(int particles, const std::vector<std::pair<
   inverse_mass_.assign(particles, 0.0);
   curvature_chunks_.assign((particles + kRowsPerChunk - 1) / kRowsPerChunk, 0.0);
   residual_chunks_.assign((particles + kParticlesPerVectorChunk - 1) / kParticlesPerVectorChunk, ResidualSums());
-  for (Eigen::Matrix3Xd* m : {&delta_v_, &rhs_, &residual_, &preconditioned_, &held_change_, &original_rhs_,
-                              &multigrid_direction_, &multigrid_product_})
+  for (Eigen::Matrix3Xd* m : {&delta_v_, &start_, &previous_start_, &rhs_, &residual_, &preconditioned_, &held_change_,
+                              &original_rhs_, &multigrid_direction_, &multigrid_product_})
     m->setZero(3, particles);
   multigrid_planned_ = false;
   for (PaddedVectors* v : {&padded_delta_v_, &padded_residual_, &padded_preconditioned_, &direction_, &product_})
@@ -551,6 +555,9 @@ SolverReport ImplicitEulerSolver::solveLinear(const std::vector<char>& pinned, c
 {
   // Directly, when chosen and the factorization succeeds (a singular or non-finite pivot leaves it
   // to CG, from the last step's Δv); then CG, which stops at once when the residual is small enough.
+  // The starts of this solve and the one before, for CG's extrapolated start.
+  previous_start_.swap(start_);
+  start_ = delta_v_;
   SolverReport report;
   if (settings.linear_solver == LinearSolverType::Multigrid)
   {
@@ -665,6 +672,12 @@ void ImplicitEulerSolver::conjugateGradient(const std::vector<char>& pinned, con
   filter(pinned, residual_);
   ResidualNorms norms = residualNorms(residual_, free_mass);
   auto within = [&](const ResidualNorms& n) { return withinTolerance(n, rhs_norm, settings); };
+  // The start moved along the last solves' change only when it is far from the tolerance (a factor
+  // kExtrapolateBeyond): near it, a moved start that passes the rule at once would carry the
+  // last steps' errors into this one (a body at rest would keep a drift of the tolerance's size).
+  const ResidualNorms far{norms.euclidean / kExtrapolateBeyond, norms.velocity / kExtrapolateBeyond};
+  if (!within(far) && max_iterations > 0 && extrapolateStart(pinned, pair_product))
+    norms = residualNorms(residual_, free_mass);
   if (!within(norms) && max_iterations > 0)
   {
     for (int i = 0; i < static_cast<int>(diagonal_block_.size()); ++i)
@@ -781,6 +794,54 @@ void ImplicitEulerSolver::conjugateGradient(const std::vector<char>& pinned, con
   report.relative_residual = rhs_norm > 0.0 ? norms.euclidean / rhs_norm : 0.0;
   report.velocity_error = norms.velocity;
   report.converged = within(norms) && std::isfinite(norms.euclidean);
+}
+
+bool ImplicitEulerSolver::extrapolateStart(const std::vector<char>& pinned, bool pair_product)
+{
+  // d = start_ − previous_start_ (zero on pinned rows) into direction_ and A d into product_, which
+  // CG overwrites next; then dᵀAd and dᵀr in one pass, and Δv += β d, r −= β A d in another. Serial
+  // passes (a few per step), so the sums do not depend on the threads.
+  constexpr int kStride = PaddedVectors::kStride;
+  const int rows = static_cast<int>(diagonal_block_.size());
+  const double* const start = start_.data();
+  const double* const previous = previous_start_.data();
+  double* const direction = direction_.data();
+  bool moved = false;
+  for (int i = 0; i < rows; ++i)
+  {
+    for (int k = 0; k < 3; ++k)
+    {
+      const double change = pinned[i] ? 0.0 : start[3 * i + k] - previous[3 * i + k];
+      direction[kStride * i + k] = change;
+      moved = moved || change != 0.0;
+    }
+  }
+  if (!moved) return false;
+  multiply(direction_, product_, pair_product);
+  const double* const product = product_.data();
+  double* const residual = residual_.data();
+  double curvature = 0.0, along = 0.0;
+  for (int i = 0; i < rows; ++i)
+  {
+    for (int k = 0; k < 3; ++k)
+    {
+      curvature += direction[kStride * i + k] * product[kStride * i + k];
+      along += direction[kStride * i + k] * residual[3 * i + k];
+    }
+  }
+  if (!(curvature > 0.0) || !std::isfinite(along)) return false;
+  const double beta = along / curvature;
+  double* const delta_v = padded_delta_v_.data();
+  for (int i = 0; i < rows; ++i)
+  {
+    if (pinned[i]) continue;
+    for (int k = 0; k < 3; ++k)
+    {
+      delta_v[kStride * i + k] += beta * direction[kStride * i + k];
+      residual[3 * i + k] -= beta * product[kStride * i + k];
+    }
+  }
+  return true;
 }
 
 void ImplicitEulerSolver::multigridConjugateGradient(const std::vector<char>& pinned, const IntegratorDef& settings,

@@ -141,6 +141,8 @@ public:
   void clearWarmStart()
   {
     delta_v_.setZero();
+    start_.setZero();
+    previous_start_.setZero();
     multigrid_.forgetHistory();
   }
   /// Threads to share the conjugate gradient's per-particle loops with (null: none). Its products,
@@ -212,9 +214,17 @@ private:
   // with E_i = A_ii + Σ C its diagonal block without the pairs' part (own_diagonal_).
   void multiplyPairRows(const PaddedVectors& p, PaddedVectors& out, int chunk, int first, int last) const;
   // CG iterations from delta_v_ until the filtered residual is within cg_tolerance |b|, or the
-  // velocity error it bounds within cg_velocity_tolerance, or `max_iterations`.
+  // velocity error it bounds within cg_velocity_tolerance, or `max_iterations`. Unless the start is
+  // already within them, it first moves the start along the change between the last two solves'
+  // starts, by the step that minimises the error's A-norm (extrapolateStart()).
   void conjugateGradient(const std::vector<char>& pinned, const IntegratorDef& settings, int max_iterations,
                          SolverReport& report);
+  // The start Δv + β d with d = start_ − previous_start_ (filtered) and β = dᵀr / dᵀAd, the minimum of
+  // the error's A-norm along d (so never further from the solution in that norm than Δv): when the
+  // motion is smooth, Δv of a step is close to the last one's plus its last change. Updates Δv (the
+  // padded copy) and the residual r = b − A Δv; one product by A. False when d is zero or dᵀAd is not
+  // positive (nothing changed).
+  bool extrapolateStart(const std::vector<char>& pinned, bool pair_product);
   // Flops of one CG iteration (directCostInCgIterations()).
   double cgIterationFlops() const;
   // `auto`'s multigrid solve (solveLinear()): false, with the multigrid rejected for good, when it
@@ -326,6 +336,9 @@ private:
   std::vector<double> curvature_chunks_;
   std::vector<ResidualSums> residual_chunks_;
   Eigen::Matrix3Xd delta_v_, rhs_, residual_, preconditioned_;
+  // The Δv each of the last two linear solves started from (the solution of the solve before it):
+  // their difference is the direction in which conjugateGradient() moves its start first.
+  Eigen::Matrix3Xd start_, previous_start_;
   Eigen::Matrix3Xd multigrid_direction_, multigrid_product_;  // multigridConjugateGradient()'s d and A d
   // CG's iterations: Δv, the residual r, the preconditioned residual z, the direction d and the
   // product A d, padded for the AVX2 passes (PaddedVectors).
