@@ -186,8 +186,8 @@ void ImplicitEulerSolver::setPattern(int particles, const std::vector<std::pair<
   inverse_mass_.assign(particles, 0.0);
   curvature_chunks_.assign((particles + kRowsPerChunk - 1) / kRowsPerChunk, 0.0);
   residual_chunks_.assign((particles + kParticlesPerVectorChunk - 1) / kParticlesPerVectorChunk, ResidualSums());
-  for (Eigen::Matrix3Xd* m : {&delta_v_, &start_, &previous_start_, &rhs_, &residual_, &preconditioned_, &held_change_,
-                              &original_rhs_, &multigrid_direction_, &multigrid_product_})
+  for (Eigen::Matrix3Xd* m : {&delta_v_, &start_, &previous_start_, &older_start_, &rhs_, &residual_, &preconditioned_,
+                              &held_change_, &original_rhs_, &multigrid_direction_, &multigrid_product_})
     m->setZero(3, particles);
   multigrid_planned_ = false;
   for (PaddedVectors* v : {&padded_delta_v_, &padded_residual_, &padded_preconditioned_, &direction_, &product_})
@@ -555,7 +555,8 @@ SolverReport ImplicitEulerSolver::solveLinear(const std::vector<char>& pinned, c
 {
   // Directly, when chosen and the factorization succeeds (a singular or non-finite pivot leaves it
   // to CG, from the last step's Δv); then CG, which stops at once when the residual is small enough.
-  // The starts of this solve and the one before, for CG's extrapolated start.
+  // The starts of this solve and the two before, for CG's extrapolated start.
+  older_start_.swap(previous_start_);
   previous_start_.swap(start_);
   start_ = delta_v_;
   SolverReport report;
@@ -798,20 +799,24 @@ void ImplicitEulerSolver::conjugateGradient(const std::vector<char>& pinned, con
 
 bool ImplicitEulerSolver::extrapolateStart(const std::vector<char>& pinned, bool pair_product)
 {
-  // d = start_ − previous_start_ (zero on pinned rows) into direction_ and A d into product_, which
-  // CG overwrites next; then dᵀAd and dᵀr in one pass, and Δv += β d, r −= β A d in another. Serial
-  // passes (a few per step), so the sums do not depend on the threads.
+  // d = (s1 − s2) + ((s1 − s2) − (s2 − s3)) of the starts s1, s2, s3, latest first: the last change
+  // and the change of the change (zero on pinned rows), into direction_, and A d into product_,
+  // which CG overwrites next; then dᵀAd and dᵀr in one pass, and Δv += β d, r −= β A d in another.
+  // Serial passes (a few per step), so the sums do not depend on the threads.
   constexpr int kStride = PaddedVectors::kStride;
   const int rows = static_cast<int>(diagonal_block_.size());
   const double* const start = start_.data();
   const double* const previous = previous_start_.data();
+  const double* const older = older_start_.data();
   double* const direction = direction_.data();
   bool moved = false;
   for (int i = 0; i < rows; ++i)
   {
     for (int k = 0; k < 3; ++k)
     {
-      const double change = pinned[i] ? 0.0 : start[3 * i + k] - previous[3 * i + k];
+      const double last_change = start[3 * i + k] - previous[3 * i + k];
+      const double change_before = previous[3 * i + k] - older[3 * i + k];
+      const double change = pinned[i] ? 0.0 : last_change + (last_change - change_before);
       direction[kStride * i + k] = change;
       moved = moved || change != 0.0;
     }

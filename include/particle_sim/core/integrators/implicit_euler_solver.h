@@ -143,6 +143,7 @@ public:
     delta_v_.setZero();
     start_.setZero();
     previous_start_.setZero();
+    older_start_.setZero();
     multigrid_.forgetHistory();
   }
   /// Threads to share the conjugate gradient's per-particle loops with (null: none). Its products,
@@ -214,16 +215,16 @@ private:
   // with E_i = A_ii + Σ C its diagonal block without the pairs' part (own_diagonal_).
   void multiplyPairRows(const PaddedVectors& p, PaddedVectors& out, int chunk, int first, int last) const;
   // CG iterations from delta_v_ until the filtered residual is within cg_tolerance |b|, or the
-  // velocity error it bounds within cg_velocity_tolerance, or `max_iterations`. Unless the start is
-  // already within them, it first moves the start along the change between the last two solves'
-  // starts, by the step that minimises the error's A-norm (extrapolateStart()).
+  // velocity error it bounds within cg_velocity_tolerance, or `max_iterations`. When the start is
+  // far from them, it first moves the start along the last solves' change, by the step that
+  // minimises the error's A-norm (extrapolateStart()).
   void conjugateGradient(const std::vector<char>& pinned, const IntegratorDef& settings, int max_iterations,
                          SolverReport& report);
-  // The start Δv + β d with d = start_ − previous_start_ (filtered) and β = dᵀr / dᵀAd, the minimum of
-  // the error's A-norm along d (so never further from the solution in that norm than Δv): when the
-  // motion is smooth, Δv of a step is close to the last one's plus its last change. Updates Δv (the
-  // padded copy) and the residual r = b − A Δv; one product by A. False when d is zero or dᵀAd is not
-  // positive (nothing changed).
+  // The start Δv + β d, with d the change from the last start that a quadratic through the last three
+  // starts gives (Δv_n ≈ 3 Δv_{n−1} − 3 Δv_{n−2} + Δv_{n−3}, so d = 2 start_ − 3 previous_start_ +
+  // older_start_, filtered) and β = dᵀr / dᵀAd, the minimum of the error's A-norm along d (so never
+  // further from the solution in that norm than Δv). Updates Δv (the padded copy) and the residual
+  // r = b − A Δv; one product by A. False when d is zero or dᵀAd is not positive (nothing changed).
   bool extrapolateStart(const std::vector<char>& pinned, bool pair_product);
   // Flops of one CG iteration (directCostInCgIterations()).
   double cgIterationFlops() const;
@@ -336,9 +337,9 @@ private:
   std::vector<double> curvature_chunks_;
   std::vector<ResidualSums> residual_chunks_;
   Eigen::Matrix3Xd delta_v_, rhs_, residual_, preconditioned_;
-  // The Δv each of the last two linear solves started from (the solution of the solve before it):
-  // their difference is the direction in which conjugateGradient() moves its start first.
-  Eigen::Matrix3Xd start_, previous_start_;
+  // The Δv each of the last three linear solves started from (the solution of the solve before it),
+  // the latest first: conjugateGradient() moves its start along their extrapolation first.
+  Eigen::Matrix3Xd start_, previous_start_, older_start_;
   Eigen::Matrix3Xd multigrid_direction_, multigrid_product_;  // multigridConjugateGradient()'s d and A d
   // CG's iterations: Δv, the residual r, the preconditioned residual z, the direction d and the
   // product A d, padded for the AVX2 passes (PaddedVectors).
