@@ -23,6 +23,7 @@ Cases:
 import argparse
 import csv
 import os
+import random
 import shutil
 import socket
 import subprocess
@@ -72,9 +73,18 @@ CASES = [
 
 
 def free_port():
-    with socket.socket() as s:
-        s.bind(('127.0.0.1', 0))
-        return s.getsockname()[1]
+    # A port nobody listens on now, below the kernel's ephemeral range, so that no outgoing
+    # connection is given it before the master binds it.
+    with open('/proc/sys/net/ipv4/ip_local_port_range') as f:
+        low = int(f.read().split()[0])
+    while True:
+        port = random.randrange(10000, low)
+        with socket.socket() as s:
+            try:
+                s.bind(('127.0.0.1', port))
+            except OSError:
+                continue
+        return port
 
 
 def wait_for_master(uri, seconds=30.0):

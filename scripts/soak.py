@@ -76,11 +76,18 @@ EXPECTED_REFUSALS = ()
 
 
 def free_port():
-    s = socket.socket()
-    s.bind(('127.0.0.1', 0))
-    port = s.getsockname()[1]
-    s.close()
-    return port
+    # A port nobody listens on now, below the kernel's ephemeral range, so that no outgoing
+    # connection is given it before the master binds it.
+    with open('/proc/sys/net/ipv4/ip_local_port_range') as f:
+        low = int(f.read().split()[0])
+    while True:
+        port = random.randrange(10000, low)
+        with socket.socket() as s:
+            try:
+                s.bind(('127.0.0.1', port))
+            except OSError:
+                continue
+        return port
 
 
 def timed_call(proxy, service, results, *args, **kwargs):

@@ -19,7 +19,9 @@
 #                            is set (scripts/test --sanitize preloads the sanitizer runtime there: the
 #                            manager itself is not instrumented); rosrun execs it, so $background_pid
 #                            is the manager's pid
-#   free_port                prints a TCP port nobody listens on now
+#   free_port                prints a TCP port nobody listens on now, below the kernel's ephemeral
+#                            range (ip_local_port_range), so that no outgoing connection is given it
+#                            before the server that asked binds it
 #   wait_for_service NAME [SECONDS]   until the master lists service NAME (default 30 s); 1 if not
 #   wait_for_log SECONDS FILE REGEX   until FILE matches the extended REGEX; 1 if not
 #   contains TEXT REGEX      true if a line of TEXT matches the extended REGEX
@@ -66,7 +68,19 @@ use_devel_space() {
 }
 
 free_port() {
-  /usr/bin/python3 -c 'import socket; s = socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])'
+  /usr/bin/python3 - <<'PYTHON'
+import random, socket
+low = int(open('/proc/sys/net/ipv4/ip_local_port_range').read().split()[0])
+for _ in range(1000):
+    port = random.randrange(10000, low)
+    with socket.socket() as s:
+        try:
+            s.bind(('127.0.0.1', port))
+        except OSError:
+            continue
+    print(port)
+    break
+PYTHON
 }
 
 background() {
