@@ -159,6 +159,8 @@ void ImplicitEulerSolver::setPattern(int particles, const std::vector<std::pair<
     row_start_[i + 1] = static_cast<int>(block_row_.size());
   }
   blocks_.assign(block_row_.size(), Eigen::Matrix3d::Zero());
+  diagonal_.assign(particles, Eigen::Matrix3d::Zero());
+  diagonal_in_blocks_ = true;
   off_diagonal_zero_ = true;
   // Room for a kept pair per coupled pair, and the pair chunks of the coupled pairs, which are the
   // kept pairs of a body of springs alone (its springs in order), so that no step allocates. A body
@@ -234,10 +236,13 @@ void ImplicitEulerSolver::begin(double h, const Eigen::VectorXd& mass, const Eig
   }
   // A = M on the diagonal; and 1/m for the velocity error's Σ |r_i|² / m_i, a product in CG's
   // iterations instead of a division (0 for a massless particle, which only a pinned one can be).
+  // A body whose elements add blocks of their own writes its diagonal in blocks_ at once.
+  diagonal_in_blocks_ = adds_blocks_;
   for (int i = 0; i < static_cast<int>(diagonal_block_.size()); ++i)
   {
-    blocks_[diagonal_block_[i]] = mass[i] * Eigen::Matrix3d::Identity();
-    own_diagonal_[i] = blocks_[diagonal_block_[i]];
+    Eigen::Matrix3d& diagonal = diagonal_in_blocks_ ? blocks_[diagonal_block_[i]] : diagonal_[i];
+    diagonal = mass[i] * Eigen::Matrix3d::Identity();
+    own_diagonal_[i] = diagonal;
     own_scale_[i] = mass[i];
     inverse_mass_[i] = mass[i] > 0.0 ? 1.0 / mass[i] : 0.0;
   }
@@ -260,6 +265,14 @@ void ImplicitEulerSolver::growPairs()
   pair_ends_.resize(size, {-1, -1});
   pair_blocks_.resize(size);
   pair_c_.resize(size);
+}
+
+void ImplicitEulerSolver::moveDiagonalIntoBlocks()
+{
+  if (diagonal_in_blocks_) return;
+  for (int i = 0; i < static_cast<int>(diagonal_block_.size()); ++i)
+    blocks_[diagonal_block_[i]] = diagonal_[i];
+  diagonal_in_blocks_ = true;
 }
 
 void ImplicitEulerSolver::movePairsIntoBlocks()
@@ -517,7 +530,11 @@ SolverReport ImplicitEulerSolver::solve(const std::vector<char>& pinned, std::ve
   positions_ = &x;
   for (RestingContact& contact : contacts)
     contact.let_go = contact.slipping = false;
-  if (!contacts.empty()) movePairsIntoBlocks();  // holding contacts works on the rows of A
+  if (!contacts.empty())  // holding contacts works on the rows of A
+  {
+    movePairsIntoBlocks();
+    moveDiagonalIntoBlocks();
+  }
   bool holding = holdContacts(pinned, contacts, v, true);
   SolverReport report = solveLinear(pinned, settings);
   int solves = 1;
@@ -644,6 +661,7 @@ bool ImplicitEulerSolver::autoMultigrid(const std::vector<char>& pinned, const I
 bool ImplicitEulerSolver::solveDirectly(const std::vector<char>& pinned)
 {
   movePairsIntoBlocks();
+  moveDiagonalIntoBlocks();
   if (!direct_.factorize(blocks_, pinned)) return false;
   residual_ = rhs_;
   filter(pinned, residual_);
@@ -660,6 +678,7 @@ void ImplicitEulerSolver::conjugateGradient(const std::vector<char>& pinned, con
   // cg_velocity_tolerance (residualNorms), or at the cap.
   // The product by the kept pairs when there are any to use (see addPairBlocks()), else by the blocks.
   const bool pair_product = !pairs_in_blocks_ && preparePairProduct();
+  if (!pair_product) moveDiagonalIntoBlocks();  // the product by the blocks reads A whole
   filter(pinned, delta_v_);
   residual_ = rhs_;
   filter(pinned, residual_);
@@ -682,7 +701,7 @@ void ImplicitEulerSolver::conjugateGradient(const std::vector<char>& pinned, con
   if (!within(norms) && max_iterations > 0)
   {
     for (int i = 0; i < static_cast<int>(diagonal_block_.size()); ++i)
-      inverse_diagonal_[i] = blocks_[diagonal_block_[i]].inverse();
+      inverse_diagonal_[i] = diagonalBlock(i).inverse();
     precondition(residual_, preconditioned_);
     filter(pinned, preconditioned_);
     copyPadded(preconditioned_, direction_);
@@ -864,6 +883,7 @@ void ImplicitEulerSolver::multigridConjugateGradient(const std::vector<char>& pi
     pairs = {kept_pairs_, pair_ends_.data(), pair_blocks_.data(), pair_c_.data()};
   else
     movePairsIntoBlocks();
+  moveDiagonalIntoBlocks();  // the hierarchy reads the diagonal blocks in blocks_
   // Given again every solve: it holds this solver and this solve's pins.
   multigrid_.setFinestProduct([this, &pinned](const double* x, double* y) { multiplyFilteredPairs(pinned, x, y); });
   multigrid_.useFinestProduct(pair_product);

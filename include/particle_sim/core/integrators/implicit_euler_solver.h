@@ -59,6 +59,7 @@ public:
   void addBlock(int block, const Eigen::Matrix3d& dfdx, const Eigen::Matrix3d& dfdv)
   {
     if (!pairs_in_blocks_) movePairsIntoBlocks();
+    moveDiagonalIntoBlocks();
     adds_blocks_ = true;
     addToBlock(block, dfdx, dfdv);
   }
@@ -66,7 +67,13 @@ public:
   /// without the pairs' part, for the pair product).
   void addToDiagonal(int i, const Eigen::Matrix3d& dfdx, const Eigen::Matrix3d& dfdv)
   {
-    addToBlock(diagonal_block_[i], dfdx, dfdv);
+    if (diagonal_in_blocks_)
+      addToBlock(diagonal_block_[i], dfdx, dfdv);
+    else
+    {
+      diagonal_[i].noalias() -= h_ * dfdv + h_ * h_ * dfdx;
+      if (v0_) rhs_.col(i).noalias() += h_ * h_ * (dfdx * v0_->col(i));
+    }
     Eigen::Matrix3d& own = own_diagonal_[i];
     own.noalias() -= h_ * dfdv + h_ * h_ * dfdx;
     // Still a multiple of the identity (a global damping's term is): the product keeps its number.
@@ -174,8 +181,16 @@ private:
   // (addPairBlocks()).
   [[gnu::always_inline]] void addPairC(const std::array<int, 4>& blocks, const Eigen::Matrix3d& c)
   {
-    blocks_[blocks[0]] -= c;
-    blocks_[blocks[3]] -= c;
+    if (diagonal_in_blocks_)
+    {
+      blocks_[blocks[0]] -= c;
+      blocks_[blocks[3]] -= c;
+    }
+    else
+    {
+      diagonal_[block_row_[blocks[0]]] -= c;
+      diagonal_[block_row_[blocks[3]]] -= c;
+    }
     if (pairs_in_blocks_)
     {
       blocks_[blocks[1]] += c;
@@ -197,6 +212,16 @@ private:
     pair_ends_[k] = {i, j};
     pair_blocks_[k] = {blocks[1], blocks[2]};
     pair_c_[k] = {c(0, 0), c(1, 0), c(2, 0), c(1, 1), c(2, 1), c(2, 2)};
+  }
+  // Writes the diagonal blocks A_ii from diagonal_ into their places in blocks_, once a step, for
+  // what reads A whole (the direct solver, the multigrid's setup, resting contacts, the product by
+  // the blocks, elements that add blocks of their own); later terms then go to blocks_ (the same
+  // sums in the same order: the same bits).
+  void moveDiagonalIntoBlocks();
+  // A_ii, wherever it is this step.
+  const Eigen::Matrix3d& diagonalBlock(int i) const
+  {
+    return diagonal_in_blocks_ ? blocks_[diagonal_block_[i]] : diagonal_[i];
   }
   // Indexes the first `pairs` pairs of pair_ends_ by chunks of `rows` rows (pair_chunks_).
   void indexPairs(int pairs, int rows);
@@ -281,6 +306,11 @@ private:
   std::vector<int> row_start_, block_row_, block_column_, diagonal_block_;
   std::vector<int> transpose_block_;  // the index of block (j, i) for block (i, j)
   std::vector<Eigen::Matrix3d> blocks_;
+  // The diagonal blocks A_ii, one a particle in particle order, while diagonal_in_blocks_ is false
+  // (from begin() on): the springs' assembly adds two of them a spring and CG's preconditioner reads
+  // them all, and in blocks_ they lie one a row of the pattern, a few hundred bytes apart.
+  std::vector<Eigen::Matrix3d> diagonal_;
+  bool diagonal_in_blocks_ = true;
   // The pairs of addPairBlocks() (struct of arrays, kept_pairs_ of them in this step): their
   // particles (i, j), their off-diagonal blocks (i, j) and (j, i), and C's lower triangle by columns
   // (C00, C10, C20, C11, C21, C22).
