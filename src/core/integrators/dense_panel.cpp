@@ -6,6 +6,7 @@
 #include <immintrin.h>
 #endif
 #include <algorithm>
+#include <cmath>
 
 namespace particle_sim
 {
@@ -20,12 +21,13 @@ constexpr int kTileColumns = 4;
 // The longest sums whose strip of L is packed (on the stack: 64 KiB).
 constexpr int kMaxPacked = 2048;
 
-// One entry: its products summed from zero in the order of p, then subtracted.
+// One entry: its products summed from zero in the order of p, each product added to the sum with
+// one rounding (a fused multiply-add, as the AVX2 tiles do), then subtracted.
 inline void subtractEntry(int k, const double* t, int ldt, const double* l, int ldl, double& c)
 {
   double sum = 0.0;
   for (int p = 0; p < k; ++p)
-    sum += t[static_cast<long>(p) * ldt] * l[static_cast<long>(p) * ldl];
+    sum = std::fma(t[static_cast<long>(p) * ldt], l[static_cast<long>(p) * ldl], sum);
   c -= sum;
 }
 
@@ -39,42 +41,45 @@ void subtractTileScalar(int rows, int columns, int k, const double* t, int ldt, 
 }
 
 #if defined(__x86_64__)
-// An 8 × 4 tile in eight 4-lane sums, named so that they stay in registers: at each p, T's eight
-// rows in two registers times each of L's four numbers, broadcast; each lane is one entry's sum in
-// the scalar order. Only C's first `columns` columns are written (L's others are padding).
-__attribute__((target("avx2"))) void subtractTileAvx2(int k, const double* t, int ldt, const double* l, int ldl,
-                                                      double* c, int ldc, int columns)
+// The sums of an 8 × 4 tile, T's rows t .. t + 7 against the four columns of a packed strip of L
+// (four numbers a p): at each p, T's eight rows in two registers times each of L's four numbers,
+// broadcast, fused into eight 4-lane sums, named so that they stay in registers; each lane is one
+// entry's sum in the scalar order. sums[q] holds column q's eight rows. Only the tiles take FMA: the
+// passes further down are built for AVX2 alone, so that the compiler cannot fuse their multiplies
+// and adds, which their scalar forms round twice.
+__attribute__((target("avx2,fma"))) void tileSumsAvx2(int k, const double* t, int ldt, const double* packed,
+                                                      double (*sums)[kTileRows])
 {
   __m256d u0 = _mm256_setzero_pd(), u1 = u0, u2 = u0, u3 = u0, w0 = u0, w1 = u0, w2 = u0, w3 = u0;
   for (int p = 0; p < k; ++p)
   {
     const double* const tp = t + static_cast<long>(p) * ldt;
-    const double* const lp = l + static_cast<long>(p) * ldl;
+    const double* const lp = packed + static_cast<long>(p) * kTileColumns;
     const __m256d upper = _mm256_loadu_pd(tp), lower = _mm256_loadu_pd(tp + 4);
     const __m256d l0 = _mm256_broadcast_sd(lp), l1 = _mm256_broadcast_sd(lp + 1);
     const __m256d l2 = _mm256_broadcast_sd(lp + 2), l3 = _mm256_broadcast_sd(lp + 3);
-    u0 = _mm256_add_pd(u0, _mm256_mul_pd(upper, l0));
-    w0 = _mm256_add_pd(w0, _mm256_mul_pd(lower, l0));
-    u1 = _mm256_add_pd(u1, _mm256_mul_pd(upper, l1));
-    w1 = _mm256_add_pd(w1, _mm256_mul_pd(lower, l1));
-    u2 = _mm256_add_pd(u2, _mm256_mul_pd(upper, l2));
-    w2 = _mm256_add_pd(w2, _mm256_mul_pd(lower, l2));
-    u3 = _mm256_add_pd(u3, _mm256_mul_pd(upper, l3));
-    w3 = _mm256_add_pd(w3, _mm256_mul_pd(lower, l3));
+    u0 = _mm256_fmadd_pd(upper, l0, u0);
+    w0 = _mm256_fmadd_pd(lower, l0, w0);
+    u1 = _mm256_fmadd_pd(upper, l1, u1);
+    w1 = _mm256_fmadd_pd(lower, l1, w1);
+    u2 = _mm256_fmadd_pd(upper, l2, u2);
+    w2 = _mm256_fmadd_pd(lower, l2, w2);
+    u3 = _mm256_fmadd_pd(upper, l3, u3);
+    w3 = _mm256_fmadd_pd(lower, l3, w3);
   }
-  const __m256d upper_sums[kTileColumns] = {u0, u1, u2, u3}, lower_sums[kTileColumns] = {w0, w1, w2, w3};
-  for (int j = 0; j < columns; ++j)
-  {
-    double* const cj = c + static_cast<long>(j) * ldc;
-    _mm256_storeu_pd(cj, _mm256_sub_pd(_mm256_loadu_pd(cj), upper_sums[j]));
-    _mm256_storeu_pd(cj + 4, _mm256_sub_pd(_mm256_loadu_pd(cj + 4), lower_sums[j]));
-  }
+  _mm256_store_pd(sums[0], u0);
+  _mm256_store_pd(sums[0] + 4, w0);
+  _mm256_store_pd(sums[1], u1);
+  _mm256_store_pd(sums[1] + 4, w1);
+  _mm256_store_pd(sums[2], u2);
+  _mm256_store_pd(sums[2] + 4, w2);
+  _mm256_store_pd(sums[3], u3);
+  _mm256_store_pd(sums[3] + 4, w3);
 }
 
-// A tile of up to 4 rows (`rows`: the lanes past them are neither read nor written) × 4 columns, of
-// which the first `columns` are written.
-__attribute__((target("avx2"))) void subtractTile4Avx2(int k, const double* t, int ldt, const double* l, int ldl,
-                                                       double* c, int ldc, int rows, int columns)
+// The same for a tile of up to four rows (`rows`; T is not read past them): sums[q][0 .. 3].
+__attribute__((target("avx2,fma"))) void tileSums4Avx2(int k, const double* t, int ldt, const double* packed, int rows,
+                                                       double (*sums)[kTileRows])
 {
   const __m256i lanes = _mm256_setr_epi64x(0, 1, 2, 3);
   const __m256i mask = _mm256_cmpgt_epi64(_mm256_set1_epi64x(rows), lanes);  // lane < rows
@@ -82,39 +87,62 @@ __attribute__((target("avx2"))) void subtractTile4Avx2(int k, const double* t, i
   for (int p = 0; p < k; ++p)
   {
     const __m256d column = _mm256_maskload_pd(t + static_cast<long>(p) * ldt, mask);
-    const double* const lp = l + static_cast<long>(p) * ldl;
-    u0 = _mm256_add_pd(u0, _mm256_mul_pd(column, _mm256_broadcast_sd(lp)));
-    u1 = _mm256_add_pd(u1, _mm256_mul_pd(column, _mm256_broadcast_sd(lp + 1)));
-    u2 = _mm256_add_pd(u2, _mm256_mul_pd(column, _mm256_broadcast_sd(lp + 2)));
-    u3 = _mm256_add_pd(u3, _mm256_mul_pd(column, _mm256_broadcast_sd(lp + 3)));
+    const double* const lp = packed + static_cast<long>(p) * kTileColumns;
+    u0 = _mm256_fmadd_pd(column, _mm256_broadcast_sd(lp), u0);
+    u1 = _mm256_fmadd_pd(column, _mm256_broadcast_sd(lp + 1), u1);
+    u2 = _mm256_fmadd_pd(column, _mm256_broadcast_sd(lp + 2), u2);
+    u3 = _mm256_fmadd_pd(column, _mm256_broadcast_sd(lp + 3), u3);
   }
-  const __m256d sums[kTileColumns] = {u0, u1, u2, u3};
-  for (int j = 0; j < columns; ++j)
-  {
-    double* const cj = c + static_cast<long>(j) * ldc;
-    _mm256_maskstore_pd(cj, mask, _mm256_sub_pd(_mm256_maskload_pd(cj, mask), sums[j]));
-  }
+  _mm256_store_pd(sums[0], u0);
+  _mm256_store_pd(sums[1], u1);
+  _mm256_store_pd(sums[2], u2);
+  _mm256_store_pd(sums[3], u3);
 }
 
-// The strips of subtractLowerProducts() in AVX2 tiles: each strip's four rows of L packed side by
-// side, p after p (zero past the last column), then its tiles of eight rows, one of four, and the
-// last rows in a masked one.
-__attribute__((target("avx2"))) void subtractLowerProductsAvx2(int rows, int columns, int k, const double* t, int ldt,
-                                                               const double* l, int ldl, double* c, int ldc)
+// A strip of L's four rows j .. j + 3 (the first `strip_columns` of them; zero past them) packed
+// side by side, p after p.
+void packStrip(int k, const double* l, int ldl, int j, int strip_columns, double* packed)
+{
+  for (int p = 0; p < k; ++p)
+    for (int q = 0; q < kTileColumns; ++q)
+      packed[kTileColumns * p + q] = q < strip_columns ? l[j + q + static_cast<long>(p) * ldl] : 0.0;
+}
+
+// The strips of subtractLowerProducts() in AVX2 tiles: each strip of L packed, then its tiles of
+// eight rows from the strip's diagonal down and the last rows in tiles of up to four, each tile's
+// sums subtracted from C's first `strip_columns` columns.
+__attribute__((target("avx2,fma"))) void subtractLowerProductsAvx2(int rows, int columns, int k, const double* t,
+                                                                   int ldt, const double* l, int ldl, double* c,
+                                                                   int ldc)
 {
   alignas(32) double packed[kTileColumns * kMaxPacked];
+  alignas(32) double sums[kTileColumns][kTileRows];
   for (int j = 0; j < columns; j += kTileColumns)
   {
     const int strip_columns = std::min(kTileColumns, columns - j);
-    for (int p = 0; p < k; ++p)
-      for (int q = 0; q < kTileColumns; ++q)
-        packed[kTileColumns * p + q] = q < strip_columns ? l[j + q + static_cast<long>(p) * ldl] : 0.0;
+    packStrip(k, l, ldl, j, strip_columns, packed);
     int i = j;
     for (; i + kTileRows <= rows; i += kTileRows)
-      subtractTileAvx2(k, t + i, ldt, packed, kTileColumns, c + i + static_cast<long>(j) * ldc, ldc, strip_columns);
-    for (; i < rows; i += kTileRows / 2)
-      subtractTile4Avx2(k, t + i, ldt, packed, kTileColumns, c + i + static_cast<long>(j) * ldc, ldc,
-                        std::min(kTileRows / 2, rows - i), strip_columns);
+    {
+      tileSumsAvx2(k, t + i, ldt, packed, sums);
+      for (int q = 0; q < strip_columns; ++q)
+      {
+        double* const cq = c + i + static_cast<long>(j + q) * ldc;
+        _mm256_storeu_pd(cq, _mm256_sub_pd(_mm256_loadu_pd(cq), _mm256_load_pd(sums[q])));
+        _mm256_storeu_pd(cq + 4, _mm256_sub_pd(_mm256_loadu_pd(cq + 4), _mm256_load_pd(sums[q] + 4)));
+      }
+    }
+    for (; i < rows; i += 4)
+    {
+      const int tile_rows = std::min(4, rows - i);
+      tileSums4Avx2(k, t + i, ldt, packed, tile_rows, sums);
+      for (int q = 0; q < strip_columns; ++q)
+      {
+        double* const cq = c + i + static_cast<long>(j + q) * ldc;
+        for (int r = 0; r < tile_rows; ++r)
+          cq[r] -= sums[q][r];
+      }
+    }
   }
 }
 
@@ -160,7 +188,12 @@ __attribute__((target("avx2"))) double dotAvx2(int n, const double* a, const dou
 
 bool available()
 {
-  return cg_avx2::available();  // the same processor feature as the CG's passes
+#if defined(__x86_64__)
+  static const bool fma = __builtin_cpu_supports("fma");
+  return fma && cg_avx2::available();  // AVX2 as the CG's passes ask, and FMA
+#else
+  return false;
+#endif
 }
 
 void subtractLowerProducts(bool avx2, int rows, int columns, int k, const double* t, int ldt, const double* l, int ldl,

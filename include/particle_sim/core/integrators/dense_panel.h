@@ -7,12 +7,12 @@ namespace core
 /// The dense kernel of SparseBlockLdlt's supernodes, on column-major panels: C −= T Lᵀ on and below
 /// C's diagonal (C(i, j) for i ≥ j, where row i and column j count from C's corner; some entries
 /// just above the diagonal are made too, and never read). Each entry is its own sum, from zero,
-/// of T(i, p) L(j, p) for p = 0, 1, ..., k − 1 in that order, subtracted from C(i, j) at the end:
-/// the AVX2 tiles (8 rows by 4 columns of C, where the processor has AVX2; without FMA, which would
-/// round a multiply and an add once instead of twice) and the scalar ones give the same bits.
+/// of T(i, p) L(j, p) for p = 0, 1, ..., k − 1 in that order, each product fused into the sum
+/// (one rounding, std::fma), subtracted from C(i, j) at the end: the AVX2 tiles (8 rows by 4
+/// columns of C, with FMA, where the processor has both) and the scalar ones give the same bits.
 namespace dense_panel
 {
-/// Whether this processor runs the AVX2 tiles (x86-64 with AVX2).
+/// Whether this processor runs the AVX2 tiles (x86-64 with AVX2 and FMA).
 bool available();
 
 /// C (rows × columns, leading dimension ldc) −= T (rows × k, ldt) Lᵀ (L: columns × k, ldl), on and
