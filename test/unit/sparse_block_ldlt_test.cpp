@@ -1,6 +1,7 @@
 // The direct solver of the implicit methods (SparseBlockLdlt): its solutions against a dense LU of
 // the same filtered matrix, its fill on a chain (none, in any labelling), its flop estimate against
-// the factor it builds, and the implicit step it gives against the conjugate gradient's.
+// the factor it builds, the implicit step it gives against the conjugate gradient's, and the dense
+// products of its supernodes.
 
 #include "particle_sim/core/integrators/sparse_block_ldlt.h"
 
@@ -16,6 +17,7 @@
 
 #include "particle_sim/core/builders/cloth_grid.h"
 #include "particle_sim/core/builders/rope.h"
+#include "particle_sim/core/integrators/dense_panel.h"
 #include "particle_sim/core/integrators/implicit_euler.h"
 #include "particle_sim/core/spring_network.h"
 
@@ -484,4 +486,63 @@ TEST(SparseBlockLdlt, InlineProductIsTheBitsOfEigensProduct)
     }
   }
   EXPECT_GT(differing_in_another_order, 1000);  // the order matters: the test can see it
+}
+
+// The supernodes' update goes straight into the panels that hold its rows
+// (dense_panel::subtractLowerProductsScattered): every entry on or below the diagonal lands where
+// its row and column offsets say, as C(i, j) − Σ_p T(i, p) L(j, p) (against a sum in long double),
+// nothing else is written, and the AVX2 tiles give the scalar entries' bits. The offsets mix rows
+// that follow each other in C (written four at a time) with gaps, and the sizes are not whole tiles.
+TEST(DensePanel, ScatteredProductsLandWhereTheyBelong)
+{
+  std::mt19937 random(17);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  const int rows = 23, columns = 10, k = 7, ldt = rows + 2, ldl = rows + 1;
+  std::vector<double> t(static_cast<std::size_t>(ldt) * k), l(static_cast<std::size_t>(ldl) * k);
+  for (double& x : t)
+    x = unit(random);
+  for (double& x : l)
+    x = unit(random);
+  // Row offsets in a column of C: runs of consecutive rows with gaps between them; columns 61 apart.
+  std::vector<int> row_offset(rows);
+  std::vector<long> column_offset(columns);
+  int at = 0;
+  for (int i = 0; i < rows; ++i)
+  {
+    row_offset[i] = at;
+    at += (i % 7 == 6 || i % 11 == 3) ? 3 : 1;
+  }
+  for (int j = 0; j < columns; ++j)
+    column_offset[j] = 61L * j + 2;
+  const std::size_t size = 61 * columns + 64;
+  std::vector<double> start(size);
+  for (double& x : start)
+    x = unit(random);
+
+  std::vector<std::vector<double>> results;
+  for (const bool avx2 : {false, true})
+  {
+    std::vector<double> c = start;
+    particle_sim::core::dense_panel::subtractLowerProductsScattered(
+        avx2, rows, columns, k, t.data(), ldt, l.data(), ldl, row_offset.data(), column_offset.data(), c.data());
+    results.push_back(c);
+  }
+  EXPECT_EQ(std::memcmp(results[0].data(), results[1].data(), sizeof(double) * size), 0);
+
+  std::vector<char> written(size, 0);
+  for (int j = 0; j < columns; ++j)
+    for (int i = j; i < rows; ++i)
+    {
+      const long place = column_offset[j] + row_offset[i];
+      written[place] = 1;
+      long double sum = 0.0L;
+      for (int p = 0; p < k; ++p)
+        sum += static_cast<long double>(t[i + p * ldt]) * l[j + p * ldl];
+      EXPECT_NEAR(results[0][place], static_cast<double>(start[place] - sum), 1e-14) << "(" << i << ", " << j << ")";
+    }
+  for (std::size_t e = 0; e < size; ++e)
+  {
+    if (written[e]) continue;
+    EXPECT_EQ(results[0][e], start[e]) << "entry " << e << " is written but holds no product";
+  }
 }

@@ -40,6 +40,18 @@ void subtractTileScalar(int rows, int columns, int k, const double* t, int ldt, 
       subtractEntry(k, t + i, ldt, l + j, ldl, c[i + static_cast<long>(j) * ldc]);
 }
 
+// The scattered form, entry by entry: column j's entries from the diagonal down.
+void subtractScatteredScalar(int rows, int columns, int k, const double* t, int ldt, const double* l, int ldl,
+                             const int* row_offset, const long* column_offset, double* c)
+{
+  for (int j = 0; j < columns; ++j)
+  {
+    double* const cj = c + column_offset[j];
+    for (int i = j; i < rows; ++i)
+      subtractEntry(k, t + i, ldt, l + j, ldl, cj[row_offset[i]]);
+  }
+}
+
 #if defined(__x86_64__)
 // The sums of an 8 × 4 tile, T's rows t .. t + 7 against the four columns of a packed strip of L
 // (four numbers a p): at each p, T's eight rows in two registers times each of L's four numbers,
@@ -146,6 +158,54 @@ __attribute__((target("avx2,fma"))) void subtractLowerProductsAvx2(int rows, int
   }
 }
 
+// subtractLowerProductsScattered() in the same tiles: each entry on or below the diagonal
+// subtracted where it belongs, four at once where four rows lie one after the other in C.
+__attribute__((target("avx2,fma"))) void subtractScatteredAvx2(int rows, int columns, int k, const double* t, int ldt,
+                                                               const double* l, int ldl, const int* row_offset,
+                                                               const long* column_offset, double* c)
+{
+  alignas(32) double packed[kTileColumns * kMaxPacked];
+  alignas(32) double sums[kTileColumns][kTileRows];
+  for (int j = 0; j < columns; j += kTileColumns)
+  {
+    const int strip_columns = std::min(kTileColumns, columns - j);
+    packStrip(k, l, ldl, j, strip_columns, packed);
+    int i = j;
+    for (; i + kTileRows <= rows; i += kTileRows)
+    {
+      tileSumsAvx2(k, t + i, ldt, packed, sums);
+      const int* const at = row_offset + i;
+      for (int q = 0; q < strip_columns; ++q)
+      {
+        double* const cq = c + column_offset[j + q];
+        const int from = std::max(0, j + q - i);  // the rows on or below the diagonal
+        for (int half = 0; half < kTileRows; half += 4)
+        {
+          if (from <= half && at[half + 3] == at[half] + 3)
+          {
+            double* const to = cq + at[half];
+            _mm256_storeu_pd(to, _mm256_sub_pd(_mm256_loadu_pd(to), _mm256_load_pd(sums[q] + half)));
+            continue;
+          }
+          for (int r = std::max(from, half); r < half + 4; ++r)
+            cq[at[r]] -= sums[q][r];
+        }
+      }
+    }
+    for (; i < rows; i += 4)
+    {
+      const int tile_rows = std::min(4, rows - i);
+      tileSums4Avx2(k, t + i, ldt, packed, tile_rows, sums);
+      for (int q = 0; q < strip_columns; ++q)
+      {
+        double* const cq = c + column_offset[j + q];
+        for (int r = std::max(0, j + q - i); r < tile_rows; ++r)
+          cq[row_offset[i + r]] -= sums[q][r];
+      }
+    }
+  }
+}
+
 // The whole fours of subtractScaled() and keepAndScale(): how many entries they did (the callers
 // do the rest, entry by entry, as their scalar form does all of them).
 __attribute__((target("avx2"))) int subtractScaledAvx2(int n, const double* t, double factor, double* column)
@@ -211,6 +271,19 @@ void subtractLowerProducts(bool avx2, int rows, int columns, int k, const double
     if (j < rows)
       subtractTileScalar(rows - j, std::min(kTileColumns, columns - j), k, t + j, ldt, l + j, ldl,
                          c + j + static_cast<long>(j) * ldc, ldc);
+}
+
+void subtractLowerProductsScattered(bool avx2, int rows, int columns, int k, const double* t, int ldt, const double* l,
+                                    int ldl, const int* row_offset, const long* column_offset, double* c)
+{
+#if defined(__x86_64__)
+  if (avx2 && available() && k <= kMaxPacked)
+  {
+    subtractScatteredAvx2(rows, columns, k, t, ldt, l, ldl, row_offset, column_offset, c);
+    return;
+  }
+#endif
+  subtractScatteredScalar(rows, columns, k, t, ldt, l, ldl, row_offset, column_offset, c);
 }
 
 void subtractScaled(bool avx2, int n, const double* t, double factor, double* column)

@@ -310,7 +310,6 @@ void SparseBlockLdlt::analyzeSupernodes(const std::vector<int>& row_start, const
   }
   panels_.assign(panel, 0.0);
   scaled_.assign(largest_panel, 0.0);
-  update_.assign(largest_below * largest_below, 0.0);
   gathered_.assign(largest_below, 0.0);
   scalar_pivot_.assign(3 * static_cast<std::size_t>(n), 1.0);
 
@@ -337,9 +336,11 @@ void SparseBlockLdlt::analyzeSupernodes(const std::vector<int>& row_start, const
     }
   }
 
-  // Each supernode's runs of rows below it by the supernode that holds them as columns.
+  // Each supernode's runs of rows below it by the supernode that holds them as columns, and where
+  // each of the update's rows and columns lies in that supernode's panel.
   runs_.clear();
-  relative_rows_.clear();
+  update_row_offset_.clear();
+  update_column_offset_.clear();
   run_start_.assign(supernodes_.size() + 1, 0);
   for (std::size_t s = 0; s < supernodes_.size(); ++s)
   {
@@ -353,9 +354,22 @@ void SparseBlockLdlt::analyzeSupernodes(const std::vector<int>& row_start, const
       while (a < supernode.below && supernode_of[super_rows_[supernode.rows + a]] == run.target)
         ++a;
       run.end = a;
-      run.relative = static_cast<int>(relative_rows_.size());
+      const Supernode& target = supernodes_[run.target];
+      const long target_m = 3L * (target.width + target.below);
+      run.rows = update_row_offset_.size();
       for (int row = run.begin; row < supernode.below; ++row)
-        relative_rows_.push_back(localRow(run.target, super_rows_[supernode.rows + row]));
+      {
+        const int local_row = 3 * localRow(run.target, super_rows_[supernode.rows + row]);
+        for (int r = 0; r < 3; ++r)
+          update_row_offset_.push_back(local_row + r);
+      }
+      run.columns = update_column_offset_.size();
+      for (int column = run.begin; column < run.end; ++column)
+      {
+        const long local_column = 3L * (super_rows_[supernode.rows + column] - target.first);
+        for (int cc = 0; cc < 3; ++cc)
+          update_column_offset_.push_back(static_cast<long>(target.panel) + (local_column + cc) * target_m);
+      }
       runs_.push_back(run);
     }
   }
@@ -517,33 +531,16 @@ bool SparseBlockLdlt::factorizeSupernodes(const std::vector<Eigen::Matrix3d>& bl
                                   scaled + static_cast<long>(c) * m + c + 1);
       }
     }
-    if (below == 0) continue;
-    // The update of the rows below, −L_R D L_Rᵀ, into the panels that hold them.
-    double* const update = update_.data();
-    std::fill(update, update + static_cast<long>(below) * below, 0.0);
-    dense_panel::subtractLowerProducts(avx2, below, below, width, scaled + width, m, panel + width, m, update, below);
+    // The update of the rows below, −L_R D L_Rᵀ, subtracted run by run where it belongs in the
+    // panels that hold those rows.
     for (int q = run_start_[s]; q < run_start_[s + 1]; ++q)
     {
       const UpdateRun& run = runs_[q];
-      const Supernode& target = supernodes_[run.target];
-      const long target_m = 3L * (target.width + target.below);
-      double* const target_panel = panels_.data() + target.panel;
-      const int* const relative = relative_rows_.data() + run.relative - run.begin;
-      for (int a = run.begin; a < run.end; ++a)
-      {
-        const long local_column = 3L * (super_rows_[supernode.rows + a] - target.first);
-        for (int cc = 0; cc < 3; ++cc)
-        {
-          const double* const from = update + static_cast<long>(3 * a + cc) * below;
-          double* const to = target_panel + (local_column + cc) * target_m;
-          for (int a2 = a; a2 < supernode.below; ++a2)
-          {
-            const long row = 3L * relative[a2];
-            for (int r = 0; r < 3; ++r)
-              to[row + r] += from[3 * a2 + r];
-          }
-        }
-      }
+      const int first_row = 3 * run.begin;
+      dense_panel::subtractLowerProductsScattered(avx2, below - first_row, 3 * (run.end - run.begin), width,
+                                                  scaled + width + first_row, m, panel + width + first_row, m,
+                                                  update_row_offset_.data() + run.rows,
+                                                  update_column_offset_.data() + run.columns, panels_.data());
     }
   }
   return true;

@@ -21,6 +21,13 @@ bool available();
 void subtractLowerProducts(bool avx2, int rows, int columns, int k, const double* t, int ldt, const double* l, int ldl,
                            double* c, int ldc);
 
+/// The same products, each entry (i, j) with i ≥ j subtracted where it belongs instead of into a
+/// dense C: at c[column_offset[j] + row_offset[i]] (entries above the diagonal are not written).
+/// Each entry's sum is the one subtractLowerProducts() makes, so the two give the same bits but
+/// for the sign of an exact zero (x − s here, x + (0 − s) there).
+void subtractLowerProductsScattered(bool avx2, int rows, int columns, int k, const double* t, int ldt, const double* l,
+                                    int ldl, const int* row_offset, const long* column_offset, double* c);
+
 /// column[r] −= t[r] factor for r < n (each entry one multiply and one subtraction, either way).
 void subtractScaled(bool avx2, int n, const double* t, double factor, double* column);
 /// kept[r] = column[r], then column[r] *= factor, for r < n.

@@ -116,16 +116,20 @@ private:
   // ({−1, 0} for the upper triangle).
   std::vector<std::array<long, 2>> block_place_;
   // A supernode's update passes to the supernodes that hold its rows below, one run of consecutive
-  // rows (below's [begin, end)) per target: for every row from begin on, its block row in the
-  // target's panel, at relative_rows_[relative + row − begin].
+  // rows (below's [begin, end)) per target: the update's entries in the run's columns, on and below
+  // the diagonal, are subtracted where they belong in panels_, entry (i, j) of the run's rows and
+  // columns (both counted from its first scalar row, 3 begin) at update_column_offset_[columns +
+  // j] + update_row_offset_[rows + i].
   struct UpdateRun
   {
-    int target = 0, begin = 0, end = 0, relative = 0;
+    int target = 0, begin = 0, end = 0;
+    std::size_t rows = 0, columns = 0;
   };
   std::vector<UpdateRun> runs_;
-  std::vector<int> run_start_, relative_rows_;
+  std::vector<int> run_start_, update_row_offset_;
+  std::vector<long> update_column_offset_;
   std::vector<double> scalar_pivot_;                // D, one number a scalar column
-  std::vector<double> scaled_, update_, gathered_;  // T = L D of a panel, a supernode's update, R's x
+  std::vector<double> scaled_, gathered_;           // T = L D of a panel, R's x
   // analyze()'s rest for the supernodal form (supernodes_ holds each one's columns): the panels,
   // where A's blocks go in them and the update runs.
   void analyzeSupernodes(const std::vector<int>& row_start, const std::vector<int>& block_column,
