@@ -240,7 +240,7 @@ void ImplicitEulerSolver::begin(double h, const Eigen::VectorXd& mass, const Eig
   diagonal_in_blocks_ = adds_blocks_;
   for (int i = 0; i < static_cast<int>(diagonal_block_.size()); ++i)
   {
-    Eigen::Matrix3d& diagonal = diagonal_in_blocks_ ? blocks_[diagonal_block_[i]] : diagonal_[i];
+    Eigen::Matrix3d& diagonal = diagonalBlock(i);
     diagonal = mass[i] * Eigen::Matrix3d::Identity();
     own_diagonal_[i] = diagonal;
     own_scale_[i] = mass[i];

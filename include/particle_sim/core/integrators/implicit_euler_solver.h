@@ -67,13 +67,8 @@ public:
   /// without the pairs' part, for the pair product).
   void addToDiagonal(int i, const Eigen::Matrix3d& dfdx, const Eigen::Matrix3d& dfdv)
   {
-    if (diagonal_in_blocks_)
-      addToBlock(diagonal_block_[i], dfdx, dfdv);
-    else
-    {
-      diagonal_[i].noalias() -= h_ * dfdv + h_ * h_ * dfdx;
-      if (v0_) rhs_.col(i).noalias() += h_ * h_ * (dfdx * v0_->col(i));
-    }
+    diagonalBlock(i).noalias() -= h_ * dfdv + h_ * h_ * dfdx;
+    if (v0_) rhs_.col(i).noalias() += h_ * h_ * (dfdx * v0_->col(i));
     Eigen::Matrix3d& own = own_diagonal_[i];
     own.noalias() -= h_ * dfdv + h_ * h_ * dfdx;
     // Still a multiple of the identity (a global damping's term is): the product keeps its number.
@@ -223,6 +218,7 @@ private:
   {
     return diagonal_in_blocks_ ? blocks_[diagonal_block_[i]] : diagonal_[i];
   }
+  Eigen::Matrix3d& diagonalBlock(int i) { return diagonal_in_blocks_ ? blocks_[diagonal_block_[i]] : diagonal_[i]; }
   // Indexes the first `pairs` pairs of pair_ends_ by chunks of `rows` rows (pair_chunks_).
   void indexPairs(int pairs, int rows);
   // More room for kept pairs (setPattern() makes room for one a coupled pair, so only a body with
