@@ -23,14 +23,14 @@ Cases:
 import argparse
 import csv
 import os
-import random
 import shutil
-import socket
 import subprocess
 import sys
 import tempfile
 import time
 import xmlrpc.client
+
+from free_port import free_port  # scripts/free_port.py, beside this script
 
 RATE = 60.0
 DT = '0.0166666666666666667'
@@ -70,21 +70,6 @@ CASES = [
     ('cloth 128 springs auto', 128, 128 * 128, cloth('springs', 128), 'markers,meshes', []),
     ('cloth 128 baraff_witkin auto', 128, 128 * 128, cloth('baraff_witkin', 128), 'markers,meshes', []),
 ]
-
-
-def free_port():
-    # A port nobody listens on now, below the kernel's ephemeral range, so that no outgoing
-    # connection is given it before the master binds it.
-    with open('/proc/sys/net/ipv4/ip_local_port_range') as f:
-        low = int(f.read().split()[0])
-    while True:
-        port = random.randrange(10000, low)
-        with socket.socket() as s:
-            try:
-                s.bind(('127.0.0.1', port))
-            except OSError:
-                continue
-        return port
 
 
 def wait_for_master(uri, seconds=30.0):

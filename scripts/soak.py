@@ -29,12 +29,13 @@ import multiprocessing as mp
 import os
 import random
 import signal
-import socket
 import statistics
 import subprocess
 import sys
 import time
 import xmlrpc.client
+
+from free_port import free_port  # scripts/free_port.py, beside this script
 
 import rospy
 from dynamic_reconfigure.client import Client as ReconfigureClient
@@ -73,21 +74,6 @@ USER_HZ = os.sysconf('SC_CLK_TCK')
 # Refusals the workload provokes on purpose or by race, and is right to get (none at present: every
 # request of the storm is valid, and each client only removes its own bodies).
 EXPECTED_REFUSALS = ()
-
-
-def free_port():
-    # A port nobody listens on now, below the kernel's ephemeral range, so that no outgoing
-    # connection is given it before the master binds it.
-    with open('/proc/sys/net/ipv4/ip_local_port_range') as f:
-        low = int(f.read().split()[0])
-    while True:
-        port = random.randrange(10000, low)
-        with socket.socket() as s:
-            try:
-                s.bind(('127.0.0.1', port))
-            except OSError:
-                continue
-        return port
 
 
 def timed_call(proxy, service, results, *args, **kwargs):

@@ -68,19 +68,7 @@ use_devel_space() {
 }
 
 free_port() {
-  /usr/bin/python3 - <<'PYTHON'
-import random, socket
-low = int(open('/proc/sys/net/ipv4/ip_local_port_range').read().split()[0])
-for _ in range(1000):
-    port = random.randrange(10000, low)
-    with socket.socket() as s:
-        try:
-            s.bind(('127.0.0.1', port))
-        except OSError:
-            continue
-    print(port)
-    break
-PYTHON
+  /usr/bin/python3 "$_helpers_dir/../../scripts/free_port.py"
 }
 
 background() {

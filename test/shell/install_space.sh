@@ -16,7 +16,7 @@ cmake --build "$PARTICLE_SIM_BUILD/build" --target install -- -j2 >/dev/null
 # outside the source tree.
 cat >"$work/check.bash" <<'CHECK'
 set -euo pipefail
-source "$(dirname "$0")/helpers.bash"
+source "$(dirname "$0")/test/shell/helpers.bash"
 set +u; source "$INSTALL/setup.bash"; set -u
 cd "$WORK"
 [ "$(rospack find particle_sim)" = "$INSTALL/share/particle_sim" ] || fail "rospack find: $(rospack find particle_sim)"
@@ -43,7 +43,11 @@ wait_for_service /particle_sim/pause_physics 30 || fail "the installed node's se
 rosservice call /particle_sim/pause_physics | grep -q "success: True" || fail "pause_physics on the installed node"
 echo "installed node answers"
 CHECK
-cp "$(dirname "${BASH_SOURCE[0]}")/helpers.bash" "$work/"
+# The helpers (and the port picker they run) in their places relative to each other, outside the
+# source tree.
+mkdir -p "$work/test/shell" "$work/scripts"
+cp "$(dirname "${BASH_SOURCE[0]}")/helpers.bash" "$work/test/shell/"
+cp "$(dirname "${BASH_SOURCE[0]}")/../../scripts/free_port.py" "$work/scripts/"
 env -i HOME="$HOME" PATH=/usr/bin:/bin INSTALL="$install" WORK="$work" /bin/bash "$work/check.bash" ||
   fail "a check in the shell with only the install space sourced failed"
 echo "PASS"
