@@ -2,8 +2,7 @@
 """A TCP port for a roscore of our own: one nobody listens on now, below the kernel's ephemeral range
 (ip_local_port_range), so that no outgoing connection is given it before the master binds it.
 
-Imported by node_bench.py and soak.py; run alone (by test/shell/helpers.bash's free_port), it prints
-the port."""
+Run by node_bench.py, soak.py and test/shell/helpers.bash's free_port: it prints the port."""
 
 import random
 import socket

@@ -30,10 +30,14 @@ import tempfile
 import time
 import xmlrpc.client
 
-from free_port import free_port  # scripts/free_port.py, beside this script
-
 RATE = 60.0
 DT = '0.0166666666666666667'
+
+
+def free_port():
+    # A port for our own roscore, from scripts/free_port.py beside this script (helpers.bash runs it too).
+    script = os.path.join(os.path.dirname(os.path.abspath(__file__)), 'free_port.py')
+    return int(subprocess.check_output([sys.executable, script]))
 
 
 def fountains(count, particles):

@@ -35,8 +35,6 @@ import sys
 import time
 import xmlrpc.client
 
-from free_port import free_port  # scripts/free_port.py, beside this script
-
 import rospy
 from dynamic_reconfigure.client import Client as ReconfigureClient
 from geometry_msgs.msg import Point, Vector3
@@ -74,6 +72,12 @@ USER_HZ = os.sysconf('SC_CLK_TCK')
 # Refusals the workload provokes on purpose or by race, and is right to get (none at present: every
 # request of the storm is valid, and each client only removes its own bodies).
 EXPECTED_REFUSALS = ()
+
+
+def free_port():
+    # A port for our own roscore, from scripts/free_port.py beside this script (helpers.bash runs it too).
+    script = os.path.join(os.path.dirname(os.path.abspath(__file__)), 'free_port.py')
+    return int(subprocess.check_output([sys.executable, script]))
 
 
 def timed_call(proxy, service, results, *args, **kwargs):
