@@ -56,9 +56,10 @@ void subtractScatteredScalar(int rows, int columns, int k, const double* t, int 
 // The sums of an 8 × 4 tile, T's rows t .. t + 7 against the four columns of a packed strip of L
 // (four numbers a p): at each p, T's eight rows in two registers times each of L's four numbers,
 // broadcast, fused into eight 4-lane sums, named so that they stay in registers; each lane is one
-// entry's sum in the scalar order. sums[q] holds column q's eight rows. Only the tiles take FMA: the
-// passes further down are built for AVX2 alone, so that the compiler cannot fuse their multiplies
-// and adds, which their scalar forms round twice.
+// entry's sum in the scalar order. sums[q] holds column q's eight rows. Only the tiles and the two
+// functions that drive them (which multiply nothing themselves) are built with FMA: the passes
+// further down are built for AVX2 alone, so that the compiler cannot fuse their multiplies and adds,
+// which their scalar forms round twice.
 __attribute__((target("avx2,fma"))) void tileSumsAvx2(int k, const double* t, int ldt, const double* packed,
                                                       double (*sums)[kTileRows])
 {

@@ -23,8 +23,8 @@ void subtractLowerProducts(bool avx2, int rows, int columns, int k, const double
 
 /// The same products, each entry (i, j) with i ≥ j subtracted where it belongs instead of into a
 /// dense C: at c[column_offset[j] + row_offset[i]] (entries above the diagonal are not written).
-/// Each entry's sum is the one subtractLowerProducts() makes, so the two give the same bits but
-/// for the sign of an exact zero (x − s here, x + (0 − s) there).
+/// Each entry's sum is the one subtractLowerProducts() makes, subtracted the same way: the same
+/// bits.
 void subtractLowerProductsScattered(bool avx2, int rows, int columns, int k, const double* t, int ldt, const double* l,
                                     int ldl, const int* row_offset, const long* column_offset, double* c);
 
