@@ -404,18 +404,10 @@ __attribute__((target("avx2,fma"))) double arithmeticPassFma(long iterations, in
   const auto start = Clock::now();
   for (long i = 0; i < iterations; ++i)
   {
-    x[0] = _mm256_fmadd_pd(x[0], factor, term);
-    x[1] = _mm256_fmadd_pd(x[1], factor, term);
-    x[2] = _mm256_fmadd_pd(x[2], factor, term);
-    x[3] = _mm256_fmadd_pd(x[3], factor, term);
-    x[4] = _mm256_fmadd_pd(x[4], factor, term);
-    x[5] = _mm256_fmadd_pd(x[5], factor, term);
-    x[6] = _mm256_fmadd_pd(x[6], factor, term);
-    x[7] = _mm256_fmadd_pd(x[7], factor, term);
-    x[8] = _mm256_fmadd_pd(x[8], factor, term);
-    x[9] = _mm256_fmadd_pd(x[9], factor, term);
-    x[10] = _mm256_fmadd_pd(x[10], factor, term);
-    x[11] = _mm256_fmadd_pd(x[11], factor, term);
+    // Unrolled whole, so that the twelve chains stay in registers.
+#pragma GCC unroll 12
+    for (int c = 0; c < 12; ++c)
+      x[c] = _mm256_fmadd_pd(x[c], factor, term);
   }
   const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
   __m256d all = x[0];

@@ -489,7 +489,7 @@ TEST(SparseBlockLdlt, InlineProductIsTheBitsOfEigensProduct)
 }
 
 // The supernodes' update goes straight into the panels that hold its rows
-// (dense_panel::subtractLowerProductsScattered): every entry on or below the diagonal lands where
+// (dense_panel::subtractLowerProducts): every entry on or below the diagonal lands where
 // its row and column offsets say, as C(i, j) − Σ_p T(i, p) L(j, p) (against a sum in long double),
 // nothing else is written, and the AVX2 tiles give the scalar entries' bits. The offsets mix rows
 // that follow each other in C (written four at a time) with gaps, and the sizes are not whole tiles.
@@ -523,8 +523,8 @@ TEST(DensePanel, ScatteredProductsLandWhereTheyBelong)
   for (const bool avx2 : {false, true})
   {
     std::vector<double> c = start;
-    particle_sim::core::dense_panel::subtractLowerProductsScattered(
-        avx2, rows, columns, k, t.data(), ldt, l.data(), ldl, row_offset.data(), column_offset.data(), c.data());
+    particle_sim::core::dense_panel::subtractLowerProducts(avx2, rows, columns, k, t.data(), ldt, l.data(), ldl,
+                                                           row_offset.data(), column_offset.data(), c.data());
     results.push_back(c);
   }
   EXPECT_EQ(std::memcmp(results[0].data(), results[1].data(), sizeof(double) * size), 0);

@@ -31,18 +31,9 @@ inline void subtractEntry(int k, const double* t, int ldt, const double* l, int 
   c -= sum;
 }
 
-// A tile of `rows` × `columns` entries, entry by entry.
-void subtractTileScalar(int rows, int columns, int k, const double* t, int ldt, const double* l, int ldl, double* c,
-                        int ldc)
-{
-  for (int j = 0; j < columns; ++j)
-    for (int i = 0; i < rows; ++i)
-      subtractEntry(k, t + i, ldt, l + j, ldl, c[i + static_cast<long>(j) * ldc]);
-}
-
-// The scattered form, entry by entry: column j's entries from the diagonal down.
-void subtractScatteredScalar(int rows, int columns, int k, const double* t, int ldt, const double* l, int ldl,
-                             const int* row_offset, const long* column_offset, double* c)
+// subtractLowerProducts() entry by entry: column j's entries from the diagonal down.
+void subtractLowerProductsScalar(int rows, int columns, int k, const double* t, int ldt, const double* l, int ldl,
+                                 const int* row_offset, const long* column_offset, double* c)
 {
   for (int j = 0; j < columns; ++j)
   {
@@ -56,8 +47,8 @@ void subtractScatteredScalar(int rows, int columns, int k, const double* t, int 
 // The sums of an 8 × 4 tile, T's rows t .. t + 7 against the four columns of a packed strip of L
 // (four numbers a p): at each p, T's eight rows in two registers times each of L's four numbers,
 // broadcast, fused into eight 4-lane sums, named so that they stay in registers; each lane is one
-// entry's sum in the scalar order. sums[q] holds column q's eight rows. Only the tiles and the two
-// functions that drive them (which multiply nothing themselves) are built with FMA: the passes
+// entry's sum in the scalar order. sums[q] holds column q's eight rows. Only the tiles and the
+// function that drives them (which multiplies nothing itself) are built with FMA: the passes
 // further down are built for AVX2 alone, so that the compiler cannot fuse their multiplies and adds,
 // which their scalar forms round twice.
 __attribute__((target("avx2,fma"))) void tileSumsAvx2(int k, const double* t, int ldt, const double* packed,
@@ -122,48 +113,13 @@ void packStrip(int k, const double* l, int ldl, int j, int strip_columns, double
 }
 
 // The strips of subtractLowerProducts() in AVX2 tiles: each strip of L packed, then its tiles of
-// eight rows from the strip's diagonal down and the last rows in tiles of up to four, each tile's
-// sums subtracted from C's first `strip_columns` columns.
+// eight rows from the strip's diagonal down and the last rows in tiles of up to four, each entry on
+// or below the diagonal subtracted where it belongs, four at once where four rows lie one after the
+// other in C.
 __attribute__((target("avx2,fma"))) void subtractLowerProductsAvx2(int rows, int columns, int k, const double* t,
-                                                                   int ldt, const double* l, int ldl, double* c,
-                                                                   int ldc)
-{
-  alignas(32) double packed[kTileColumns * kMaxPacked];
-  alignas(32) double sums[kTileColumns][kTileRows];
-  for (int j = 0; j < columns; j += kTileColumns)
-  {
-    const int strip_columns = std::min(kTileColumns, columns - j);
-    packStrip(k, l, ldl, j, strip_columns, packed);
-    int i = j;
-    for (; i + kTileRows <= rows; i += kTileRows)
-    {
-      tileSumsAvx2(k, t + i, ldt, packed, sums);
-      for (int q = 0; q < strip_columns; ++q)
-      {
-        double* const cq = c + i + static_cast<long>(j + q) * ldc;
-        _mm256_storeu_pd(cq, _mm256_sub_pd(_mm256_loadu_pd(cq), _mm256_load_pd(sums[q])));
-        _mm256_storeu_pd(cq + 4, _mm256_sub_pd(_mm256_loadu_pd(cq + 4), _mm256_load_pd(sums[q] + 4)));
-      }
-    }
-    for (; i < rows; i += 4)
-    {
-      const int tile_rows = std::min(4, rows - i);
-      tileSums4Avx2(k, t + i, ldt, packed, tile_rows, sums);
-      for (int q = 0; q < strip_columns; ++q)
-      {
-        double* const cq = c + i + static_cast<long>(j + q) * ldc;
-        for (int r = 0; r < tile_rows; ++r)
-          cq[r] -= sums[q][r];
-      }
-    }
-  }
-}
-
-// subtractLowerProductsScattered() in the same tiles: each entry on or below the diagonal
-// subtracted where it belongs, four at once where four rows lie one after the other in C.
-__attribute__((target("avx2,fma"))) void subtractScatteredAvx2(int rows, int columns, int k, const double* t, int ldt,
-                                                               const double* l, int ldl, const int* row_offset,
-                                                               const long* column_offset, double* c)
+                                                                   int ldt, const double* l, int ldl,
+                                                                   const int* row_offset, const long* column_offset,
+                                                                   double* c)
 {
   alignas(32) double packed[kTileColumns * kMaxPacked];
   alignas(32) double sums[kTileColumns][kTileRows];
@@ -258,33 +214,16 @@ bool available()
 }
 
 void subtractLowerProducts(bool avx2, int rows, int columns, int k, const double* t, int ldt, const double* l, int ldl,
-                           double* c, int ldc)
-{
-  // Column strips of four, in each the entries from the strip's diagonal down.
-#if defined(__x86_64__)
-  if (avx2 && available() && k <= kMaxPacked)
-  {
-    subtractLowerProductsAvx2(rows, columns, k, t, ldt, l, ldl, c, ldc);
-    return;
-  }
-#endif
-  for (int j = 0; j < columns; j += kTileColumns)
-    if (j < rows)
-      subtractTileScalar(rows - j, std::min(kTileColumns, columns - j), k, t + j, ldt, l + j, ldl,
-                         c + j + static_cast<long>(j) * ldc, ldc);
-}
-
-void subtractLowerProductsScattered(bool avx2, int rows, int columns, int k, const double* t, int ldt, const double* l,
-                                    int ldl, const int* row_offset, const long* column_offset, double* c)
+                           const int* row_offset, const long* column_offset, double* c)
 {
 #if defined(__x86_64__)
   if (avx2 && available() && k <= kMaxPacked)
   {
-    subtractScatteredAvx2(rows, columns, k, t, ldt, l, ldl, row_offset, column_offset, c);
+    subtractLowerProductsAvx2(rows, columns, k, t, ldt, l, ldl, row_offset, column_offset, c);
     return;
   }
 #endif
-  subtractScatteredScalar(rows, columns, k, t, ldt, l, ldl, row_offset, column_offset, c);
+  subtractLowerProductsScalar(rows, columns, k, t, ldt, l, ldl, row_offset, column_offset, c);
 }
 
 void subtractScaled(bool avx2, int n, const double* t, double factor, double* column)

@@ -293,7 +293,7 @@ void SparseBlockLdlt::analyzeSupernodes(const std::vector<int>& row_start, const
   lower_.shrink_to_fit();
   // Each supernode's rows below it (those of its last column) and its panel.
   super_rows_.clear();
-  std::size_t panel = 0, largest_panel = 0, largest_below = 0;
+  std::size_t panel = 0, largest_panel = 0, largest_below = 0, largest_rows = 0;
   for (Supernode& supernode : supernodes_)
   {
     const int last = supernode.first + supernode.width - 1;
@@ -306,11 +306,15 @@ void SparseBlockLdlt::analyzeSupernodes(const std::vector<int>& row_start, const
     const std::size_t size = m * 3 * static_cast<std::size_t>(supernode.width);
     panel += size;
     largest_panel = std::max(largest_panel, size);
+    largest_rows = std::max(largest_rows, m);
     largest_below = std::max(largest_below, 3 * static_cast<std::size_t>(supernode.below));
   }
   panels_.assign(panel, 0.0);
   scaled_.assign(largest_panel, 0.0);
   gathered_.assign(largest_below, 0.0);
+  ascending_.resize(largest_rows);
+  for (std::size_t r = 0; r < largest_rows; ++r)
+    ascending_[r] = static_cast<int>(r);
   scalar_pivot_.assign(3 * static_cast<std::size_t>(n), 1.0);
 
   // The block row of block row `row` in supernode t's panel (its own columns first, then below).
@@ -514,8 +518,13 @@ bool SparseBlockLdlt::factorizeSupernodes(const std::vector<Eigen::Matrix3d>& bl
     {
       const int c1 = std::min(width, c0 + kPanelColumns);
       if (c0 > 0)
-        dense_panel::subtractLowerProducts(avx2, m - c0, c1 - c0, c0, scaled + c0, m, panel + c0, m,
-                                           panel + c0 + static_cast<long>(c0) * m, m);
+      {
+        long group_columns[kPanelColumns];  // the group's columns in the panel, from its diagonal
+        for (int c = c0; c < c1; ++c)
+          group_columns[c - c0] = static_cast<long>(c - c0) * m;
+        dense_panel::subtractLowerProducts(avx2, m - c0, c1 - c0, c0, scaled + c0, m, panel + c0, m, ascending_.data(),
+                                           group_columns, panel + c0 + static_cast<long>(c0) * m);
+      }
       for (int c = c0; c < c1; ++c)
       {
         double* const column = panel + static_cast<long>(c) * m;
@@ -537,10 +546,10 @@ bool SparseBlockLdlt::factorizeSupernodes(const std::vector<Eigen::Matrix3d>& bl
     {
       const UpdateRun& run = runs_[q];
       const int first_row = 3 * run.begin;
-      dense_panel::subtractLowerProductsScattered(avx2, below - first_row, 3 * (run.end - run.begin), width,
-                                                  scaled + width + first_row, m, panel + width + first_row, m,
-                                                  update_row_offset_.data() + run.rows,
-                                                  update_column_offset_.data() + run.columns, panels_.data());
+      dense_panel::subtractLowerProducts(avx2, below - first_row, 3 * (run.end - run.begin), width,
+                                         scaled + width + first_row, m, panel + width + first_row, m,
+                                         update_row_offset_.data() + run.rows,
+                                         update_column_offset_.data() + run.columns, panels_.data());
     }
   }
   return true;

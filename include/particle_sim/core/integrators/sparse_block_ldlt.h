@@ -130,6 +130,7 @@ private:
   std::vector<long> update_column_offset_;
   std::vector<double> scalar_pivot_;                // D, one number a scalar column
   std::vector<double> scaled_, gathered_;           // T = L D of a panel, R's x
+  std::vector<int> ascending_;                      // 0, 1, 2, ...: a panel's own rows as row offsets
   // analyze()'s rest for the supernodal form (supernodes_ holds each one's columns): the panels,
   // where A's blocks go in them and the update runs.
   void analyzeSupernodes(const std::vector<int>& row_start, const std::vector<int>& block_column,
