@@ -10,6 +10,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <random>
 #include <utility>
@@ -151,7 +152,7 @@ TEST(SparseBlockLdlt, ASheetTakesSupernodesThatSolveLikeADenseLuWithTheSameBitsI
 {
   // A 2-D sheet's separators are wide supernodes: analyze() takes the supernodal form, whose
   // solution matches a dense LU of the filtered matrix, pins included; its dense products give the
-  // same bits with the AVX2 tiles and without.
+  // same bits with the AVX-512 tiles, the AVX2 tiles and without (each where the processor has it).
   std::mt19937_64 random(5);
   const int nu = 26, nv = 21, n = nu * nv;
   const std::vector<std::pair<int, int>> pairs = gridPairs(nu, nv);
@@ -163,11 +164,12 @@ TEST(SparseBlockLdlt, ASheetTakesSupernodesThatSolveLikeADenseLuWithTheSameBitsI
   for (int i = 0; i < n; ++i)
     if (pinned[i]) b.col(i).setZero();
 
-  const bool avx2 = SparseBlockLdlt::useAvx2();
+  const bool avx2 = SparseBlockLdlt::useAvx2(), avx512 = SparseBlockLdlt::useAvx512();
   std::vector<Eigen::Matrix3Xd> solutions;
-  for (const bool use_avx2 : {true, false})
+  for (const auto& [use_avx2, use_avx512] : {std::pair{true, true}, {true, false}, {false, false}})
   {
     SparseBlockLdlt::setUseAvx2(use_avx2);
+    SparseBlockLdlt::setUseAvx512(use_avx512);
     SparseBlockLdlt ldlt;
     ldlt.analyze(p.row_start, p.block_column);
     ASSERT_TRUE(ldlt.supernodal());
@@ -177,7 +179,13 @@ TEST(SparseBlockLdlt, ASheetTakesSupernodesThatSolveLikeADenseLuWithTheSameBitsI
     solutions.push_back(x);
   }
   SparseBlockLdlt::setUseAvx2(avx2);
-  EXPECT_EQ(std::memcmp(solutions[0].data(), solutions[1].data(), sizeof(double) * 3 * n), 0);
+  SparseBlockLdlt::setUseAvx512(avx512);
+  std::printf("[tiles] widest on this processor: %s\n",
+              dense_panel::widestTiles() == dense_panel::Tiles::Avx512 ? "AVX-512"
+              : dense_panel::widestTiles() == dense_panel::Tiles::Avx2 ? "AVX2"
+                                                                       : "scalar");
+  for (std::size_t form = 1; form < solutions.size(); ++form)
+    EXPECT_EQ(std::memcmp(solutions[0].data(), solutions[form].data(), sizeof(double) * 3 * n), 0) << "form " << form;
 
   const Eigen::MatrixXd a = denseFiltered(p, n, blocks, pinned);
   const Eigen::VectorXd expected = a.partialPivLu().solve(Eigen::Map<const Eigen::VectorXd>(b.data(), 3 * n));
@@ -496,9 +504,13 @@ TEST(SparseBlockLdlt, InlineProductIsTheBitsOfEigensProduct)
 // The supernodes' update goes straight into the panels that hold its rows
 // (dense_panel::subtractLowerProducts): every entry on or below the diagonal lands where
 // its row and column offsets say, as C(i, j) − Σ_p T(i, p) L(j, p) (against a sum in long double),
-// nothing else is written, and the AVX2 tiles give the scalar entries' bits. The offsets mix rows
-// that follow each other in C (written four at a time) with gaps, and the sizes are not whole tiles.
-TEST(DensePanel, ScatteredProductsLandWhereTheyBelong)
+// nothing else is written, and the AVX2 and AVX-512 tiles give the scalar entries' bits. The row
+// offsets either mix rows that follow each other in C with gaps (none eight long) or are all
+// consecutive (a panel's own rows: written four or eight at a time), and the sizes are not whole
+// tiles.
+namespace
+{
+void scatteredProductsLandWhereTheyBelong(bool consecutive)
 {
   std::mt19937 random(17);
   std::uniform_real_distribution<double> unit(-1.0, 1.0);
@@ -508,14 +520,15 @@ TEST(DensePanel, ScatteredProductsLandWhereTheyBelong)
     x = unit(random);
   for (double& x : l)
     x = unit(random);
-  // Row offsets in a column of C: runs of consecutive rows with gaps between them; columns 61 apart.
+  // Row offsets in a column of C: runs of consecutive rows with gaps between them (or one run);
+  // columns 61 apart.
   std::vector<int> row_offset(rows);
   std::vector<long> column_offset(columns);
   int at = 0;
   for (int i = 0; i < rows; ++i)
   {
     row_offset[i] = at;
-    at += (i % 7 == 6 || i % 11 == 3) ? 3 : 1;
+    at += (!consecutive && (i % 7 == 6 || i % 11 == 3)) ? 3 : 1;
   }
   for (int j = 0; j < columns; ++j)
     column_offset[j] = 61L * j + 2;
@@ -524,15 +537,18 @@ TEST(DensePanel, ScatteredProductsLandWhereTheyBelong)
   for (double& x : start)
     x = unit(random);
 
+  using particle_sim::core::dense_panel::Tiles;
   std::vector<std::vector<double>> results;
-  for (const bool avx2 : {false, true})
+  for (const Tiles tiles : {Tiles::Scalar, Tiles::Avx2, Tiles::Avx512})
   {
     std::vector<double> c = start;
-    particle_sim::core::dense_panel::subtractLowerProducts(avx2, rows, columns, k, t.data(), ldt, l.data(), ldl,
-                                                           row_offset.data(), column_offset.data(), c.data());
+    const Tiles ran = particle_sim::core::dense_panel::subtractLowerProducts(
+        tiles, rows, columns, k, t.data(), ldt, l.data(), ldl, row_offset.data(), column_offset.data(), c.data());
+    EXPECT_EQ(ran, std::min(tiles, particle_sim::core::dense_panel::widestTiles()));
     results.push_back(c);
   }
-  EXPECT_EQ(std::memcmp(results[0].data(), results[1].data(), sizeof(double) * size), 0);
+  for (std::size_t form = 1; form < results.size(); ++form)
+    EXPECT_EQ(std::memcmp(results[0].data(), results[form].data(), sizeof(double) * size), 0) << "form " << form;
 
   std::vector<char> written(size, 0);
   for (int j = 0; j < columns; ++j)
@@ -549,5 +565,15 @@ TEST(DensePanel, ScatteredProductsLandWhereTheyBelong)
   {
     if (written[e]) continue;
     EXPECT_EQ(results[0][e], start[e]) << "entry " << e << " is written but holds no product";
+  }
+}
+}  // namespace
+
+TEST(DensePanel, ScatteredProductsLandWhereTheyBelong)
+{
+  for (const bool consecutive : {false, true})
+  {
+    SCOPED_TRACE(consecutive ? "consecutive rows" : "rows with gaps");
+    scatteredProductsLandWhereTheyBelong(consecutive);
   }
 }

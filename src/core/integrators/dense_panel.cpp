@@ -163,6 +163,89 @@ __attribute__((target("avx2,fma"))) void subtractLowerProductsAvx2(int rows, int
   }
 }
 
+// AVX-512's form of subtractLowerProductsAvx2(): tiles of 16 rows (two registers of eight) by the
+// strip's four columns, eight 8-lane sums fused at each p; the rows past the last masked off (not
+// read, not written). Each column's entries on or below the diagonal are then subtracted where they
+// belong: eight at once, masked, where the eight rows follow each other in C, else gathered and
+// scattered by their row offsets. The same sums in the same order as the other forms: their bits.
+__attribute__((target("avx512f,avx512vl,fma"))) void tileSumsAvx512(int k, const double* t, int ldt,
+                                                                    const double* packed, __mmask8 upper_rows,
+                                                                    __mmask8 lower_rows, __m512d (&upper)[4],
+                                                                    __m512d (&lower)[4])
+{
+  __m512d u0 = _mm512_setzero_pd(), u1 = u0, u2 = u0, u3 = u0, w0 = u0, w1 = u0, w2 = u0, w3 = u0;
+  for (int p = 0; p < k; ++p)
+  {
+    const double* const tp = t + static_cast<long>(p) * ldt;
+    const double* const lp = packed + static_cast<long>(p) * kTileColumns;
+    const __m512d top = _mm512_maskz_loadu_pd(upper_rows, tp), bottom = _mm512_maskz_loadu_pd(lower_rows, tp + 8);
+    const __m512d l0 = _mm512_set1_pd(lp[0]), l1 = _mm512_set1_pd(lp[1]);
+    const __m512d l2 = _mm512_set1_pd(lp[2]), l3 = _mm512_set1_pd(lp[3]);
+    u0 = _mm512_fmadd_pd(top, l0, u0);
+    w0 = _mm512_fmadd_pd(bottom, l0, w0);
+    u1 = _mm512_fmadd_pd(top, l1, u1);
+    w1 = _mm512_fmadd_pd(bottom, l1, w1);
+    u2 = _mm512_fmadd_pd(top, l2, u2);
+    w2 = _mm512_fmadd_pd(bottom, l2, w2);
+    u3 = _mm512_fmadd_pd(top, l3, u3);
+    w3 = _mm512_fmadd_pd(bottom, l3, w3);
+  }
+  upper[0] = u0, upper[1] = u1, upper[2] = u2, upper[3] = u3;
+  lower[0] = w0, lower[1] = w1, lower[2] = w2, lower[3] = w3;
+}
+
+// Eight rows' sums subtracted from column cq where `rows` (a mask) says: at offsets[r] each, or as
+// one run from offsets[0] where `contiguous`.
+__attribute__((target("avx512f,avx512vl"))) inline void subtractEight(double* cq, const int* offsets, __mmask8 rows,
+                                                                      bool contiguous, __m512d sums)
+{
+  if (contiguous)
+  {
+    double* const to = cq + offsets[0];
+    _mm512_mask_storeu_pd(to, rows, _mm512_sub_pd(_mm512_maskz_loadu_pd(rows, to), sums));
+    return;
+  }
+  const __m256i index = _mm256_maskz_loadu_epi32(rows, offsets);
+  const __m512d old = _mm512_mask_i32gather_pd(_mm512_setzero_pd(), rows, index, cq, 8);
+  _mm512_mask_i32scatter_pd(cq, rows, index, _mm512_sub_pd(old, sums), 8);
+}
+
+__attribute__((target("avx512f,avx512vl,fma"))) void subtractLowerProductsAvx512(int rows, int columns, int k,
+                                                                                 const double* t, int ldt,
+                                                                                 const double* l, int ldl,
+                                                                                 const int* row_offset,
+                                                                                 const long* column_offset, double* c)
+{
+  alignas(64) double packed[kTileColumns * kMaxPacked];
+  // The first `count` (0 to 8) of eight lanes.
+  auto firstLanes = [](int count) { return static_cast<__mmask8>(count >= 8 ? 0xff : (1u << std::max(count, 0)) - 1); };
+  for (int j = 0; j < columns; j += kTileColumns)
+  {
+    const int strip_columns = std::min(kTileColumns, columns - j);
+    packStrip(k, l, ldl, j, strip_columns, packed);
+    for (int i = j; i < rows; i += 2 * kTileRows)
+    {
+      const int left = rows - i;
+      const __mmask8 upper_rows = firstLanes(left), lower_rows = firstLanes(left - kTileRows);
+      __m512d upper[4], lower[4];
+      tileSumsAvx512(k, t + i, ldt, packed, upper_rows, lower_rows, upper, lower);
+      const int* const at = row_offset + i;
+      const int upper_last = std::min(left, kTileRows) - 1, lower_last = std::min(left, 2 * kTileRows) - kTileRows - 1;
+      const bool upper_contiguous = at[upper_last] == at[0] + upper_last;
+      const bool lower_contiguous = lower_last >= 0 && at[kTileRows + lower_last] == at[kTileRows] + lower_last;
+      for (int q = 0; q < strip_columns; ++q)
+      {
+        double* const cq = c + column_offset[j + q];
+        // The rows on or below the diagonal: from row j + q of C on, the tile's row j + q − i.
+        const int from = std::max(0, j + q - i);
+        subtractEight(cq, at, upper_rows & static_cast<__mmask8>(~firstLanes(from)), upper_contiguous, upper[q]);
+        const __mmask8 lower_mask = lower_rows & static_cast<__mmask8>(~firstLanes(from - kTileRows));
+        if (lower_mask) subtractEight(cq, at + kTileRows, lower_mask, lower_contiguous, lower[q]);
+      }
+    }
+  }
+}
+
 // The whole fours of subtractScaled() and keepAndScale(): how many entries they did (the callers
 // do the rest, entry by entry, as their scalar form does all of them).
 __attribute__((target("avx2"))) int subtractScaledAvx2(int n, const double* t, double factor, double* column)
@@ -213,17 +296,35 @@ bool available()
 #endif
 }
 
-void subtractLowerProducts(bool avx2, int rows, int columns, int k, const double* t, int ldt, const double* l, int ldl,
-                           const int* row_offset, const long* column_offset, double* c)
+Tiles widestTiles()
 {
 #if defined(__x86_64__)
-  if (avx2 && available() && k <= kMaxPacked)
+  static const bool avx512 = __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl");
+  if (available()) return avx512 ? Tiles::Avx512 : Tiles::Avx2;
+#endif
+  return Tiles::Scalar;
+}
+
+Tiles subtractLowerProducts(Tiles tiles, int rows, int columns, int k, const double* t, int ldt, const double* l,
+                            int ldl, const int* row_offset, const long* column_offset, double* c)
+{
+#if defined(__x86_64__)
+  const Tiles widest = widestTiles();
+  if (k <= kMaxPacked && tiles == Tiles::Avx512 && widest == Tiles::Avx512)
+  {
+    subtractLowerProductsAvx512(rows, columns, k, t, ldt, l, ldl, row_offset, column_offset, c);
+    return Tiles::Avx512;
+  }
+  if (k <= kMaxPacked && tiles != Tiles::Scalar && widest != Tiles::Scalar)
   {
     subtractLowerProductsAvx2(rows, columns, k, t, ldt, l, ldl, row_offset, column_offset, c);
-    return;
+    return Tiles::Avx2;
   }
+#else
+  (void)tiles;
 #endif
   subtractLowerProductsScalar(rows, columns, k, t, ldt, l, ldl, row_offset, column_offset, c);
+  return Tiles::Scalar;
 }
 
 void subtractScaled(bool avx2, int n, const double* t, double factor, double* column)

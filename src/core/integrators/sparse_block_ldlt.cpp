@@ -130,6 +130,12 @@ std::atomic<bool>& useAvx2Flag()
   return use;
 }
 
+std::atomic<bool>& useAvx512Flag()
+{
+  static std::atomic<bool> use(dense_panel::widestTiles() == dense_panel::Tiles::Avx512);
+  return use;
+}
+
 // The supernodes of L, as (first column, width), from its elimination tree and the counts of its
 // columns' off-diagonal blocks: column j + 1 joins column j's when it is j's parent and its rows
 // are j's but j + 1 (then the two columns have one pattern below them). supernode_of[j] is column
@@ -169,6 +175,16 @@ bool SparseBlockLdlt::useAvx2()
 void SparseBlockLdlt::setUseAvx2(bool use)
 {
   useAvx2Flag().store(use && dense_panel::available(), std::memory_order_relaxed);
+}
+
+bool SparseBlockLdlt::useAvx512()
+{
+  return useAvx512Flag().load(std::memory_order_relaxed);
+}
+
+void SparseBlockLdlt::setUseAvx512(bool use)
+{
+  useAvx512Flag().store(use && dense_panel::widestTiles() == dense_panel::Tiles::Avx512, std::memory_order_relaxed);
 }
 
 SparseBlockLdlt::Cost SparseBlockLdlt::estimateCost(const std::vector<int>& row_start,
@@ -504,6 +520,8 @@ bool SparseBlockLdlt::factorizeSupernodes(const std::vector<Eigen::Matrix3d>& bl
   }
 
   const bool avx2 = useAvx2();
+  const dense_panel::Tiles tiles =
+      !avx2 ? dense_panel::Tiles::Scalar : (useAvx512() ? dense_panel::Tiles::Avx512 : dense_panel::Tiles::Avx2);
   for (std::size_t s = 0; s < supernodes_.size(); ++s)
   {
     const Supernode& supernode = supernodes_[s];
@@ -522,7 +540,7 @@ bool SparseBlockLdlt::factorizeSupernodes(const std::vector<Eigen::Matrix3d>& bl
         long group_columns[kPanelColumns];  // the group's columns in the panel, from its diagonal
         for (int c = c0; c < c1; ++c)
           group_columns[c - c0] = static_cast<long>(c - c0) * m;
-        dense_panel::subtractLowerProducts(avx2, m - c0, c1 - c0, c0, scaled + c0, m, panel + c0, m, ascending_.data(),
+        dense_panel::subtractLowerProducts(tiles, m - c0, c1 - c0, c0, scaled + c0, m, panel + c0, m, ascending_.data(),
                                            group_columns, panel + c0 + static_cast<long>(c0) * m);
       }
       for (int c = c0; c < c1; ++c)
@@ -546,7 +564,7 @@ bool SparseBlockLdlt::factorizeSupernodes(const std::vector<Eigen::Matrix3d>& bl
     {
       const UpdateRun& run = runs_[q];
       const int first_row = 3 * run.begin;
-      dense_panel::subtractLowerProducts(avx2, below - first_row, 3 * (run.end - run.begin), width,
+      dense_panel::subtractLowerProducts(tiles, below - first_row, 3 * (run.end - run.begin), width,
                                          scaled + width + first_row, m, panel + width + first_row, m,
                                          update_row_offset_.data() + run.rows,
                                          update_column_offset_.data() + run.columns, panels_.data());

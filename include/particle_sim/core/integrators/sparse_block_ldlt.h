@@ -39,8 +39,8 @@ inline void multiplyInline(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b, E
 /// Where most of the work lies in wide supernodes (runs of columns of L with one pattern below
 /// them: the separators of a 2-D sheet), analyze() takes the supernodal form instead: each supernode
 /// is one dense column-major panel, factored as scalar L D Lᵀ by products of many columns at once
-/// (dense_panel.h, on AVX2 where the processor has it), and passes its update to the supernodes
-/// above it as one dense matrix. A chain has no wide supernodes and keeps the 3x3 blocks.
+/// (dense_panel.h, on AVX-512 or AVX2 where the processor has it), and subtracts its update from the
+/// panels of the supernodes above it. A chain has no wide supernodes and keeps the 3x3 blocks.
 ///
 /// Pinned particles are solved as identity rows (their Δv is 0), which is the filtered system that
 /// Baraff & Witkin's modified conjugate gradient solves.
@@ -57,10 +57,14 @@ public:
   double solveFlops() const { return solve_flops_; }
   /// Whether analyze() took the supernodal form.
   bool supernodal() const { return !supernodes_.empty(); }
-  /// Whether the supernodal form's dense products take their AVX2 tiles (the same bits either way;
-  /// where the processor has AVX2, by default).
+  /// Whether the supernodal form's dense products take vector tiles (the same bits either way; where
+  /// the processor has AVX2 and FMA, by default); false: the scalar ones.
   static bool useAvx2();
   static void setUseAvx2(bool use);
+  /// Whether those tiles are AVX-512's where the processor has it (the same bits; by default) rather
+  /// than AVX2's.
+  static bool useAvx512();
+  static void setUseAvx512(bool use);
   /// Off-diagonal blocks of L.
   std::int64_t factorBlocks() const { return static_cast<std::int64_t>(row_index_.size()); }
 
