@@ -379,45 +379,40 @@ ClothGridDef stiffSheetOnAuto()
 }
 }  // namespace
 
-TEST(SparseBlockLdlt, AutoTurnsDirectWhenTheIterativeSolveCostsMoreThanTheFactorization)
+TEST(SparseBlockLdlt, AutoTurnsDirectWhenCgTakesMoreIterationsThanTheFactorizationCosts)
 {
   // A stiff 48 x 48 spring cloth at dt = 1/60: too large for `auto` to start directly, but CG needs
   // hundreds of iterations to a relative residual of 1e-8 (the velocity rule alone would stop it
-  // sooner). Its first CG solve over kMultigridTrialCgIterations brings one solve by the multigrid,
-  // which costs less than those CG iterations here and is kept (where it costs more, CG is back:
-  // MultigridSolver.AutoGoesBackToCgForGood...); the multigrid's iterations grow as the cloth
-  // stretches, and the step after the first multigrid solve that costs more than a factorization is
-  // direct, and so is every step after it. That trigger is the multigrid's most iterations so far
-  // (the cost to beat is fixed for the pattern).
+  // sooner), more than one factorization costs; from the next step on it is direct. (On the way, its
+  // first CG solve over kMultigridTrialCgIterations brings one solve by the multigrid, which costs
+  // more than CG here and is not kept: MultigridSolver.AutoGoesBackToCgForGood...)
   ClothGridDef def = stiffSheetOnAuto();
   def.integrator.cg_velocity_tolerance = 0.0;
   SpringNetworkBody body(buildClothGrid(def));
   Environment env;
   env.ground.enabled = false;
-  std::vector<int> cg_iterations, multigrid_iterations;
+  // CG first; the step after the first CG solve whose iterations exceed the factorization's cost is
+  // direct, and so is every step after it. That trigger is the most iterations so far (the count
+  // to beat is fixed for the pattern), and far above the first step's (from rest, a few).
+  std::vector<int> iterations;
   int first_direct = -1;
-  bool multigrid_last = false;
   for (int step = 0; step < 60; ++step)
   {
     body.step(1.0 / 60.0, env);
-    const SolverReport& report = body.lastSolve();
-    if (report.direct)
+    if (body.lastSolve().direct)
     {
       if (first_direct < 0) first_direct = step;
-      continue;
     }
-    EXPECT_LT(first_direct, 0) << "back to an iterative solve at step " << step;
-    EXPECT_FALSE(multigrid_last && !report.multigrid) << "back to CG at step " << step;
-    (report.multigrid ? multigrid_iterations : cg_iterations).push_back(report.iterations);
-    multigrid_last = report.multigrid;
+    else
+    {
+      EXPECT_LT(first_direct, 0) << "back to CG at step " << step;
+      iterations.push_back(body.lastSolve().iterations);
+    }
   }
   ASSERT_GT(first_direct, 0) << "auto never turned direct in 60 steps";
-  ASSERT_FALSE(cg_iterations.empty());
-  ASSERT_FALSE(multigrid_iterations.empty());
-  EXPECT_GT(cg_iterations.back(), 100) << "the multigrid was tried before CG needed it";
-  EXPECT_TRUE(multigrid_last);
-  EXPECT_EQ(multigrid_iterations.back(), *std::max_element(multigrid_iterations.begin(), multigrid_iterations.end()));
-  EXPECT_LT(multigrid_iterations.back(), cg_iterations.back() / 4);
+  ASSERT_EQ(static_cast<int>(iterations.size()), first_direct);
+  EXPECT_EQ(iterations.back(), *std::max_element(iterations.begin(), iterations.end()));
+  EXPECT_GT(iterations.back(), 10 * iterations.front());
   EXPECT_TRUE(body.lastSolve().converged);
   // A forced CG stays CG.
   def.integrator.linear_solver = LinearSolverType::ConjugateGradient;

@@ -37,8 +37,6 @@ constexpr double kDroppedMode = 1e-10;
 // The coarsest level is factored densely up to this many unknowns (else smoothed by block Jacobi
 // alone: a body whose graph does not coarsen, such as particles without couplings).
 constexpr int kMaxDenseUnknowns = 1200;
-// No block: a weak coupling's place in the plan of Ā P (planNextLevel()).
-constexpr int kNoBlock = INT32_MIN;
 
 // Position of `value` in the sorted range [first, last) (it must be there).
 int positionIn(const std::vector<int>& sorted, int first, int last, int value)
@@ -229,18 +227,8 @@ void SmoothedAggregation::planNextLevel(int index)
     level.members[aggregate[i]].push_back(i);
 
   // P has a block (i, J) where a strong neighbour of i (or i) is in aggregate J (it is smoothed by the
-  // lumped matrix A_L); Ā P a block (i, J) where P has one in the row of i or of a neighbour that Ā
-  // couples it with; A_c = Pᵀ (Ā P) a block (I, J) where a row has P's (·, I) and Ā P's (·, J).
-  // The blocks of Ā, the matrix whose Galerkin product makes the next level: A's strong blocks, with
-  // each weak block's symmetric part added to its row's diagonal block instead (the lumped matrix A_L
-  // where the blocks are symmetric, as a spring's are; symmetric on every level, so that A_c is).
-  // Block k of row i is, in Ā, A's block k (a strong one), the row's own diagonal block of Ā (−1 − i,
-  // for A's diagonal block) or none (kNoBlock, a weak one). Where no coupling is weak, Ā is A.
-  auto galerkinBlock = [&level](int i, int k) {
-    if (!level.has_weak) return k;
-    if (k == level.diagonal[i]) return -1 - i;
-    return level.strong[k] ? k : kNoBlock;
-  };
+  // lumped matrix A_L); A P a block (i, J) where P has one in a neighbour's row; A_c = Pᵀ (A P) a
+  // block (I, J) where a row has P's (·, I) and A P's (·, J).
   std::vector<std::vector<int>> rows(n);
   for (int i = 0; i < n; ++i)
     for (int k = level.start[i]; k < level.start[i + 1]; ++k)
@@ -270,7 +258,6 @@ void SmoothedAggregation::planNextLevel(int index)
     rows[i].clear();
     for (int k = level.start[i]; k < level.start[i + 1]; ++k)
     {
-      if (galerkinBlock(i, k) == kNoBlock) continue;
       const int j = level.column[k];
       rows[i].insert(rows[i].end(), level.p_column.begin() + level.p_start[j],
                      level.p_column.begin() + level.p_start[j + 1]);
@@ -290,9 +277,9 @@ void SmoothedAggregation::planNextLevel(int index)
   next.block = kModes;
   compressRows(coarse_rows, next.start, next.column);
 
-  // The plans: every block product of Ā P, row after row, and of Pᵀ (Ā P), by the row of A_c it adds
-  // into (a column of P) and within that by ascending row of Ā P (Pᵀ's rows, pt_block and pt_row,
-  // are in that order). Each row of Ā P and each row of A_c is so made by one plan range alone, which
+  // The plans: every block product of A P, row after row, and of Pᵀ (A P), by the row of A_c it adds
+  // into (a column of P) and within that by ascending row of A P (Pᵀ's rows, pt_block and pt_row,
+  // are in that order). Each row of A P and each row of A_c is so made by one plan range alone, which
   // the workers share; of A_c only the blocks on and above the diagonal are summed (A_c is symmetric),
   // the ones below copied from them after.
   level.ap_plan.clear();
@@ -302,11 +289,9 @@ void SmoothedAggregation::planNextLevel(int index)
     const int first = level.ap_start[i], last = level.ap_start[i + 1];
     for (int k = level.start[i]; k < level.start[i + 1]; ++k)
     {
-      const int block = galerkinBlock(i, k);
-      if (block == kNoBlock) continue;
       const int j = level.column[k];
       for (int q = level.p_start[j]; q < level.p_start[j + 1]; ++q)
-        level.ap_plan.push_back({block, q, positionIn(level.ap_column, first, last, level.p_column[q])});
+        level.ap_plan.push_back({k, q, positionIn(level.ap_column, first, last, level.p_column[q])});
     }
     level.ap_plan_start[i + 1] = static_cast<int>(level.ap_plan.size());
   }
@@ -336,7 +321,6 @@ void SmoothedAggregation::planNextLevel(int index)
   const int b = level.block;
   if (level.has_weak)
   {
-    level.galerkin_diagonal.assign(static_cast<std::size_t>(n) * b * b, 0.0);
     level.lumped_inverse_diagonal.assign(static_cast<std::size_t>(n) * b * b, 0.0);
     level.lumped_power.setZero(static_cast<Eigen::Index>(n) * b);
     level.lumped_power_product.setZero(static_cast<Eigen::Index>(n) * b);
@@ -579,35 +563,16 @@ void SmoothedAggregation::setupLevel(int index)
     }
   });
 
-  // Ā P by its plan, each row alone (Ā's diagonal blocks first where it has weak couplings: A_ii plus
-  // the symmetric part of each weak block of the row); then A_c = Pᵀ (Ā P) by its plan, each row of
-  // A_c alone (its blocks on and above the diagonal); then its lower blocks from the upper ones.
-  if (level.has_weak)
-  {
-    shareLoop(workers_, n, kNodesPerChunk<B>, [&](int begin, int end) {
-      for (int i = begin; i < end; ++i)
-      {
-        BlockMap<B, B> diagonal(level.galerkin_diagonal.data() + B * B * i);
-        diagonal = ConstBlockMap<B, B>(level.a.data() + B * B * level.diagonal[i]);
-        for (int k = level.start[i]; k < level.start[i + 1]; ++k)
-        {
-          if (level.strong[k]) continue;
-          const ConstBlockMap<B, B> weak(level.a.data() + B * B * k);
-          diagonal += 0.5 * (weak + weak.transpose());
-        }
-      }
-    });
-  }
+  // A P by its plan, each row alone; then A_c = Pᵀ (A P) by its plan, each row of A_c alone (its
+  // blocks on and above the diagonal); then its lower blocks from the upper ones.
   shareLoop(workers_, n, kNodesPerChunk<B>, [&](int begin, int end) {
     std::fill(level.ap.begin() + B * kModes * level.ap_start[begin],
               level.ap.begin() + B * kModes * level.ap_start[end], 0.0);
     for (int e = level.ap_plan_start[begin]; e < level.ap_plan_start[end]; ++e)
     {
       const auto& [k, q, t] = level.ap_plan[e];
-      const double* const block =
-          k >= 0 ? level.a.data() + B * B * k : level.galerkin_diagonal.data() + B * B * (-1 - k);
       BlockMap<B, kModes>(level.ap.data() + B * kModes * t).noalias() +=
-          ConstBlockMap<B, B>(block) * ConstBlockMap<B, kModes>(level.p.data() + B * kModes * q);
+          ConstBlockMap<B, B>(level.a.data() + B * B * k) * ConstBlockMap<B, kModes>(level.p.data() + B * kModes * q);
     }
   });
   shareLoop(workers_, next.nodes, kNodesPerChunk<kModes>, [&](int begin, int end) {
@@ -664,8 +629,7 @@ double SmoothedAggregation::setupFlops() const
     // smoothing: A_L P̂ by blocks of A, and D_L⁻¹ times each block of P.
     flops += 2.0 * 15.0 * 2.0 * 2.0 * b * nodes;
     flops += 2.0 * b * b * kModes * (blocks + static_cast<double>(level.p_start.back()));
-    // Ā's diagonal, Ā P and Pᵀ (Ā P), by their plans.
-    if (level.has_weak) flops += 2.0 * b * b * (blocks - nodes);
+    // A P and Pᵀ (A P), by their plans.
     flops += 2.0 * b * b * kModes * static_cast<double>(level.ap_plan.size());
     flops += 2.0 * kModes * b * kModes * static_cast<double>(level.galerkin_plan.size());
   }

@@ -47,12 +47,7 @@ inline Eigen::Matrix3d symmetricBlock(const std::array<double, 6>& c)
 /// iterations): A without its weak couplings (a cloth's bend springs), each added to its row's
 /// diagonal block instead, so that a row's sum is kept and P spreads an aggregate over its strong
 /// neighbours only (Vaněk, Mandel & Brezina's filtered matrix: fewer blocks in P, A P and the coarse
-/// levels); the next level's matrix is A_c = Pᵀ Ā P, the Galerkin product of Ā: A with each weak block's
-/// symmetric part added to its row's diagonal block instead (A_L where the blocks are symmetric, as a
-/// spring's are; symmetric on every level), so that the weak couplings, which reach further, do not
-/// widen the coarse levels either (a cloth's first coarse level has about 9 blocks a row instead of
-/// 20). Ā is close to A where the weak couplings are weak; the V-cycle stays symmetric positive
-/// definite with any symmetric positive definite A_c. Down to a few nodes,
+/// levels); the next level's matrix is A_c = Pᵀ A P (Galerkin, with A whole). Down to a few nodes,
 /// which a dense L D Lᵀ solves. The V-cycle smooths once with damped block Jacobi before the coarse
 /// correction and once after: the same smoother both ways, so the cycle is a symmetric positive
 /// definite operator, as CG needs.
@@ -69,9 +64,9 @@ inline Eigen::Matrix3d symmetricBlock(const std::array<double, 6>& c)
 /// chunks of nodes: the products, the residuals, the smoothing, the prolongation, the restriction
 /// (gathered by aggregate), the finest level's copy, the inverse diagonal blocks of A and of the
 /// lumped matrix, the power iterations' D⁻¹ products, the tentative prolongator (by aggregate), P's
-/// rows, Ā's diagonal blocks, Ā P, and the Galerkin product Pᵀ (Ā P) (by row of A_c, each block
-/// summed in the order of the rows of Ā P). The rest is serial (the power iterations' norms, the coarsest solve). So
-/// the same bits at any thread count.
+/// rows, A P, and the Galerkin product Pᵀ (A P) (by row of A_c, each block summed in the order of
+/// the rows of A P). The rest is serial (the power iterations' norms, the coarsest solve). So the
+/// same bits at any thread count.
 class SmoothedAggregation
 {
 public:
@@ -108,7 +103,7 @@ public:
   /// Floating-point operations of one apply() (a V-cycle: two smoothings, two residuals, the
   /// restriction and prolongation on every level above the coarsest, the coarsest's solve) and of
   /// one setup() after the first (the numbers of every level: inverse diagonals, the power
-  /// iterations, P̂ and P, Ā P and Pᵀ Ā P, the coarsest factorization), a multiply and an add counted
+  /// iterations, P̂ and P, A P and Pᵀ A P, the coarsest factorization), a multiply and an add counted
   /// as two, from the hierarchy's sizes: for ImplicitEulerSolver's `auto`, which compares them with
   /// the conjugate gradient's flops. 0 before the first setup().
   double cycleFlops() const;
@@ -135,9 +130,6 @@ public:
   };
   /// The matrix of `level` as setup() left it (the finest level filtered): for tests.
   BlockRows matrixOf(int level) const;
-  /// Per block of matrixOf(level) above the coarsest: 1 where its coupling is strong (the diagonal
-  /// always), 0 where it is weak (lumped into its row's diagonal block in A_L and Ā) or zero: for tests.
-  const std::vector<char>& strongCouplings(int level) const { return levels_[level].strong; }
   /// The smoothed prolongator P from `level` to the next (b x 6 blocks): for tests.
   BlockRows prolongatorOf(int level) const;
 
@@ -164,9 +156,6 @@ private:
     std::vector<char> strong;
     bool has_weak = false;
     std::vector<double> lumped_inverse_diagonal;
-    // Ā's diagonal blocks (A_ii plus the symmetric part of each weak block of the row), where the
-    // level has weak couplings: the Galerkin product's (planNextLevel()).
-    std::vector<double> galerkin_diagonal;
     double lumped_omega = 0.0;
     bool lumped_power_started = false;
     Eigen::VectorXd lumped_power, lumped_power_product;
@@ -176,16 +165,15 @@ private:
     std::vector<double> p;  // b x 6 per block of P
     // Pᵀ by rows (aggregates): each one's blocks of P (pt_block) and their rows (pt_row), ascending.
     std::vector<int> pt_start, pt_block, pt_row;
-    // Ā P: rows of this level, columns of the next (its pattern, its blocks in `ap`), planned as
-    // (block of A or −1 − i for Ā's diagonal block of row i, block of P, block of Ā P) per product,
-    // row after row.
+    // A P: rows of this level, columns of the next (its pattern, its blocks in `ap`), planned as
+    // (block of A, block of P, block of A P) per product, row after row.
     std::vector<int> ap_start, ap_column;
     std::vector<double> ap;
     std::vector<std::array<int, 3>> ap_plan;
     std::vector<int> ap_plan_start;  // per row
-    // Pᵀ (Ā P) into the next level's blocks on and above the diagonal: (block of P, block of Ā P,
+    // Pᵀ (A P) into the next level's blocks on and above the diagonal: (block of P, block of A P,
     // block of A_c) per product, by the row of A_c (a row of P's column) and within it by ascending
-    // row of Ā P: each block of A_c sums its products in the order of the rows of Ā P.
+    // row of A P: each block of A_c sums its products in the order of the rows of A P.
     std::vector<std::array<int, 3>> galerkin_plan;
     std::vector<int> galerkin_plan_start;  // per row of A_c (per node of the next level)
     // This level's blocks below the diagonal with their mirror above it (lower = upperᵀ).
@@ -209,7 +197,7 @@ private:
   // The coarsest level's inverse diagonal and factorization.
   bool setUpCoarsest();
   // The numbers of `level` from its matrix: inverse diagonal, ω, P̂ and the next level's modes, P,
-  // Ā P and the next level's A. Templated on the block size.
+  // A P and the next level's A. Templated on the block size.
   template <int B>
   void setupLevel(int level);
   // The tentative prolongator's rows of aggregate `a`'s members on `level` (its modes orthonormalised,
