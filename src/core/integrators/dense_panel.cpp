@@ -217,7 +217,7 @@ __attribute__((target("avx512f,avx512vl,fma"))) void subtractLowerProductsAvx512
                                                                                  const long* column_offset, double* c)
 {
   alignas(64) double packed[kTileColumns * kMaxPacked];
-  // The first `count` (0 to 8) of eight lanes.
+  // The first `count` of eight lanes: none for a count of 0 or less, all from 8 on.
   auto firstLanes = [](int count) { return static_cast<__mmask8>(count >= 8 ? 0xff : (1u << std::max(count, 0)) - 1); };
   for (int j = 0; j < columns; j += kTileColumns)
   {
