@@ -164,12 +164,12 @@ TEST(SparseBlockLdlt, ASheetTakesSupernodesThatSolveLikeADenseLuWithTheSameBitsI
   for (int i = 0; i < n; ++i)
     if (pinned[i]) b.col(i).setZero();
 
-  const bool avx2 = SparseBlockLdlt::useAvx2(), avx512 = SparseBlockLdlt::useAvx512();
+  const dense_panel::Tiles tiles = SparseBlockLdlt::tiles();
   std::vector<Eigen::Matrix3Xd> solutions;
-  for (const auto& [use_avx2, use_avx512] : {std::pair{true, true}, {true, false}, {false, false}})
+  for (const dense_panel::Tiles form :
+       {dense_panel::Tiles::Avx512, dense_panel::Tiles::Avx2, dense_panel::Tiles::Scalar})
   {
-    SparseBlockLdlt::setUseAvx2(use_avx2);
-    SparseBlockLdlt::setUseAvx512(use_avx512);
+    SparseBlockLdlt::setTiles(form);
     SparseBlockLdlt ldlt;
     ldlt.analyze(p.row_start, p.block_column);
     ASSERT_TRUE(ldlt.supernodal());
@@ -178,8 +178,7 @@ TEST(SparseBlockLdlt, ASheetTakesSupernodesThatSolveLikeADenseLuWithTheSameBitsI
     ldlt.solve(b, x);
     solutions.push_back(x);
   }
-  SparseBlockLdlt::setUseAvx2(avx2);
-  SparseBlockLdlt::setUseAvx512(avx512);
+  SparseBlockLdlt::setTiles(tiles);
   std::printf("[tiles] widest on this processor: %s\n",
               dense_panel::widestTiles() == dense_panel::Tiles::Avx512 ? "AVX-512"
               : dense_panel::widestTiles() == dense_panel::Tiles::Avx2 ? "AVX2"

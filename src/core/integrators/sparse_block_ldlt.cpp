@@ -124,16 +124,11 @@ constexpr int kPanelColumns = 4;
 // A scalar pivot at most this fraction of its diagonal entry in A (or not finite) is singular.
 constexpr double kSingularPivot = 1e-14;
 
-std::atomic<bool>& useAvx2Flag()
+// The dense products' form (SparseBlockLdlt::setTiles()): the widest the processor has, by default.
+std::atomic<dense_panel::Tiles>& tilesSetting()
 {
-  static std::atomic<bool> use(dense_panel::available());
-  return use;
-}
-
-std::atomic<bool>& useAvx512Flag()
-{
-  static std::atomic<bool> use(dense_panel::widestTiles() == dense_panel::Tiles::Avx512);
-  return use;
+  static std::atomic<dense_panel::Tiles> tiles(dense_panel::widestTiles());
+  return tiles;
 }
 
 // The supernodes of L, as (first column, width), from its elimination tree and the counts of its
@@ -169,22 +164,22 @@ std::vector<std::array<int, 2>> findSupernodes(const std::vector<int>& parent, c
 
 bool SparseBlockLdlt::useAvx2()
 {
-  return useAvx2Flag().load(std::memory_order_relaxed);
+  return tiles() != dense_panel::Tiles::Scalar;
 }
 
 void SparseBlockLdlt::setUseAvx2(bool use)
 {
-  useAvx2Flag().store(use && dense_panel::available(), std::memory_order_relaxed);
+  setTiles(use ? dense_panel::widestTiles() : dense_panel::Tiles::Scalar);
 }
 
-bool SparseBlockLdlt::useAvx512()
+dense_panel::Tiles SparseBlockLdlt::tiles()
 {
-  return useAvx512Flag().load(std::memory_order_relaxed);
+  return tilesSetting().load(std::memory_order_relaxed);
 }
 
-void SparseBlockLdlt::setUseAvx512(bool use)
+void SparseBlockLdlt::setTiles(dense_panel::Tiles form)
 {
-  useAvx512Flag().store(use && dense_panel::widestTiles() == dense_panel::Tiles::Avx512, std::memory_order_relaxed);
+  tilesSetting().store(std::min(form, dense_panel::widestTiles()), std::memory_order_relaxed);
 }
 
 SparseBlockLdlt::Cost SparseBlockLdlt::estimateCost(const std::vector<int>& row_start,
@@ -519,9 +514,8 @@ bool SparseBlockLdlt::factorizeSupernodes(const std::vector<Eigen::Matrix3d>& bl
         scalar_pivot_[3 * i + r] = std::abs(blocks[b](r, r));
   }
 
-  const bool avx2 = useAvx2();
-  const dense_panel::Tiles tiles =
-      !avx2 ? dense_panel::Tiles::Scalar : (useAvx512() ? dense_panel::Tiles::Avx512 : dense_panel::Tiles::Avx2);
+  const dense_panel::Tiles tiles = SparseBlockLdlt::tiles();
+  const bool avx2 = tiles != dense_panel::Tiles::Scalar;
   for (std::size_t s = 0; s < supernodes_.size(); ++s)
   {
     const Supernode& supernode = supernodes_[s];

@@ -7,6 +7,8 @@
 #include <cstdint>
 #include <vector>
 
+#include "particle_sim/core/integrators/dense_panel.h"
+
 namespace particle_sim
 {
 namespace core
@@ -58,13 +60,15 @@ public:
   /// Whether analyze() took the supernodal form.
   bool supernodal() const { return !supernodes_.empty(); }
   /// Whether the supernodal form's dense products take vector tiles (the same bits either way; where
-  /// the processor has AVX2 and FMA, by default); false: the scalar ones.
+  /// the processor has AVX2 and FMA, by default); setting true takes the widest the processor has,
+  /// false the scalar ones.
   static bool useAvx2();
   static void setUseAvx2(bool use);
-  /// Whether those tiles are AVX-512's where the processor has it (the same bits; by default) rather
-  /// than AVX2's.
-  static bool useAvx512();
-  static void setUseAvx512(bool use);
+  /// The form of those products (dense_panel::Tiles, every form the same bits): the widest the
+  /// processor has by default; setTiles() takes the one asked for, or the widest below it that the
+  /// processor has.
+  static dense_panel::Tiles tiles();
+  static void setTiles(dense_panel::Tiles form);
   /// Off-diagonal blocks of L.
   std::int64_t factorBlocks() const { return static_cast<std::int64_t>(row_index_.size()); }
 
