@@ -744,7 +744,9 @@ def main():
                  'is a preconditioner that does not need a new factorization every step. Keeping '
                  'the factorization of an earlier step as CG\'s preconditioner was tried and fails here: while the '
                  'cloth swings, the implicit system changes so much from one step to the next at h = 1/60 that CG '
-                 'needs more than 20 iterations with it (each a solve with the factor), every step; and at h = 1/1000, '
+                 'needs more than 20 iterations with it (each a solve with the factor), every step (measured again '
+                 'in the engine on 2026-12-06, to a relative 1e-6: 38 iterations a step with the factor of the step '
+                 'before, 87 with one made every fourth step); and at h = 1/1000, '
                  'tried in the engine on 2026-11-29, refactored every 5, 10, 20 or 40 steps, CG took 5.2, 8.5, 15.1 '
                  'and 25.3 iterations a step and the step 6.3 to 17 ms, against 3.1 ms with block Jacobi: a solve '
                  'with the factor costs about 0.6 ms, as much as a dozen products with the springs\' blocks. The '
@@ -860,7 +862,18 @@ def main():
                  'of 30 runs of 100 steps). The springs\' Jacobians (a fifth of that step) were tried with their '
                  'four divisions (the direction\'s three and L/l) in one four-lane division, the same bits: no '
                  'faster (23.5 against 21.9 %% of the step in a profile), so the divider does not bound them; not '
-                 'kept.'
+                 'kept. Nor did wider registers help the pair product, on 2026-12-06: two pairs in one 512-bit '
+                 'register where the processor has AVX-512 (each lane\'s products and sums as in the AVX2 pass, the '
+                 'same bits, no fused multiply-adds) made hang64\'s step at h = 1/1000 slower, 2.11–2.16 ms against '
+                 '1.78–1.91 at 1e-6 (three runs of each in turn), likely because 512-bit operations issue on two ports '
+                 'of this Xeon instead of three and the shuffles that set out the two pairs\' blocks take one of them; not kept. '
+                 'Two threads for the direct solver\'s factorization, counted on hang64\'s tree of supernodes the '
+                 'same day (not built): the approximate minimum degree order leaves the tree lopsided. The root '
+                 'supernode (100 block columns) holds 14 %% of the flops, the subtrees under it 61, 20 and 6 %%, and '
+                 'the largest of those splits into 34 and 17 %% under a supernode of 10 %%. With each supernode on one '
+                 'thread, started once its children are done, two threads could at best take 0.64 of the time '
+                 '(1.55× faster): a step of about 3.6 ms, still above goal 1\'s 3 ms unless the largest supernodes\' '
+                 'own products are shared between the threads as well.'
                  % (direct64['detail'].split(';')[0] if direct64 and direct64['detail'] else 'see the table',
                     factorization_rate(direct64), roof_sentence(rows, direct64),
                     ' (%.0f iterations a step at 1e-6)' % cg_tol['cg_iterations'] if cg_tol else ''))
@@ -948,6 +961,20 @@ def main():
     lines.append('|---|---|---|---|')
     for r in springs:
         lines.append('| %d | %d | %s | %s |' % (r['size'], r['elements'], spread(r), r['detail']))
+    lines.append('')
+    lines.append('What bounds the force pass (2026-12-06, outside the bench: a driver stepping this cloth with the '
+                 'pass replaced by a changed copy, one run of each, in turn). Not the divider: the direction\'s three '
+                 'divisions replaced by one reciprocal and three products (a change of rounding) left the step where '
+                 'it was (64²: 7.19 and 7.29 against 7.03 and 7.21 ns a spring; 256²: 7.36 and 7.47 against 7.50 and '
+                 '7.83). Nor the chain of additions into a particle\'s force (five of a cloth point\'s six springs '
+                 'start at it, one after the other): summing a run of springs that share their end i in registers, '
+                 'stored once a run (the same bits), made it no faster (64²: 7.19 and 7.22 against 7.03 and 7.27 ns; '
+                 '256²: 8.2 and 8.4 against 7.8 and 7.9). At 64², where springs and particles fit in the second-level '
+                 'cache, the pass alone takes 5.1 ns a spring, some 13 cycles at 2.6 GHz, with two springs in the '
+                 'lanes of 128-bit registers and every coordinate loaded and added alone: what is left is most '
+                 'likely the instructions it issues, so the way to 2× the floor is fewer of them a spring (wider '
+                 'registers, a particle\'s coordinates loaded at once) and the passes over the particles folded into '
+                 'the force pass.')
     lines.append('')
     collision_rows = [r for r in rows if r['case'] == 'selfcollision']
     if collision_rows:
