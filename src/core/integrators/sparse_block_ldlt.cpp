@@ -8,6 +8,7 @@
 #include <cmath>
 
 #include "particle_sim/core/integrators/dense_panel.h"
+#include "particle_sim/core/worker_pool.h"
 
 namespace particle_sim
 {
@@ -268,6 +269,10 @@ void SparseBlockLdlt::analyze(const std::vector<int>& row_start, const std::vect
 
   supernodes_.clear();
   update_slot_.clear();
+  share_of_.clear();
+  shared_order_[0].clear();
+  shared_order_[1].clear();
+  shared_share_ = 0.0;
   if (wide)
   {
     for (const auto& [first, width] : found)
@@ -389,6 +394,142 @@ void SparseBlockLdlt::analyzeSupernodes(const std::vector<int>& row_start, const
     }
   }
   run_start_[supernodes_.size()] = static_cast<int>(runs_.size());
+  planSubtrees(supernode_of);
+}
+
+void SparseBlockLdlt::planSubtrees(const std::vector<int>& supernode_of)
+{
+  const int count = static_cast<int>(supernodes_.size());
+  share_of_.assign(count, -1);
+  shared_order_[0].clear();
+  shared_order_[1].clear();
+  kept_scaled_at_.assign(count, kNotKept);
+  kept_scaled_.clear();
+  second_scaled_.clear();
+  shared_share_ = 0.0;
+  // The tree of supernodes: each one's parent is the supernode of its first row below (−1 at a
+  // root), and comes after it. Its work: its panel's flops and its update's, as dense counts; its
+  // subtree's, summed up the tree.
+  std::vector<int> parent(count, -1), child_start(count + 1, 0);
+  std::vector<double> work(count), subtree(count);
+  for (int s = 0; s < count; ++s)
+  {
+    const Supernode& supernode = supernodes_[s];
+    const double w = 3.0 * supernode.width, b = 3.0 * supernode.below;
+    if (supernode.below > 0)
+    {
+      parent[s] = supernode_of[super_rows_[supernode.rows]];
+      ++child_start[parent[s] + 1];
+    }
+    work[s] = w * w * w / 3.0 + b * w * w + b * b * w;
+    subtree[s] = work[s];
+  }
+  std::vector<int> roots;
+  double total = 0.0;
+  for (int s = 0; s < count; ++s)
+  {
+    child_start[s + 1] += child_start[s];
+    if (parent[s] >= 0)
+    {
+      subtree[parent[s]] += subtree[s];
+    }
+    else
+    {
+      roots.push_back(s);
+      total += subtree[s];
+    }
+  }
+  std::vector<int> children(child_start[count]);
+  std::vector<int> next_child(child_start.begin(), child_start.end() - 1);
+  for (int s = 0; s < count; ++s)
+    if (parent[s] >= 0) children[next_child[parent[s]]++] = s;
+
+  // Two threads' time for a frontier of whole subtrees under the supernodes above it: the larger of
+  // two bins filled heaviest subtree first, each into the lighter bin, plus the work above.
+  auto heaviestFirst = [&](std::vector<int> frontier) {
+    std::sort(frontier.begin(), frontier.end(),
+              [&](int a, int b) { return subtree[a] > subtree[b] || (subtree[a] == subtree[b] && a < b); });
+    return frontier;
+  };
+  auto twoThreadTime = [&](const std::vector<int>& frontier, double above) {
+    double bins[2] = {0.0, 0.0};
+    for (const int r : heaviestFirst(frontier))
+      bins[bins[1] < bins[0] ? 1 : 0] += subtree[r];
+    return std::max(bins[0], bins[1]) + above;
+  };
+  // From the roots down: the heaviest subtree of the frontier is split (its root goes above, its
+  // children join the frontier) a few times, and the frontier with the least time is kept.
+  constexpr int kSplits = 64;
+  std::vector<int> frontier = roots, best_frontier = roots;
+  double above = 0.0, best_time = twoThreadTime(frontier, above);
+  for (int split = 0; split < kSplits && !frontier.empty(); ++split)
+  {
+    const auto heaviest =
+        std::max_element(frontier.begin(), frontier.end(), [&](int a, int b) { return subtree[a] < subtree[b]; });
+    const int h = *heaviest;
+    if (child_start[h] == child_start[h + 1]) break;
+    frontier.erase(heaviest);
+    frontier.insert(frontier.end(), children.begin() + child_start[h], children.begin() + child_start[h + 1]);
+    above += work[h];
+    const double time = twoThreadTime(frontier, above);
+    if (time < best_time)
+    {
+      best_time = time;
+      best_frontier = frontier;
+    }
+  }
+  // Not worth a second thread below a tenth less time (a chain, a small sheet).
+  if (!(best_time < 0.9 * total)) return;
+
+  // Each subtree of the frontier into the lighter share, heaviest first, all its supernodes with it.
+  double shares[2] = {0.0, 0.0};
+  std::vector<int> stack;
+  for (const int r : heaviestFirst(best_frontier))
+  {
+    const int share = shares[1] < shares[0] ? 1 : 0;
+    shares[share] += subtree[r];
+    stack.assign(1, r);
+    while (!stack.empty())
+    {
+      const int s = stack.back();
+      stack.pop_back();
+      share_of_[s] = static_cast<signed char>(share);
+      stack.insert(stack.end(), children.begin() + child_start[s], children.begin() + child_start[s + 1]);
+    }
+  }
+  shared_share_ = (shares[0] + shares[1]) / total;
+  // Each share's supernodes in order; those with runs into the supernodes above keep their T.
+  std::size_t kept = 0;
+  for (int s = 0; s < count; ++s)
+  {
+    if (share_of_[s] < 0) continue;
+    shared_order_[share_of_[s]].push_back(s);
+    for (int q = run_start_[s]; q < run_start_[s + 1]; ++q)
+    {
+      if (share_of_[runs_[q].target] >= 0) continue;
+      const Supernode& supernode = supernodes_[s];
+      kept_scaled_at_[s] = kept;
+      kept += 9 * static_cast<std::size_t>(supernode.width + supernode.below) * supernode.width;
+      break;
+    }
+  }
+  kept_scaled_.assign(kept, 0.0);
+  second_scaled_.assign(scaled_.size(), 0.0);
+  // Each supernode above the shares: the column that splits the updates it takes between the two
+  // threads, about half of its panel's entries on and below the diagonal (column c of m rows has
+  // m − c of them) before it.
+  split_column_.assign(count, 0);
+  for (int t = 0; t < count; ++t)
+  {
+    if (share_of_[t] >= 0) continue;
+    const long m = 3L * (supernodes_[t].width + supernodes_[t].below), width = 3L * supernodes_[t].width;
+    const long entries = width * m - width * (width - 1) / 2;
+    long before = 0;
+    int split = 0;
+    for (; split < width && 2 * (before + m - split) <= entries; ++split)
+      before += m - split;
+    split_column_[t] = split;
+  }
 }
 
 bool SparseBlockLdlt::factorize(const std::vector<Eigen::Matrix3d>& blocks, const std::vector<char>& pinned)
@@ -488,83 +629,181 @@ void SparseBlockLdlt::solve(const Eigen::Matrix3Xd& b, Eigen::Matrix3Xd& x)
 bool SparseBlockLdlt::factorizeSupernodes(const std::vector<Eigen::Matrix3d>& blocks)
 {
   // A's lower triangle into the panels; a pinned particle's row and column stay 0, its diagonal I.
-  // Each scalar column's diagonal entry in A is the scale its pivot is judged by.
-  std::fill(panels_.begin(), panels_.end(), 0.0);
-  for (std::size_t b = 0; b < blocks.size(); ++b)
-  {
-    const auto [offset, ld] = block_place_[b];
-    if (offset < 0) continue;
-    const int i = block_row_new_[b], k = block_column_new_[b];
-    double* const corner = panels_.data() + offset;
-    if (pinned_new_[i] || pinned_new_[k])
+  // Each scalar column's diagonal entry in A is the scale its pivot is judged by. Each block writes
+  // its own entries, so with two threads planned (planSubtrees()) they share the zeroing and the
+  // blocks by halves.
+  const bool two_threads =
+      workers_ && workers_->threads() > 1 && !shared_order_[0].empty() && !shared_order_[1].empty();
+  auto scatter = [&](std::size_t first, std::size_t last) {
+    for (std::size_t b = first; b < last; ++b)
     {
+      const auto [offset, ld] = block_place_[b];
+      if (offset < 0) continue;
+      const int i = block_row_new_[b], k = block_column_new_[b];
+      double* const corner = panels_.data() + offset;
+      if (pinned_new_[i] || pinned_new_[k])
+      {
+        if (i == k)
+          for (int r = 0; r < 3; ++r)
+          {
+            corner[r + r * ld] = 1.0;
+            scalar_pivot_[3 * i + r] = 1.0;
+          }
+        continue;
+      }
+      for (int c = 0; c < 3; ++c)
+        for (int r = 0; r < 3; ++r)
+          corner[r + c * ld] = blocks[b](r, c);
       if (i == k)
         for (int r = 0; r < 3; ++r)
-        {
-          corner[r + r * ld] = 1.0;
-          scalar_pivot_[3 * i + r] = 1.0;
-        }
-      continue;
+          scalar_pivot_[3 * i + r] = std::abs(blocks[b](r, r));
     }
-    for (int c = 0; c < 3; ++c)
-      for (int r = 0; r < 3; ++r)
-        corner[r + c * ld] = blocks[b](r, c);
-    if (i == k)
-      for (int r = 0; r < 3; ++r)
-        scalar_pivot_[3 * i + r] = std::abs(blocks[b](r, r));
+  };
+  if (two_threads)
+  {
+    workers_->forEachChunk(2, 1, [&](int half, int) {
+      const std::size_t middle = panels_.size() / 2;
+      std::fill(panels_.begin() + (half == 0 ? 0 : middle), half == 0 ? panels_.begin() + middle : panels_.end(), 0.0);
+    });
+    workers_->forEachChunk(2, 1, [&](int half, int) {
+      const std::size_t middle = blocks.size() / 2;
+      scatter(half == 0 ? 0 : middle, half == 0 ? middle : blocks.size());
+    });
+  }
+  else
+  {
+    std::fill(panels_.begin(), panels_.end(), 0.0);
+    scatter(0, blocks.size());
   }
 
   const dense_panel::Tiles tiles = SparseBlockLdlt::tiles();
-  const bool avx2 = tiles != dense_panel::Tiles::Scalar;
-  for (std::size_t s = 0; s < supernodes_.size(); ++s)
+  const std::size_t count = supernodes_.size();
+  if (two_threads)
   {
-    const Supernode& supernode = supernodes_[s];
-    const int width = 3 * supernode.width, below = 3 * supernode.below, m = width + below;
-    double* const panel = panels_.data() + supernode.panel;
-    double* const scaled = scaled_.data();  // T = L D, column by column as they are done
-    double* const pivots = scalar_pivot_.data() + 3 * supernode.first;
-    // Left-looking by groups of columns: the columns before a group, as one dense product, then the
-    // group's own columns one by one; each column's pivot, T's column (the column before it is
-    // divided by its pivot) and L's.
-    for (int c0 = 0; c0 < width; c0 += kPanelColumns)
-    {
-      const int c1 = std::min(width, c0 + kPanelColumns);
-      if (c0 > 0)
+    // The two shares at once, one a thread, each supernode's runs into the supernodes above the
+    // shares held back.
+    bool factored[2] = {true, true};
+    workers_->forEachChunk(2, 1, [&](int share, int) {
+      double* const scratch = share == 0 ? scaled_.data() : second_scaled_.data();
+      for (const int s : shared_order_[share])
       {
-        long group_columns[kPanelColumns];  // the group's columns in the panel, from its diagonal
-        for (int c = c0; c < c1; ++c)
-          group_columns[c - c0] = static_cast<long>(c - c0) * m;
-        dense_panel::subtractLowerProducts(tiles, m - c0, c1 - c0, c0, scaled + c0, m, panel + c0, m, ascending_.data(),
-                                           group_columns, panel + c0 + static_cast<long>(c0) * m);
-      }
-      for (int c = c0; c < c1; ++c)
-      {
-        double* const column = panel + static_cast<long>(c) * m;
-        for (int p = c0; p < c; ++p)
+        double* const scaled = kept_scaled_at_[s] == kNotKept ? scratch : kept_scaled_.data() + kept_scaled_at_[s];
+        if (!factorSupernode(s, scaled, true, tiles))
         {
-          dense_panel::subtractScaled(avx2, m - c, scaled + static_cast<long>(p) * m + c,
-                                      panel[c + static_cast<long>(p) * m], column + c);
+          factored[share] = false;
+          return;
         }
-        const double pivot = column[c];
-        if (!std::isfinite(pivot) || !(std::abs(pivot) > kSingularPivot * pivots[c])) return false;
-        pivots[c] = pivot;
-        dense_panel::keepAndScale(avx2, m - c - 1, 1.0 / pivot, column + c + 1,
-                                  scaled + static_cast<long>(c) * m + c + 1);
       }
-    }
-    // The update of the rows below, −L_R D L_Rᵀ, subtracted run by run where it belongs in the
-    // panels that hold those rows.
-    for (int q = run_start_[s]; q < run_start_[s + 1]; ++q)
+    });
+    if (!factored[0] || !factored[1]) return false;
+    // Then, in order, the held-back runs and the supernodes above the shares, each run's columns
+    // split between the two threads (each column's entries on one thread, their terms in the order
+    // of one thread: supernode after supernode); the panels above on one thread.
+    for (std::size_t s = 0; s < count;)
     {
-      const UpdateRun& run = runs_[q];
-      const int first_row = 3 * run.begin;
-      dense_panel::subtractLowerProducts(tiles, below - first_row, 3 * (run.end - run.begin), width,
-                                         scaled + width + first_row, m, panel + width + first_row, m,
-                                         update_row_offset_.data() + run.rows,
-                                         update_column_offset_.data() + run.columns, panels_.data());
+      std::size_t end = s;
+      bool held_back = false;
+      for (; end < count && share_of_[end] >= 0; ++end)
+        held_back = held_back || kept_scaled_at_[end] != kNotKept;
+      if (held_back)
+      {
+        workers_->forEachChunk(2, 1, [&](int half, int) {
+          for (std::size_t t = s; t < end; ++t)
+            if (kept_scaled_at_[t] != kNotKept)
+              subtractRuns(t, kept_scaled_.data() + kept_scaled_at_[t], -1, tiles, half);
+        });
+      }
+      if (end == count) break;
+      if (!factorPanel(end, scaled_.data(), tiles)) return false;
+      workers_->forEachChunk(2, 1, [&](int half, int) { subtractRuns(end, scaled_.data(), 2, tiles, half); });
+      s = end + 1;
+    }
+    return true;
+  }
+  for (std::size_t s = 0; s < count; ++s)
+    if (!factorSupernode(s, scaled_.data(), false, tiles)) return false;
+  return true;
+}
+
+bool SparseBlockLdlt::factorSupernode(std::size_t s, double* scaled, bool shared_only, dense_panel::Tiles tiles)
+{
+  if (!factorPanel(s, scaled, tiles)) return false;
+  subtractRuns(s, scaled, shared_only ? share_of_[s] : 2, tiles, -1);
+  return true;
+}
+
+bool SparseBlockLdlt::factorPanel(std::size_t s, double* scaled, dense_panel::Tiles tiles)
+{
+  const bool avx2 = tiles != dense_panel::Tiles::Scalar;
+  const Supernode& supernode = supernodes_[s];
+  const int width = 3 * supernode.width, below = 3 * supernode.below, m = width + below;
+  double* const panel = panels_.data() + supernode.panel;
+  double* const pivots = scalar_pivot_.data() + 3 * supernode.first;
+  // Left-looking by groups of columns: the columns before a group, as one dense product, then the
+  // group's own columns one by one; each column's pivot, T's column (the column before it is
+  // divided by its pivot) and L's.
+  for (int c0 = 0; c0 < width; c0 += kPanelColumns)
+  {
+    const int c1 = std::min(width, c0 + kPanelColumns);
+    if (c0 > 0)
+    {
+      long group_columns[kPanelColumns];  // the group's columns in the panel, from its diagonal
+      for (int c = c0; c < c1; ++c)
+        group_columns[c - c0] = static_cast<long>(c - c0) * m;
+      dense_panel::subtractLowerProducts(tiles, m - c0, c1 - c0, c0, scaled + c0, m, panel + c0, m, ascending_.data(),
+                                         group_columns, panel + c0 + static_cast<long>(c0) * m);
+    }
+    for (int c = c0; c < c1; ++c)
+    {
+      double* const column = panel + static_cast<long>(c) * m;
+      for (int p = c0; p < c; ++p)
+      {
+        dense_panel::subtractScaled(avx2, m - c, scaled + static_cast<long>(p) * m + c,
+                                    panel[c + static_cast<long>(p) * m], column + c);
+      }
+      const double pivot = column[c];
+      if (!std::isfinite(pivot) || !(std::abs(pivot) > kSingularPivot * pivots[c])) return false;
+      pivots[c] = pivot;
+      dense_panel::keepAndScale(avx2, m - c - 1, 1.0 / pivot, column + c + 1,
+                                scaled + static_cast<long>(c) * m + c + 1);
     }
   }
   return true;
+}
+
+void SparseBlockLdlt::subtractRuns(std::size_t s, const double* scaled, int share, dense_panel::Tiles tiles, int half)
+{
+  // The update of the rows below, −L_R D L_Rᵀ, subtracted run by run where it belongs in the
+  // panels that hold those rows.
+  const Supernode& supernode = supernodes_[s];
+  const int width = 3 * supernode.width, below = 3 * supernode.below, m = width + below;
+  const double* const panel = panels_.data() + supernode.panel;
+  for (int q = run_start_[s]; q < run_start_[s + 1]; ++q)
+  {
+    const UpdateRun& run = runs_[q];
+    if (share != 2 && share_of_[run.target] != share) continue;
+    const int first_row = 3 * run.begin, rows = below - first_row, columns = 3 * (run.end - run.begin);
+    // Half 0 takes the run's columns that land in the target's columns before its split column,
+    // half 1 the others (the run's columns land in ascending columns of the target): every column of
+    // a panel above the shares is written by one thread alone, whichever supernode's update it is.
+    int from = 0, to = columns;
+    if (half >= 0)
+    {
+      const Supernode& target = supernodes_[run.target];
+      const long target_m = 3L * (target.width + target.below);
+      const long* const landing = update_column_offset_.data() + run.columns;
+      int split = 0;
+      while (split < columns &&
+             (landing[split] - static_cast<long>(target.panel)) / target_m < split_column_[run.target])
+        ++split;
+      from = half == 0 ? 0 : split;
+      to = half == 0 ? split : columns;
+    }
+    if (from == to) continue;
+    dense_panel::subtractLowerProducts(tiles, rows - from, to - from, width, scaled + width + first_row + from, m,
+                                       panel + width + first_row + from, m, update_row_offset_.data() + run.rows + from,
+                                       update_column_offset_.data() + run.columns + from, panels_.data());
+  }
 }
 
 void SparseBlockLdlt::solveSupernodes()

@@ -156,6 +156,7 @@ public:
   {
     workers_ = workers;
     multigrid_.setWorkers(workers);
+    direct_.setWorkers(workers);
   }
   /// Whether the conjugate gradient's passes run a particle's three coordinates in one 256-bit
   /// register (cg_avx2.h), which they do where the processor has AVX2, with the same bits as the

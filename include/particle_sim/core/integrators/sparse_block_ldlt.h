@@ -13,6 +13,8 @@ namespace particle_sim
 {
 namespace core
 {
+class WorkerPool;
+
 /// out = a b, inline, the same bits as Eigen's `out.noalias() = a * b` (Eigen 3.4, SSE2): each
 /// coefficient summed in Eigen's order, rows 0 and 1 (a packet) left to right, row 2 (a scalar
 /// reduction) with its last two terms first. For a loop where GCC calls Eigen's product out of line.
@@ -71,6 +73,16 @@ public:
   static void setTiles(dense_panel::Tiles form);
   /// Off-diagonal blocks of L.
   std::int64_t factorBlocks() const { return static_cast<std::int64_t>(row_index_.size()); }
+
+  /// Threads for factorize() (null: the caller's alone). With two or more, the supernodal form's
+  /// tree of supernodes is cut, once per pattern, into two sets of whole subtrees of about equal
+  /// work, each factored by one thread, and the supernodes above them, factored after both by one
+  /// thread (see planSubtrees()). Every entry of L gets the same terms in the same order as on one
+  /// thread: the same bits.
+  void setWorkers(WorkerPool* workers) { workers_ = workers; }
+  /// The factorization's flops in the two sets of subtrees that two threads share, over all of
+  /// them (0 when none are planned: no supernodal form, or no cut worth it).
+  double sharedShare() const { return shared_share_; }
 
   /// What analyze() would find, from the pattern alone (L is not built): whether the direct solver
   /// is worth analysing at all.
@@ -146,6 +158,29 @@ private:
   // factorize() and solve() in the supernodal form (solve() on work_, in the new order).
   bool factorizeSupernodes(const std::vector<Eigen::Matrix3d>& blocks);
   void solveSupernodes();
+  // One supernode's panel factored (factorPanel()), false at a singular pivot; then its update
+  // subtracted from the panels above it: all of its runs, or (`shared_only`) only those into
+  // supernodes of its own share, the others left for subtractRuns().
+  bool factorSupernode(std::size_t s, double* scaled, bool shared_only, dense_panel::Tiles tiles);
+  // Supernode s's panel factored, T = L D into `scaled` (a panel's size); false at a singular pivot.
+  bool factorPanel(std::size_t s, double* scaled, dense_panel::Tiles tiles);
+  // The update runs of supernode s into the supernodes of share `share` (−1: above the shares; 2:
+  // every run), from its T in `scaled`: each run whole (half −1), or the first (0) or second (1)
+  // part of its columns, about half its entries each.
+  void subtractRuns(std::size_t s, const double* scaled, int share, dense_panel::Tiles tiles, int half);
+  // Two threads' plan: share_of_[s] is 0 or 1 for a supernode in one of the two sets of subtrees,
+  // −1 for one above them; shared_order_[k] lists share k's supernodes in order; a shared supernode
+  // with runs into those above keeps its T at kept_scaled_at_[s] in kept_scaled_ (else kNotKept)
+  // for those runs, subtracted after both shares are done.
+  void planSubtrees(const std::vector<int>& supernode_of);
+  static constexpr std::size_t kNotKept = SIZE_MAX;
+  std::vector<signed char> share_of_;
+  std::vector<int> shared_order_[2];
+  std::vector<std::size_t> kept_scaled_at_;
+  std::vector<int> split_column_;                    // a supernode above the shares: where subtractRuns()'s halves meet
+  std::vector<double> kept_scaled_, second_scaled_;  // the kept T's; the second thread's T
+  double shared_share_ = 0.0;
+  WorkerPool* workers_ = nullptr;
   Eigen::Matrix3Xd work_;
   double factor_flops_ = 0.0, solve_flops_ = 0.0;
 };
