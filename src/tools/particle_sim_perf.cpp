@@ -894,6 +894,71 @@ void writeTwoThreadCeiling(std::ostream& out, bool quick, const char* when)
 void threads(std::ostream& out, bool quick)
 {
   writeTwoThreadCeiling(out, quick, "before");
+  // One body's steps by one thread and by two, from rest over the same steps: `per_step` is the rough
+  // cost of a step in units of one force pass over the n × n particles.
+  auto compare = [&](const std::string& name, const core::SpringNetworkDef& net, int n, double dt, double per_step) {
+    // The two bodies' repeats alternate (one thread, two threads, one, ...), so that a spell of
+    // load on the machine's other core slows both alike rather than one of them.
+    core::WorkerPool one_thread(1), two_threads(2);
+    core::WorkerPool* pools[2] = {&one_thread, &two_threads};
+    std::vector<std::unique_ptr<core::SpringNetworkBody>> bodies;
+    for (core::WorkerPool* pool : pools)
+    {
+      bodies.push_back(std::make_unique<core::SpringNetworkBody>(net));
+      bodies.back()->setWorkers(pool);
+    }
+    // About 2e6 particle-force-passes a repeat (30 steps of a 256² symplectic step, about 0.1 s): with
+    // fewer, each repeat's first steps, which find the caches full of the other body's data, weigh on
+    // the time (with 4e5, 6 steps, both bodies' 256² symplectic steps took 1.3 to 1.4 times as long).
+    const int steps = quick ? 2 : std::max(2, static_cast<int>(2e6 / (static_cast<double>(n) * n * per_step)));
+    const int repeats = quick ? 2 : 7;
+    const core::Environment env = noGround();
+    std::vector<double> per_step_times[2];
+    long long iterations[2] = {0, 0}, timed_steps[2] = {0, 0};  // CG iterations over the timed steps
+    for (int repeat = -1; repeat < repeats; ++repeat)           // repeat −1: the warm-up steps, untimed
+    {
+      for (int b = 0; b < 2; ++b)
+      {
+        const double time = timeRepeat(
+            [&] {
+              bodies[b]->step(dt, env);
+              if (repeat < 0) return;
+              iterations[b] += bodies[b]->lastSolve().iterations;
+              ++timed_steps[b];
+            },
+            repeat < 0 ? (quick ? 1 : 2) : steps);
+        if (repeat >= 0) per_step_times[b].push_back(time);
+      }
+    }
+    Row rows[2];
+    Eigen::Matrix3Xd end_state[2];
+    for (int b = 0; b < 2; ++b)
+    {
+      const core::SpringNetworkBody& body = *bodies[b];
+      Row& row = rows[b];
+      row.timing = summarize(per_step_times[b]);
+      row.iterations = timed_steps[b] > 0 ? static_cast<double>(iterations[b]) / timed_steps[b] : 0.0;
+      if (body.frozen()) row.detail = "FROZE: " + body.frozenReason();
+      row.case_name = "threads";
+      row.variant = name + (b == 0 ? " 1 thread" : " 2 threads");
+      row.size = n;
+      row.elements = static_cast<double>(n) * n;
+      const int count = body.particles().size();
+      end_state[b].resize(3, 2 * count);
+      end_state[b] << body.particles().position.leftCols(count), body.particles().velocity.leftCols(count);
+    }
+    const int substeps = bodies[1]->lastSubsteps();
+    const bool same = end_state[0].size() == end_state[1].size() &&
+                      std::memcmp(end_state[0].data(), end_state[1].data(), sizeof(double) * end_state[0].size()) == 0;
+    std::ostringstream detail;
+    detail.precision(3);
+    detail << rows[0].timing.min / rows[1].timing.min << "x faster than 1 thread (min against min); "
+           << (same ? "bit-identical end state" : "END STATE DIFFERS FROM 1 THREAD") << "; " << substeps
+           << " substeps a step";
+    rows[1].detail = detail.str() + (rows[1].detail.empty() ? "" : "; " + rows[1].detail);
+    writeRow(out, rows[0]);
+    writeRow(out, rows[1]);
+  };
   struct Method
   {
     const char* name;
@@ -916,72 +981,17 @@ void threads(std::ostream& out, bool quick)
       core::ClothGridDef def = squareCloth(n, method.solver);
       def.integrator.type = method.type;
       def.integrator.max_substeps = verlet ? 100000 : 1;
-      // The two bodies' repeats alternate (one thread, two threads, one, ...), so that a spell of
-      // load on the machine's other core slows both alike rather than one of them.
-      core::WorkerPool one_thread(1), two_threads(2);
-      core::WorkerPool* pools[2] = {&one_thread, &two_threads};
-      std::vector<std::unique_ptr<core::SpringNetworkBody>> bodies;
-      for (core::WorkerPool* pool : pools)
-      {
-        bodies.push_back(std::make_unique<core::SpringNetworkBody>(core::buildClothGrid(def)));
-        bodies.back()->setWorkers(pool);
-      }
-      const double dt = verlet || implicit ? 1.0 / 60.0 : 0.5 * 2.0 / bodies[0]->frequencyBound();
-      const double per_step = verlet || implicit ? 1e3 : 1.0;  // rough cost in units of one force pass
-      // About 2e6 particle-force-passes a repeat (30 steps of a 256² symplectic step, about 0.1 s): with
-      // fewer, each repeat's first steps, which find the caches full of the other body's data, weigh on
-      // the time (with 4e5, 6 steps, both bodies' 256² symplectic steps took 1.3 to 1.4 times as long).
-      const int steps = quick ? 2 : std::max(2, static_cast<int>(2e6 / (static_cast<double>(n) * n * per_step)));
-      const int repeats = quick ? 2 : 7;
-      const core::Environment env = noGround();
-      std::vector<double> per_step_times[2];
-      long long iterations[2] = {0, 0}, timed_steps[2] = {0, 0};  // CG iterations over the timed steps
-      for (int repeat = -1; repeat < repeats; ++repeat)           // repeat −1: the warm-up steps, untimed
-      {
-        for (int b = 0; b < 2; ++b)
-        {
-          const double time = timeRepeat(
-              [&] {
-                bodies[b]->step(dt, env);
-                if (repeat < 0) return;
-                iterations[b] += bodies[b]->lastSolve().iterations;
-                ++timed_steps[b];
-              },
-              repeat < 0 ? (quick ? 1 : 2) : steps);
-          if (repeat >= 0) per_step_times[b].push_back(time);
-        }
-      }
-      Row rows[2];
-      Eigen::Matrix3Xd end_state[2];
-      for (int b = 0; b < 2; ++b)
-      {
-        const core::SpringNetworkBody& body = *bodies[b];
-        Row& row = rows[b];
-        row.timing = summarize(per_step_times[b]);
-        row.iterations = timed_steps[b] > 0 ? static_cast<double>(iterations[b]) / timed_steps[b] : 0.0;
-        if (body.frozen()) row.detail = "FROZE: " + body.frozenReason();
-        row.case_name = "threads";
-        row.variant = std::string(method.name) + (b == 0 ? " 1 thread" : " 2 threads");
-        row.size = n;
-        row.elements = static_cast<double>(n) * n;
-        const int count = body.particles().size();
-        end_state[b].resize(3, 2 * count);
-        end_state[b] << body.particles().position.leftCols(count), body.particles().velocity.leftCols(count);
-      }
-      const int substeps = bodies[1]->lastSubsteps();
-      const bool same =
-          end_state[0].size() == end_state[1].size() &&
-          std::memcmp(end_state[0].data(), end_state[1].data(), sizeof(double) * end_state[0].size()) == 0;
-      std::ostringstream detail;
-      detail.precision(3);
-      detail << rows[0].timing.min / rows[1].timing.min << "x faster than 1 thread (min against min); "
-             << (same ? "bit-identical end state" : "END STATE DIFFERS FROM 1 THREAD") << "; " << substeps
-             << " substeps a step";
-      rows[1].detail = detail.str() + (rows[1].detail.empty() ? "" : "; " + rows[1].detail);
-      writeRow(out, rows[0]);
-      writeRow(out, rows[1]);
+      const core::SpringNetworkDef net = core::buildClothGrid(def);
+      const double dt = verlet || implicit ? 1.0 / 60.0 : 0.5 * 2.0 / core::SpringNetworkBody(net).frequencyBound();
+      compare(method.name, net, n, dt, verlet || implicit ? 1e3 : 1.0);
     }
   }
+  // hang64 by the direct solver at dt = 1/60 (goal 1's case): the factorization's two shares of
+  // subtrees at once (README, "Or directly").
+  core::SpringNetworkDef hang64 = particle_sim_bench::hang64(64);
+  hang64.integrator.type = core::kImplicitEulerIntegrator;
+  hang64.integrator.linear_solver = core::LinearSolverType::Direct;
+  compare("implicit_euler direct hang64", hang64, 64, 1.0 / 60.0, 25.0);
   writeTwoThreadCeiling(out, quick, "after");
 }
 

@@ -406,6 +406,9 @@ void SparseBlockLdlt::planSubtrees(const std::vector<int>& supernode_of)
   kept_scaled_at_.assign(count, kNotKept);
   kept_scaled_.clear();
   second_scaled_.clear();
+  kept_sums_at_.clear();
+  kept_sums_.clear();
+  second_gathered_.clear();
   shared_share_ = 0.0;
   // The tree of supernodes: each one's parent is the supernode of its first row below (−1 at a
   // root), and comes after it. Its work: its panel's flops and its update's, as dense counts; its
@@ -515,6 +518,26 @@ void SparseBlockLdlt::planSubtrees(const std::vector<int>& supernode_of)
   }
   kept_scaled_.assign(kept, 0.0);
   second_scaled_.assign(scaled_.size(), 0.0);
+  // The solve's: each shared supernode's first row below that lies above the shares (its rows are
+  // ascending: those of its own share, which are its ancestors there, come first), and room for the
+  // sums of those rows.
+  first_row_above_.assign(count, 0);
+  kept_sums_at_.assign(count, kNotKept);
+  std::size_t sums = 0;
+  for (int s = 0; s < count; ++s)
+  {
+    if (share_of_[s] < 0) continue;
+    const Supernode& supernode = supernodes_[s];
+    int a = 0;
+    while (a < supernode.below && share_of_[supernode_of[super_rows_[supernode.rows + a]]] >= 0)
+      ++a;
+    first_row_above_[s] = a;
+    if (a == supernode.below) continue;
+    kept_sums_at_[s] = sums;
+    sums += 3 * static_cast<std::size_t>(supernode.below - a);
+  }
+  kept_sums_.assign(sums, 0.0);
+  second_gathered_.assign(gathered_.size(), 0.0);
   // Each supernode above the shares: the column that splits the updates it takes between the two
   // threads, about half of its panel's entries on and below the diagonal (column c of m rows has
   // m − c of them) before it.
@@ -809,44 +832,99 @@ void SparseBlockLdlt::subtractRuns(std::size_t s, const double* scaled, int shar
 void SparseBlockLdlt::solveSupernodes()
 {
   // L y = b by supernodes (each panel's own triangle, then its rows below gathered as one sum a
-  // row), y = D⁻¹ y, then Lᵀ x = y backwards; on work_'s numbers in the new order.
+  // row), y = D⁻¹ y, then Lᵀ x = y backwards; on work_'s numbers in the new order. With two threads
+  // planned (planSubtrees()): forwards, the two shares at once, each supernode's sums for the rows
+  // above the shares kept and added after both, in order, with the supernodes above; backwards,
+  // the supernodes above first, then the two shares at once. Every number of y gets its terms in the
+  // order of one thread.
   double* const y = work_.data();
-  double* const gathered = gathered_.data();
   const bool avx2 = useAvx2();
-  for (const Supernode& supernode : supernodes_)
+  const std::size_t count = supernodes_.size();
+  if (!(workers_ && workers_->threads() > 1 && !shared_order_[0].empty() && !shared_order_[1].empty()))
   {
-    const int width = 3 * supernode.width, below = 3 * supernode.below, m = width + below;
-    const double* const panel = panels_.data() + supernode.panel;
-    double* const own = y + 3L * supernode.first;
-    std::fill(gathered, gathered + below, 0.0);
-    for (int c = 0; c < width; ++c)
-    {
-      const double* const column = panel + static_cast<long>(c) * m;
-      dense_panel::subtractScaled(avx2, width - c - 1, column + c + 1, own[c], own + c + 1);
-      dense_panel::subtractScaled(avx2, below, column + width, own[c], gathered);  // −Σ of the rows below
-    }
-    const int* const rows = super_rows_.data() + supernode.rows;
-    for (int a = 0; a < supernode.below; ++a)
-      for (int r = 0; r < 3; ++r)
-        y[3L * rows[a] + r] += gathered[3 * a + r];
+    for (std::size_t s = 0; s < count; ++s)
+      forwardSupernode(s, y, gathered_.data(), avx2, nullptr);
+    for (std::size_t q = 0; q < scalar_pivot_.size(); ++q)
+      y[q] /= scalar_pivot_[q];
+    for (std::size_t s = count; s-- > 0;)
+      backwardSupernode(s, y, gathered_.data(), avx2);
+    return;
   }
-  for (std::size_t q = 0; q < scalar_pivot_.size(); ++q)
-    y[q] /= scalar_pivot_[q];
-  for (auto supernode = supernodes_.rbegin(); supernode != supernodes_.rend(); ++supernode)
+  workers_->forEachChunk(2, 1, [&](int share, int) {
+    double* const gathered = share == 0 ? gathered_.data() : second_gathered_.data();
+    for (const int s : shared_order_[share])
+      forwardSupernode(s, y, gathered, avx2,
+                       kept_sums_at_[s] == kNotKept ? nullptr : kept_sums_.data() + kept_sums_at_[s]);
+  });
+  for (std::size_t s = 0; s < count; ++s)
   {
-    const int width = 3 * supernode->width, below = 3 * supernode->below, m = width + below;
-    const double* const panel = panels_.data() + supernode->panel;
-    double* const own = y + 3L * supernode->first;
-    const int* const rows = super_rows_.data() + supernode->rows;
-    for (int a = 0; a < supernode->below; ++a)
-      for (int r = 0; r < 3; ++r)
-        gathered[3 * a + r] = y[3L * rows[a] + r];
-    for (int c = width - 1; c >= 0; --c)
+    if (share_of_[s] < 0)
     {
-      const double* const column = panel + static_cast<long>(c) * m;
-      own[c] -= dense_panel::dot(avx2, below, column + width, gathered) +
-                dense_panel::dot(avx2, width - c - 1, column + c + 1, own + c + 1);
+      forwardSupernode(s, y, gathered_.data(), avx2, nullptr);
     }
+    else if (kept_sums_at_[s] != kNotKept)
+    {
+      const Supernode& supernode = supernodes_[s];
+      const int* const rows = super_rows_.data() + supernode.rows;
+      const double* const kept = kept_sums_.data() + kept_sums_at_[s] - 3L * first_row_above_[s];
+      for (int a = first_row_above_[s]; a < supernode.below; ++a)
+        for (int r = 0; r < 3; ++r)
+          y[3L * rows[a] + r] += kept[3 * a + r];
+    }
+  }
+  workers_->forEachChunk(2, 1, [&](int half, int) {
+    const std::size_t middle = scalar_pivot_.size() / 2;
+    for (std::size_t q = half == 0 ? 0 : middle; q < (half == 0 ? middle : scalar_pivot_.size()); ++q)
+      y[q] /= scalar_pivot_[q];
+  });
+  for (std::size_t s = count; s-- > 0;)
+    if (share_of_[s] < 0) backwardSupernode(s, y, gathered_.data(), avx2);
+  workers_->forEachChunk(2, 1, [&](int share, int) {
+    double* const gathered = share == 0 ? gathered_.data() : second_gathered_.data();
+    for (auto s = shared_order_[share].rbegin(); s != shared_order_[share].rend(); ++s)
+      backwardSupernode(*s, y, gathered, avx2);
+  });
+}
+
+void SparseBlockLdlt::forwardSupernode(std::size_t s, double* y, double* gathered, bool avx2, double* kept)
+{
+  // The own triangle, then −Σ of the rows below into `gathered` and added to them: all of them, or
+  // (`kept` not null) those of the supernode's own share, the sums of the rows above the shares
+  // written to `kept` instead.
+  const Supernode& supernode = supernodes_[s];
+  const int width = 3 * supernode.width, below = 3 * supernode.below, m = width + below;
+  const double* const panel = panels_.data() + supernode.panel;
+  double* const own = y + 3L * supernode.first;
+  std::fill(gathered, gathered + below, 0.0);
+  for (int c = 0; c < width; ++c)
+  {
+    const double* const column = panel + static_cast<long>(c) * m;
+    dense_panel::subtractScaled(avx2, width - c - 1, column + c + 1, own[c], own + c + 1);
+    dense_panel::subtractScaled(avx2, below, column + width, own[c], gathered);  // −Σ of the rows below
+  }
+  const int* const rows = super_rows_.data() + supernode.rows;
+  const int added = kept ? first_row_above_[s] : supernode.below;
+  for (int a = 0; a < added; ++a)
+    for (int r = 0; r < 3; ++r)
+      y[3L * rows[a] + r] += gathered[3 * a + r];
+  if (kept) std::copy(gathered + 3 * added, gathered + below, kept);
+}
+
+void SparseBlockLdlt::backwardSupernode(std::size_t s, double* y, double* gathered, bool avx2)
+{
+  const Supernode& supernode = supernodes_[s];
+  const int width = 3 * supernode.width, below = 3 * supernode.below, m = width + below;
+  const double* const panel = panels_.data() + supernode.panel;
+  double* const own = y + 3L * supernode.first;
+  const int* const rows = super_rows_.data() + supernode.rows;
+  for (int a = 0; a < supernode.below; ++a)
+    for (int r = 0; r < 3; ++r)
+      gathered[3 * a + r] = y[3L * rows[a] + r];
+  for (int c = width - 1; c >= 0; --c)
+  {
+    const double* const column = panel + static_cast<long>(c) * m;
+    own[c] -= dense_panel::dot(avx2, below, column + width, gathered) +
+              dense_panel::dot(avx2, width - c - 1, column + c + 1, own + c + 1);
   }
 }
 

@@ -155,7 +155,8 @@ private:
   // where A's blocks go in them and the update runs.
   void analyzeSupernodes(const std::vector<int>& row_start, const std::vector<int>& block_column,
                          const std::vector<int>& supernode_of);
-  // factorize() and solve() in the supernodal form (solve() on work_, in the new order).
+  // factorize() and solve() in the supernodal form (solve() on work_, in the new order; both with
+  // two threads where planSubtrees() planned them and there are workers).
   bool factorizeSupernodes(const std::vector<Eigen::Matrix3d>& blocks);
   void solveSupernodes();
   // One supernode's panel factored (factorPanel()), false at a singular pivot; then its update
@@ -177,7 +178,18 @@ private:
   std::vector<signed char> share_of_;
   std::vector<int> shared_order_[2];
   std::vector<std::size_t> kept_scaled_at_;
-  std::vector<int> split_column_;                    // a supernode above the shares: where subtractRuns()'s halves meet
+  // A supernode above the shares: the column where subtractRuns()'s halves meet.
+  std::vector<int> split_column_;
+  // The solve's (solveSupernodes()): a shared supernode's first row below that lies above the
+  // shares, where its sums for those rows wait (kept_sums_at_[s] in kept_sums_, else kNotKept), and
+  // the second thread's sums.
+  std::vector<int> first_row_above_;
+  std::vector<std::size_t> kept_sums_at_;
+  std::vector<double> kept_sums_, second_gathered_;
+  // One supernode of the solve forwards (L y = b; its sums for the rows above the shares into
+  // `kept` when that is not null) and backwards (Lᵀ x = y), `gathered` its scratch.
+  void forwardSupernode(std::size_t s, double* y, double* gathered, bool avx2, double* kept);
+  void backwardSupernode(std::size_t s, double* y, double* gathered, bool avx2);
   std::vector<double> kept_scaled_, second_scaled_;  // the kept T's; the second thread's T
   double shared_share_ = 0.0;
   WorkerPool* workers_ = nullptr;
