@@ -238,35 +238,41 @@ TEST(SparseBlockLdlt, TwoThreadsFactorASheetToTheSameBitsAsOne)
   // products, and over a second factorization on the same analysis; a singular pivot is refused
   // either way, in a share or above them.
   std::mt19937_64 random(13);
-  const int nu = 40, nv = 36, n = nu * nv;
-  const std::vector<std::pair<int, int>> pairs = gridPairs(nu, nv);
-  const Pattern p = patternOf(n, pairs);
-  std::vector<char> pinned(n, 0);
-  pinned[0] = pinned[nu - 1] = pinned[n / 2 + 7] = 1;
-  Eigen::Matrix3Xd b = Eigen::Matrix3Xd::Random(3, n);
-  for (int i = 0; i < n; ++i)
-    if (pinned[i]) b.col(i).setZero();
   WorkerPool two(2);
   const dense_panel::Tiles tiles = SparseBlockLdlt::tiles();
-  for (const dense_panel::Tiles form :
-       {dense_panel::Tiles::Avx512, dense_panel::Tiles::Avx2, dense_panel::Tiles::Scalar})
+  // A near-square sheet (one supernode above the shares, its root) and a long one (some twenty
+  // above, whose updates of each other are split between the threads between the held-back ones).
+  for (const auto& [nu, nv] : {std::pair<int, int>{40, 36}, std::pair<int, int>{17, 123}})
   {
-    SparseBlockLdlt::setTiles(form);
-    SparseBlockLdlt one_thread, two_threads;
-    one_thread.analyze(p.row_start, p.block_column);
-    two_threads.analyze(p.row_start, p.block_column);
-    two_threads.setWorkers(&two);
-    ASSERT_TRUE(two_threads.supernodal());
-    ASSERT_GT(two_threads.sharedShare(), 0.5);
-    for (int round = 0; round < 2; ++round)
+    const int n = nu * nv;
+    const std::vector<std::pair<int, int>> pairs = gridPairs(nu, nv);
+    const Pattern p = patternOf(n, pairs);
+    std::vector<char> pinned(n, 0);
+    pinned[0] = pinned[nu - 1] = pinned[n / 2 + 7] = 1;
+    Eigen::Matrix3Xd b = Eigen::Matrix3Xd::Random(3, n);
+    for (int i = 0; i < n; ++i)
+      if (pinned[i]) b.col(i).setZero();
+    for (const dense_panel::Tiles form :
+         {dense_panel::Tiles::Avx512, dense_panel::Tiles::Avx2, dense_panel::Tiles::Scalar})
     {
-      const std::vector<Eigen::Matrix3d> blocks = randomSpdBlocks(p, n, pairs, random);
-      ASSERT_TRUE(one_thread.factorize(blocks, pinned));
-      ASSERT_TRUE(two_threads.factorize(blocks, pinned));
-      Eigen::Matrix3Xd x1(3, n), x2(3, n);
-      one_thread.solve(b, x1);
-      two_threads.solve(b, x2);
-      EXPECT_EQ(std::memcmp(x1.data(), x2.data(), sizeof(double) * 3 * n), 0) << "round " << round;
+      SparseBlockLdlt::setTiles(form);
+      SparseBlockLdlt one_thread, two_threads;
+      one_thread.analyze(p.row_start, p.block_column);
+      two_threads.analyze(p.row_start, p.block_column);
+      two_threads.setWorkers(&two);
+      ASSERT_TRUE(two_threads.supernodal());
+      ASSERT_GT(two_threads.sharedShare(), 0.5) << nu << " x " << nv;
+      for (int round = 0; round < 2; ++round)
+      {
+        const std::vector<Eigen::Matrix3d> blocks = randomSpdBlocks(p, n, pairs, random);
+        ASSERT_TRUE(one_thread.factorize(blocks, pinned));
+        ASSERT_TRUE(two_threads.factorize(blocks, pinned));
+        Eigen::Matrix3Xd x1(3, n), x2(3, n);
+        one_thread.solve(b, x1);
+        two_threads.solve(b, x2);
+        EXPECT_EQ(std::memcmp(x1.data(), x2.data(), sizeof(double) * 3 * n), 0)
+            << nu << " x " << nv << ", round " << round;
+      }
     }
   }
   SparseBlockLdlt::setTiles(tiles);
@@ -274,6 +280,9 @@ TEST(SparseBlockLdlt, TwoThreadsFactorASheetToTheSameBitsAsOne)
 
   // A zero row and column, singular, at every 11th particle in turn: such particles lie in both
   // shares and above them (the supernodes above hold some 9 % of the columns here).
+  const int nu = 40, nv = 36, n = nu * nv;
+  const std::vector<std::pair<int, int>> pairs = gridPairs(nu, nv);
+  const Pattern p = patternOf(n, pairs);
   SparseBlockLdlt ldlt;
   ldlt.analyze(p.row_start, p.block_column);
   ldlt.setWorkers(&two);

@@ -269,10 +269,7 @@ void SparseBlockLdlt::analyze(const std::vector<int>& row_start, const std::vect
 
   supernodes_.clear();
   update_slot_.clear();
-  share_of_.clear();
-  shared_order_[0].clear();
-  shared_order_[1].clear();
-  shared_share_ = 0.0;
+  forgetSubtrees();
   if (wide)
   {
     for (const auto& [first, width] : found)
@@ -397,19 +394,28 @@ void SparseBlockLdlt::analyzeSupernodes(const std::vector<int>& row_start, const
   planSubtrees(supernode_of);
 }
 
-void SparseBlockLdlt::planSubtrees(const std::vector<int>& supernode_of)
+void SparseBlockLdlt::forgetSubtrees()
 {
-  const int count = static_cast<int>(supernodes_.size());
-  share_of_.assign(count, -1);
+  share_of_.clear();
   shared_order_[0].clear();
   shared_order_[1].clear();
-  kept_scaled_at_.assign(count, kNotKept);
+  kept_scaled_at_.clear();
+  split_column_.clear();
+  first_row_above_.clear();
+  kept_sums_at_.clear();
   kept_scaled_.clear();
   second_scaled_.clear();
-  kept_sums_at_.clear();
   kept_sums_.clear();
   second_gathered_.clear();
   shared_share_ = 0.0;
+}
+
+void SparseBlockLdlt::planSubtrees(const std::vector<int>& supernode_of)
+{
+  const int count = static_cast<int>(supernodes_.size());
+  forgetSubtrees();
+  share_of_.assign(count, -1);
+  kept_scaled_at_.assign(count, kNotKept);
   // The tree of supernodes: each one's parent is the supernode of its first row below (−1 at a
   // root), and comes after it. Its work: its panel's flops and its update's, as dense counts; its
   // subtree's, summed up the tree.
@@ -866,10 +872,10 @@ void SparseBlockLdlt::solveSupernodes()
     {
       const Supernode& supernode = supernodes_[s];
       const int* const rows = super_rows_.data() + supernode.rows;
-      const double* const kept = kept_sums_.data() + kept_sums_at_[s] - 3L * first_row_above_[s];
+      const double* const kept = kept_sums_.data() + kept_sums_at_[s];
       for (int a = first_row_above_[s]; a < supernode.below; ++a)
         for (int r = 0; r < 3; ++r)
-          y[3L * rows[a] + r] += kept[3 * a + r];
+          y[3L * rows[a] + r] += kept[3 * (a - first_row_above_[s]) + r];
     }
   }
   workers_->forEachChunk(2, 1, [&](int half, int) {

@@ -174,6 +174,8 @@ private:
   // with runs into those above keeps its T at kept_scaled_at_[s] in kept_scaled_ (else kNotKept)
   // for those runs, subtracted after both shares are done.
   void planSubtrees(const std::vector<int>& supernode_of);
+  // No plan: every vector of the two threads' plan emptied (one thread factors and solves).
+  void forgetSubtrees();
   static constexpr std::size_t kNotKept = SIZE_MAX;
   std::vector<signed char> share_of_;
   std::vector<int> shared_order_[2];
