@@ -125,6 +125,18 @@ constexpr int kPanelColumns = 4;
 // A scalar pivot at most this fraction of its diagonal entry in A (or not finite) is singular.
 constexpr double kSingularPivot = 1e-14;
 
+// body(first, last) on the two halves of [0, n), one a thread (WorkerPool: each half on its own).
+template <class Body>
+void byHalves(WorkerPool& workers, std::size_t n, Body&& body)
+{
+  workers.forEachChunk(2, 1, [&](int half, int) {
+    if (half == 0)
+      body(std::size_t{0}, n / 2);
+    else
+      body(n / 2, n);
+  });
+}
+
 // The dense products' form (SparseBlockLdlt::setTiles()): the widest the processor has, by default.
 std::atomic<dense_panel::Tiles>& tilesSetting()
 {
@@ -414,7 +426,7 @@ void SparseBlockLdlt::planSubtrees(const std::vector<int>& supernode_of)
 {
   const int count = static_cast<int>(supernodes_.size());
   forgetSubtrees();
-  share_of_.assign(count, -1);
+  share_of_.assign(count, kAboveShares);
   kept_scaled_at_.assign(count, kNotKept);
   // The tree of supernodes: each one's parent is the supernode of its first row below (−1 at a
   // root), and comes after it. Its work: its panel's flops and its update's, as dense counts; its
@@ -661,8 +673,7 @@ bool SparseBlockLdlt::factorizeSupernodes(const std::vector<Eigen::Matrix3d>& bl
   // Each scalar column's diagonal entry in A is the scale its pivot is judged by. Each block writes
   // its own entries, so with two threads planned (planSubtrees()) they share the zeroing and the
   // blocks by halves.
-  const bool two_threads =
-      workers_ && workers_->threads() > 1 && !shared_order_[0].empty() && !shared_order_[1].empty();
+  const bool two_threads = twoThreads();
   auto scatter = [&](std::size_t first, std::size_t last) {
     for (std::size_t b = first; b < last; ++b)
     {
@@ -690,14 +701,10 @@ bool SparseBlockLdlt::factorizeSupernodes(const std::vector<Eigen::Matrix3d>& bl
   };
   if (two_threads)
   {
-    workers_->forEachChunk(2, 1, [&](int half, int) {
-      const std::size_t middle = panels_.size() / 2;
-      std::fill(panels_.begin() + (half == 0 ? 0 : middle), half == 0 ? panels_.begin() + middle : panels_.end(), 0.0);
+    byHalves(*workers_, panels_.size(), [&](std::size_t first, std::size_t last) {
+      std::fill(panels_.begin() + first, panels_.begin() + last, 0.0);
     });
-    workers_->forEachChunk(2, 1, [&](int half, int) {
-      const std::size_t middle = blocks.size() / 2;
-      scatter(half == 0 ? 0 : middle, half == 0 ? middle : blocks.size());
-    });
+    byHalves(*workers_, blocks.size(), scatter);
   }
   else
   {
@@ -739,12 +746,12 @@ bool SparseBlockLdlt::factorizeSupernodes(const std::vector<Eigen::Matrix3d>& bl
         workers_->forEachChunk(2, 1, [&](int half, int) {
           for (std::size_t t = s; t < end; ++t)
             if (kept_scaled_at_[t] != kNotKept)
-              subtractRuns(t, kept_scaled_.data() + kept_scaled_at_[t], -1, tiles, half);
+              subtractRuns(t, kept_scaled_.data() + kept_scaled_at_[t], kAboveShares, tiles, half);
         });
       }
       if (end == count) break;
       if (!factorPanel(end, scaled_.data(), tiles)) return false;
-      workers_->forEachChunk(2, 1, [&](int half, int) { subtractRuns(end, scaled_.data(), 2, tiles, half); });
+      workers_->forEachChunk(2, 1, [&](int half, int) { subtractRuns(end, scaled_.data(), kEveryShare, tiles, half); });
       s = end + 1;
     }
     return true;
@@ -754,10 +761,15 @@ bool SparseBlockLdlt::factorizeSupernodes(const std::vector<Eigen::Matrix3d>& bl
   return true;
 }
 
+bool SparseBlockLdlt::twoThreads() const
+{
+  return workers_ && workers_->threads() > 1 && !shared_order_[0].empty() && !shared_order_[1].empty();
+}
+
 bool SparseBlockLdlt::factorSupernode(std::size_t s, double* scaled, bool shared_only, dense_panel::Tiles tiles)
 {
   if (!factorPanel(s, scaled, tiles)) return false;
-  subtractRuns(s, scaled, shared_only ? share_of_[s] : 2, tiles, -1);
+  subtractRuns(s, scaled, shared_only ? share_of_[s] : kEveryShare, tiles, kWholeRun);
   return true;
 }
 
@@ -810,13 +822,13 @@ void SparseBlockLdlt::subtractRuns(std::size_t s, const double* scaled, int shar
   for (int q = run_start_[s]; q < run_start_[s + 1]; ++q)
   {
     const UpdateRun& run = runs_[q];
-    if (share != 2 && share_of_[run.target] != share) continue;
+    if (share != kEveryShare && share_of_[run.target] != share) continue;
     const int first_row = 3 * run.begin, rows = below - first_row, columns = 3 * (run.end - run.begin);
     // Half 0 takes the run's columns that land in the target's columns before its split column,
     // half 1 the others (the run's columns land in ascending columns of the target): every column of
     // a panel above the shares is written by one thread alone, whichever supernode's update it is.
     int from = 0, to = columns;
-    if (half >= 0)
+    if (half != kWholeRun)
     {
       const Supernode& target = supernodes_[run.target];
       const long target_m = 3L * (target.width + target.below);
@@ -846,7 +858,7 @@ void SparseBlockLdlt::solveSupernodes()
   double* const y = work_.data();
   const bool avx2 = useAvx2();
   const std::size_t count = supernodes_.size();
-  if (!(workers_ && workers_->threads() > 1 && !shared_order_[0].empty() && !shared_order_[1].empty()))
+  if (!twoThreads())
   {
     for (std::size_t s = 0; s < count; ++s)
       forwardSupernode(s, y, gathered_.data(), avx2, nullptr);
@@ -878,9 +890,8 @@ void SparseBlockLdlt::solveSupernodes()
           y[3L * rows[a] + r] += kept[3 * (a - first_row_above_[s]) + r];
     }
   }
-  workers_->forEachChunk(2, 1, [&](int half, int) {
-    const std::size_t middle = scalar_pivot_.size() / 2;
-    for (std::size_t q = half == 0 ? 0 : middle; q < (half == 0 ? middle : scalar_pivot_.size()); ++q)
+  byHalves(*workers_, scalar_pivot_.size(), [&](std::size_t first, std::size_t last) {
+    for (std::size_t q = first; q < last; ++q)
       y[q] /= scalar_pivot_[q];
   });
   for (std::size_t s = count; s-- > 0;)

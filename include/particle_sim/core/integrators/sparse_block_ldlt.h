@@ -74,11 +74,11 @@ public:
   /// Off-diagonal blocks of L.
   std::int64_t factorBlocks() const { return static_cast<std::int64_t>(row_index_.size()); }
 
-  /// Threads for factorize() (null: the caller's alone). With two or more, the supernodal form's
-  /// tree of supernodes is cut, once per pattern, into two sets of whole subtrees of about equal
-  /// work, each factored by one thread, and the supernodes above them, factored after both by one
-  /// thread (see planSubtrees()). Every entry of L gets the same terms in the same order as on one
-  /// thread: the same bits.
+  /// Threads for factorize() and solve() (null: the caller's alone). With two or more, the
+  /// supernodal form's tree of supernodes is cut, once per pattern, into two sets of whole subtrees
+  /// of about equal work, each factored by one thread, and the supernodes above them, factored after
+  /// both (see planSubtrees()). Every entry of L and of the solution gets the same terms in the same
+  /// order as on one thread: the same bits.
   void setWorkers(WorkerPool* workers) { workers_ = workers; }
   /// The factorization's flops in the two sets of subtrees that two threads share, over all of
   /// them (0 when none are planned: no supernodal form, or no cut worth it).
@@ -165,21 +165,29 @@ private:
   bool factorSupernode(std::size_t s, double* scaled, bool shared_only, dense_panel::Tiles tiles);
   // Supernode s's panel factored, T = L D into `scaled` (a panel's size); false at a singular pivot.
   bool factorPanel(std::size_t s, double* scaled, dense_panel::Tiles tiles);
-  // The update runs of supernode s into the supernodes of share `share` (−1: above the shares; 2:
-  // every run), from its T in `scaled`: each run whole (half −1), or the first (0) or second (1)
-  // part of its columns, about half its entries each.
+  // The update runs of supernode s into the supernodes of share `share` (0 or 1, kAboveShares or
+  // kEveryShare), from its T in `scaled`: each run whole (kWholeRun), or the first (0) or second (1)
+  // part of its columns by the target's split column.
   void subtractRuns(std::size_t s, const double* scaled, int share, dense_panel::Tiles tiles, int half);
-  // Two threads' plan: share_of_[s] is 0 or 1 for a supernode in one of the two sets of subtrees,
-  // −1 for one above them; shared_order_[k] lists share k's supernodes in order; a shared supernode
-  // with runs into those above keeps its T at kept_scaled_at_[s] in kept_scaled_ (else kNotKept)
-  // for those runs, subtracted after both shares are done.
+  static constexpr int kAboveShares = -1, kEveryShare = 2, kWholeRun = -1;
+  // One supernode of the solve forwards (L y = b; its sums for the rows above the shares into
+  // `kept` when that is not null) and backwards (Lᵀ x = y), `gathered` its scratch.
+  void forwardSupernode(std::size_t s, double* y, double* gathered, bool avx2, double* kept);
+  void backwardSupernode(std::size_t s, double* y, double* gathered, bool avx2);
+
+  // Two threads' plan (planSubtrees(); forgetSubtrees() empties it): share_of_[s] is 0 or 1 for a
+  // supernode in one of the two sets of subtrees, kAboveShares for one above them; shared_order_[k]
+  // lists share k's supernodes in order; a shared supernode with runs into those above keeps its T
+  // at kept_scaled_at_[s] in kept_scaled_ (else kNotKept) for those runs, subtracted after both
+  // shares are done. twoThreads(): there is a plan and there are threads for it.
   void planSubtrees(const std::vector<int>& supernode_of);
-  // No plan: every vector of the two threads' plan emptied (one thread factors and solves).
   void forgetSubtrees();
+  bool twoThreads() const;
   static constexpr std::size_t kNotKept = SIZE_MAX;
   std::vector<signed char> share_of_;
   std::vector<int> shared_order_[2];
   std::vector<std::size_t> kept_scaled_at_;
+  std::vector<double> kept_scaled_, second_scaled_;  // the kept T's; the second thread's T
   // A supernode above the shares: the column where subtractRuns()'s halves meet.
   std::vector<int> split_column_;
   // The solve's (solveSupernodes()): a shared supernode's first row below that lies above the
@@ -188,11 +196,6 @@ private:
   std::vector<int> first_row_above_;
   std::vector<std::size_t> kept_sums_at_;
   std::vector<double> kept_sums_, second_gathered_;
-  // One supernode of the solve forwards (L y = b; its sums for the rows above the shares into
-  // `kept` when that is not null) and backwards (Lᵀ x = y), `gathered` its scratch.
-  void forwardSupernode(std::size_t s, double* y, double* gathered, bool avx2, double* kept);
-  void backwardSupernode(std::size_t s, double* y, double* gathered, bool avx2);
-  std::vector<double> kept_scaled_, second_scaled_;  // the kept T's; the second thread's T
   double shared_share_ = 0.0;
   WorkerPool* workers_ = nullptr;
   Eigen::Matrix3Xd work_;
