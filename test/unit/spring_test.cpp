@@ -8,7 +8,11 @@
 
 #include <Eigen/Eigenvalues>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <limits>
 #include <random>
+#include <vector>
 
 using namespace particle_sim::core;
 
@@ -233,6 +237,84 @@ TEST(Spring, JacobianPartsMakeTheDefiniteJacobian)
   double along_x = 0.0, isotropic_x = 0.0, along_v = 0.0;
   const Eigen::Vector3d x(0.25, -1.0, 2.0);
   EXPECT_FALSE(springJacobianParts(x, x, 1.0, 10.0, 1.0, d, along_x, isotropic_x, along_v));
+}
+
+TEST(Spring, JacobianPartsOfManyAreEachSpringsBitForBit)
+{
+  // springJacobianPartsOf(), four springs at a time or one, gives for every spring the bits that
+  // springJacobianParts() gives it alone: compressed and stretched springs, a spring at its rest
+  // length (transverse factor 0), coincident ends, a zero stiffness (a −0 part), a non-finite
+  // position, and a count that leaves springs over after the groups of four.
+  std::mt19937_64 rng(46);
+  std::vector<Spring> springs;
+  std::vector<Eigen::Vector3d> positions;
+  auto add = [&](const Eigen::Vector3d& xi, const Eigen::Vector3d& xj, double rest_length, double stiffness) {
+    Spring spring;
+    spring.i = static_cast<int>(positions.size());
+    spring.j = spring.i + 1;
+    spring.rest_length = rest_length;
+    spring.stiffness = stiffness;
+    spring.damping = 0.5;
+    springs.push_back(spring);
+    positions.push_back(xi);
+    positions.push_back(xj);
+  };
+  // The unusual springs first, in groups of four.
+  add({0.0, 0.0, 0.0}, {3.0, 4.0, 0.0}, 5.0, 100.0);  // at its rest length
+  add({1.0, 2.0, 3.0}, {1.0, 2.0, 3.0}, 1.0, 100.0);  // coincident
+  add({0.0, 0.0, 0.0}, {0.0, 0.0, 2.0}, 1.0, 0.0);    // no stiffness
+  add({0.0, 0.0, 0.0}, {0.0, 0.0, 0.5}, 1.0, 0.0);    // no stiffness, compressed
+  add({0.0, std::nan(""), 0.0}, {0.0, 1.0, 0.0}, 1.0, 10.0);
+  add({0.0, 0.0, 0.0}, {std::numeric_limits<double>::infinity(), 1.0, 0.0}, 1.0, 10.0);
+  add({0.0, 0.0, 0.0}, {1e-300, 0.0, 0.0}, 1.0, 10.0);  // its square underflows: coincident too
+  for (double stretch : kStretches)
+  {
+    for (int trial = 0; trial < 7; ++trial)
+    {
+      const Config c = randomConfig(rng, stretch);
+      add(c.xi, c.xj, c.rest_length, c.stiffness);
+    }
+  }
+  ASSERT_NE(springs.size() % 4, 0u);
+  std::vector<double> x;
+  for (const Eigen::Vector3d& p : positions)
+    x.insert(x.end(), {p.x(), p.y(), p.z()});
+
+  const int count = static_cast<int>(springs.size());
+  for (bool vectorized : {true, false})
+  {
+    SpringJacobianParts parts;
+    parts.resize(springs.size());
+    // Two calls, the first range ending inside a group of four.
+    springJacobianPartsOf(springs.data(), 0, 10, x.data(), vectorized, parts);
+    springJacobianPartsOf(springs.data(), 10, count, x.data(), vectorized, parts);
+    int coincident = 0;
+    for (int s = 0; s < count; ++s)
+    {
+      const Spring& spring = springs[s];
+      Eigen::Vector3d d;
+      double along_x = 0.0, isotropic_x = 0.0, along_v = 0.0;
+      const bool has_parts = springJacobianParts(positions[spring.i], positions[spring.j], spring.rest_length,
+                                                 spring.stiffness, spring.damping, d, along_x, isotropic_x, along_v);
+      ASSERT_EQ(parts.coincident[s] != 0, !has_parts) << "spring " << s << (vectorized ? ", four at a time" : "");
+      if (!has_parts)
+      {
+        ++coincident;
+        continue;
+      }
+      auto bits = [](double value) {
+        std::uint64_t b = 0;
+        std::memcpy(&b, &value, sizeof b);
+        return b;
+      };
+      const double expected[5] = {d.x(), d.y(), d.z(), along_x, isotropic_x};
+      const double got[5] = {parts.d_x[s], parts.d_y[s], parts.d_z[s], parts.along_x[s], parts.isotropic_x[s]};
+      for (int k = 0; k < 5; ++k)
+        EXPECT_EQ(bits(got[k]), bits(expected[k]))
+            << "spring " << s << " number " << k << (vectorized ? ", four at a time" : "");
+    }
+    EXPECT_EQ(coincident, 2);
+  }
 }
 
 TEST(Spring, EnergyNegativeGradientIsTheElasticForce)

@@ -2,7 +2,9 @@
 
 #include <Eigen/Core>
 #include <algorithm>
+#include <cstddef>
 #include <string>
+#include <vector>
 
 namespace particle_sim
 {
@@ -115,6 +117,27 @@ struct Spring
   along_v = -damping;
   return true;
 }
+
+/// springJacobianParts() of many springs, one entry a spring in each array: d = (d_x, d_y, d_z),
+/// along_x and isotropic_x (along_v is −k_d), and `coincident` 1 where it returned false (then the
+/// other numbers are not used).
+struct SpringJacobianParts
+{
+  std::vector<double> d_x, d_y, d_z, along_x, isotropic_x;
+  std::vector<char> coincident;
+  /// Room for `springs` springs (allocates only when it grows).
+  void resize(std::size_t springs);
+};
+
+/// The parts of springs [first, last) of `springs` into the same places of `parts`, from the
+/// positions x (3 numbers a particle). With `vectorized` (where the processor has AVX2: see
+/// springPartsVectorized()), four springs at a time, their square roots and divisions in one
+/// instruction each: every lane does springJacobianParts()'s operations in its order (no fused
+/// multiply-add), so the numbers are the same bits as one spring at a time.
+void springJacobianPartsOf(const Spring* springs, int first, int last, const double* x, bool vectorized,
+                           SpringJacobianParts& parts);
+/// Whether this processor runs springJacobianPartsOf() four springs at a time (x86-64 with AVX2).
+bool springPartsVectorized();
 
 }  // namespace core
 }  // namespace particle_sim

@@ -352,20 +352,27 @@ void SpringForces::splitParticle(int original, int copy, const std::vector<int>&
   ends_valid_ = false;
 }
 
-void SpringForces::addJacobians(const ForceContext& /*context*/, const Eigen::Matrix3Xd& x,
+void SpringForces::addJacobians(const ForceContext& context, const Eigen::Matrix3Xd& x,
                                 ImplicitEulerSolver& solver) const
 {
   // ∂f_i/∂x_i = ∂f_j/∂x_j = −∂f_i/∂x_j = −∂f_j/∂x_i (definite form), alike for v: by their parts
-  // along the spring and across it, but for coincident ends (no direction).
-  for (std::size_t s = 0; s < springs_.size(); ++s)
+  // along the spring and across it, but for coincident ends (no direction). The parts first, for
+  // every spring at once (their square roots and divisions four at a time, shared by chunks between
+  // the threads), then the blocks in spring order.
+  const int count = static_cast<int>(springs_.size());
+  jacobian_parts_.resize(springs_.size());
+  const bool vectorized = ImplicitEulerSolver::useAvx2();
+  forEachFixedChunk(context.workers, count, kSpringsPerChunk, [&](int, int first, int last) {
+    springJacobianPartsOf(springs_.data(), first, last, x.data(), vectorized, jacobian_parts_);
+  });
+  const SpringJacobianParts& parts = jacobian_parts_;
+  for (int s = 0; s < count; ++s)
   {
     const Spring& spring = springs_[s];
-    Eigen::Vector3d d;
-    double along_x, isotropic_x, along_v;
-    if (springJacobianParts(x.col(spring.i), x.col(spring.j), spring.rest_length, spring.stiffness, spring.damping, d,
-                            along_x, isotropic_x, along_v))
+    if (!parts.coincident[s])
     {
-      solver.addAlongPairBlocks(blocks_[s], d, along_x, isotropic_x, along_v);
+      solver.addAlongPairBlocks(blocks_[s], Eigen::Vector3d(parts.d_x[s], parts.d_y[s], parts.d_z[s]), parts.along_x[s],
+                                parts.isotropic_x[s], -spring.damping);
       continue;
     }
     Eigen::Matrix3d dfdx, dfdv;

@@ -88,6 +88,7 @@ private:
   // One thread's addForcesKeepingEnergy() keeps each chunk's sum of addEnergy() instead of each spring's.
   mutable std::vector<double> kept_chunk_energy_;
   mutable bool energy_kept_by_chunks_ = false;
+  mutable SpringJacobianParts jacobian_parts_;  // addJacobians(): per spring of springs_, its parts
 };
 
 }  // namespace core

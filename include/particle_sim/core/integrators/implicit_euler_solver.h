@@ -89,7 +89,8 @@ public:
   [[gnu::always_inline]] void addPairBlocks(const std::array<int, 4>& blocks, const Eigen::Matrix3d& dfdx,
                                             const Eigen::Matrix3d& dfdv)
   {
-    addPairC(blocks, h_ * dfdv + h_ * h_ * dfdx);
+    const Eigen::Matrix3d c = h_ * dfdv + h_ * h_ * dfdx;
+    addPairC(blocks, c.data());
     if (!v0_) return;
     const int i = block_row_[blocks[0]], j = block_row_[blocks[3]];
     const Eigen::Vector3d at_i = h_ * h_ * (dfdx * v0_->col(i));
@@ -101,15 +102,26 @@ public:
   }
   /// addPairBlocks() for Jacobians of a spring's form along the unit vector d: dfdx = along_x d dᵀ +
   /// isotropic_x I, dfdv = along_v d dᵀ (springJacobianParts()). Then C = (h along_v + h² along_x)
-  /// d dᵀ + h² isotropic_x I, symmetric bit for bit, and b's term h² dfdx (v0_i − v0_j) =
-  /// h² (along_x (d·u) d + isotropic_x u) with u = v0_i − v0_j: about half the arithmetic of the
-  /// full blocks, the same system but for rounding.
+  /// d dᵀ + h² isotropic_x I, and b's term h² dfdx (v0_i − v0_j) = h² (along_x (d·u) d +
+  /// isotropic_x u) with u = v0_i − v0_j: about half the arithmetic of the full blocks, the same
+  /// system but for rounding. C's entries are computed one by one as Eigen evaluates that
+  /// expression, (a d_r) d_c + b I_rc with a = h along_v + h² along_x and b = h² isotropic_x (so
+  /// C_rc and C_cr may differ in the last bit; the kept pair is the lower triangle), into numbers
+  /// the compiler keeps in registers: a 3x3 matrix written to the stack and read back in halves
+  /// stalled the assembly on every spring.
   [[gnu::always_inline]] void addAlongPairBlocks(const std::array<int, 4>& blocks, const Eigen::Vector3d& d,
                                                  double along_x, double isotropic_x, double along_v)
   {
     const double h2 = h_ * h_;
-    addPairC(blocks,
-             (h_ * along_v + h2 * along_x) * (d * d.transpose()) + (h2 * isotropic_x) * Eigen::Matrix3d::Identity());
+    const double a = h_ * along_v + h2 * along_x, b = h2 * isotropic_x, b_off = b * 0.0;
+    const double ad[3] = {a * d[0], a * d[1], a * d[2]};
+    double c[9];  // column-major
+#pragma GCC unroll 3
+    for (int column = 0; column < 3; ++column)
+#pragma GCC unroll 3
+      for (int row = 0; row < 3; ++row)
+        c[row + 3 * column] = ad[row] * d[column] + (row == column ? b : b_off);
+    addPairC(blocks, c);
     if (!v0_) return;
     const int i = block_row_[blocks[0]], j = block_row_[blocks[3]];
     const Eigen::Vector3d u = v0_->col(i) - v0_->col(j);
@@ -174,23 +186,33 @@ private:
     if (v0_) rhs_.col(block_row_[block]).noalias() += h_ * h_ * (dfdx * v0_->col(block_column_[block]));
   }
   // A_ii −= C, A_jj −= C, and A_ij = A_ji += C, kept as a pair until the blocks are needed
-  // (addPairBlocks()).
-  [[gnu::always_inline]] void addPairC(const std::array<int, 4>& blocks, const Eigen::Matrix3d& c)
+  // (addPairBlocks()); C's nine numbers column-major.
+  [[gnu::always_inline]] void addPairC(const std::array<int, 4>& blocks, const double* c)
   {
+    auto subtract = [c](Eigen::Matrix3d& block) {
+#pragma GCC unroll 9
+      for (int k = 0; k < 9; ++k)
+        block.data()[k] -= c[k];
+    };
+    auto add = [c](Eigen::Matrix3d& block) {
+#pragma GCC unroll 9
+      for (int k = 0; k < 9; ++k)
+        block.data()[k] += c[k];
+    };
     if (diagonal_in_blocks_)
     {
-      blocks_[blocks[0]] -= c;
-      blocks_[blocks[3]] -= c;
+      subtract(blocks_[blocks[0]]);
+      subtract(blocks_[blocks[3]]);
     }
     else
     {
-      diagonal_[block_row_[blocks[0]]] -= c;
-      diagonal_[block_row_[blocks[3]]] -= c;
+      subtract(diagonal_[block_row_[blocks[0]]]);
+      subtract(diagonal_[block_row_[blocks[3]]]);
     }
     if (pairs_in_blocks_)
     {
-      blocks_[blocks[1]] += c;
-      blocks_[blocks[2]] += c;
+      add(blocks_[blocks[1]]);
+      add(blocks_[blocks[2]]);
     }
     else
     {
@@ -199,7 +221,7 @@ private:
   }
   // Keeps pair C (addPairBlocks()); notes when its particles differ from the last step's pair at
   // this place in the list (the pair chunks are then indexed again).
-  [[gnu::always_inline]] void keepPair(const std::array<int, 4>& blocks, const Eigen::Matrix3d& c)
+  [[gnu::always_inline]] void keepPair(const std::array<int, 4>& blocks, const double* c)
   {
     if (kept_pairs_ == static_cast<int>(pair_ends_.size())) growPairs();
     const int k = kept_pairs_++;
@@ -207,7 +229,7 @@ private:
     if (pair_ends_[k][0] != i || pair_ends_[k][1] != j) pairs_changed_ = true;
     pair_ends_[k] = {i, j};
     pair_blocks_[k] = {blocks[1], blocks[2]};
-    pair_c_[k] = {c(0, 0), c(1, 0), c(2, 0), c(1, 1), c(2, 1), c(2, 2)};
+    pair_c_[k] = {c[0], c[1], c[2], c[4], c[5], c[8]};
   }
   // Writes the diagonal blocks A_ii from diagonal_ into their places in blocks_, once a step, for
   // what reads A whole (the direct solver, the multigrid's setup, resting contacts, the product by
