@@ -24,6 +24,8 @@ constexpr double kExtrapolateBeyond = 100.0;
 
 // Rows per chunk of a shared product with the block matrix (about ten blocks a row).
 constexpr int kRowsPerChunk = 2048;
+// Blocks of A per chunk of a shared pass that zeroes them (a memset of 576 kB).
+constexpr int kBlocksPerChunk = 8192;
 
 // out_i += C (p_j − p_i) at end i (if kAddI), out_j −= C (p_j − p_i) at end j (if kAddJ), for the
 // kept pairs [first, last) in order (ImplicitEulerSolver::multiplyPairRows()). C is symmetric, given
@@ -219,8 +221,10 @@ void ImplicitEulerSolver::begin(double h, const Eigen::VectorXd& mass, const Eig
   // elements add blocks of their own writes them in every step.
   if (!off_diagonal_zero_)
   {
-    for (Eigen::Matrix3d& block : blocks_)
-      block.setZero();
+    shareLoop(workers_, static_cast<int>(blocks_.size()), kBlocksPerChunk, [&](int first, int last) {
+      for (int b = first; b < last; ++b)
+        blocks_[b].setZero();
+    });
   }
   off_diagonal_zero_ = !adds_blocks_;
   // A body with an element that adds blocks of its own (Baraff–Witkin, bending) writes its springs'
@@ -270,20 +274,38 @@ void ImplicitEulerSolver::growPairs()
 void ImplicitEulerSolver::moveDiagonalIntoBlocks()
 {
   if (diagonal_in_blocks_) return;
-  for (int i = 0; i < static_cast<int>(diagonal_block_.size()); ++i)
-    blocks_[diagonal_block_[i]] = diagonal_[i];
+  shareLoop(workers_, static_cast<int>(diagonal_block_.size()), kRowsPerChunk, [&](int first, int last) {
+    for (int i = first; i < last; ++i)
+      blocks_[diagonal_block_[i]] = diagonal_[i];
+  });
   diagonal_in_blocks_ = true;
 }
 
 void ImplicitEulerSolver::movePairsIntoBlocks()
 {
   if (pairs_in_blocks_) return;
-  for (int k = 0; k < kept_pairs_; ++k)
-  {
-    const Eigen::Matrix3d c = symmetricBlock(pair_c_[k]);
-    blocks_[pair_blocks_[k][0]] += c;
-    blocks_[pair_blocks_[k][1]] += c;
-  }
+  // Each block gets its pairs' C in the pairs' order. With threads, the blocks are cut in two at
+  // the middle and each part's thread passes every pair, adding to its own blocks alone (a pair's
+  // two blocks may lie in different parts).
+  auto addPairs = [&](int first_block, int last_block) {
+    for (int k = 0; k < kept_pairs_; ++k)
+    {
+      const int ij = pair_blocks_[k][0], ji = pair_blocks_[k][1];
+      const bool add_ij = ij >= first_block && ij < last_block, add_ji = ji >= first_block && ji < last_block;
+      if (!add_ij && !add_ji) continue;
+      const Eigen::Matrix3d c = symmetricBlock(pair_c_[k]);
+      if (add_ij) blocks_[ij] += c;
+      if (add_ji) blocks_[ji] += c;
+    }
+  };
+  const int blocks = static_cast<int>(blocks_.size());
+  if (workers_ && workers_->threads() > 1 && kept_pairs_ > kRowsPerChunk)
+    workers_->forEachChunk(2, 1, [&](int begin, int end) {
+      for (int part = begin; part < end; ++part)
+        addPairs(part == 0 ? 0 : blocks / 2, part == 0 ? blocks / 2 : blocks);
+    });
+  else
+    addPairs(0, blocks);
   pairs_in_blocks_ = true;
   off_diagonal_zero_ = false;
 }
@@ -341,7 +363,8 @@ void ImplicitEulerSolver::multiply(const PaddedVectors& p, PaddedVectors& out, b
 {
   if (!pair_product)
   {
-    multiplyRows(p, out, 0, static_cast<int>(diagonal_block_.size()));
+    shareLoop(workers_, static_cast<int>(diagonal_block_.size()), kRowsPerChunk,
+              [&](int first, int last) { multiplyRows(p, out, first, last); });
     return;
   }
   forEachFixedChunk(workers_, static_cast<int>(diagonal_block_.size()), kRowsPerChunk,
