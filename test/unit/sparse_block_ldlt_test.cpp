@@ -236,7 +236,7 @@ TEST(SparseBlockLdlt, TwoThreadsFactorASheetToTheSameBitsAsOne)
   // whole subtrees and the supernodes above them. The solution with two threads is the one thread's
   // (which the test above holds against a dense LU), bit for bit, in every form of the dense
   // products, and over a second factorization on the same analysis; a singular pivot is refused
-  // either way, in a share or above them.
+  // either way, in a share or above them, and by factorizeAndSolve(), which then leaves x alone.
   std::mt19937_64 random(13);
   WorkerPool two(2);
   const dense_panel::Tiles tiles = SparseBlockLdlt::tiles();
@@ -267,11 +267,15 @@ TEST(SparseBlockLdlt, TwoThreadsFactorASheetToTheSameBitsAsOne)
         const std::vector<Eigen::Matrix3d> blocks = randomSpdBlocks(p, n, pairs, random);
         ASSERT_TRUE(one_thread.factorize(blocks, pinned));
         ASSERT_TRUE(two_threads.factorize(blocks, pinned));
-        Eigen::Matrix3Xd x1(3, n), x2(3, n);
+        Eigen::Matrix3Xd x1(3, n), x2(3, n), x3(3, n);
         one_thread.solve(b, x1);
         two_threads.solve(b, x2);
         EXPECT_EQ(std::memcmp(x1.data(), x2.data(), sizeof(double) * 3 * n), 0)
             << nu << " x " << nv << ", round " << round;
+        // Both at once, the shares' forward passes beside the last panel above them.
+        ASSERT_TRUE(two_threads.factorizeAndSolve(blocks, pinned, b, x3));
+        EXPECT_EQ(std::memcmp(x1.data(), x3.data(), sizeof(double) * 3 * n), 0)
+            << nu << " x " << nv << ", round " << round << ", factorized and solved at once";
       }
     }
   }
@@ -296,6 +300,10 @@ TEST(SparseBlockLdlt, TwoThreadsFactorASheetToTheSameBitsAsOne)
       blocks[p.blockIndex(j, singular)].col(1).setZero();
     }
     EXPECT_FALSE(ldlt.factorize(blocks, std::vector<char>(n, 0))) << "singular particle " << singular;
+    Eigen::Matrix3Xd x = Eigen::Matrix3Xd::Constant(3, n, 7.0);
+    EXPECT_FALSE(ldlt.factorizeAndSolve(blocks, std::vector<char>(n, 0), Eigen::Matrix3Xd::Ones(3, n), x))
+        << "singular particle " << singular;
+    EXPECT_TRUE((x.array() == 7.0).all()) << "x written after a singular pivot, particle " << singular;
   }
 }
 

@@ -685,11 +685,9 @@ bool ImplicitEulerSolver::solveDirectly(const std::vector<char>& pinned)
 {
   movePairsIntoBlocks();
   moveDiagonalIntoBlocks();
-  if (!direct_.factorize(blocks_, pinned)) return false;
   residual_ = rhs_;
   filter(pinned, residual_);
-  direct_.solve(residual_, delta_v_);
-  return true;
+  return direct_.factorizeAndSolve(blocks_, pinned, residual_, delta_v_);
 }
 
 void ImplicitEulerSolver::conjugateGradient(const std::vector<char>& pinned, const IntegratorDef& settings,

@@ -420,6 +420,7 @@ void SparseBlockLdlt::forgetSubtrees()
   kept_sums_.clear();
   second_gathered_.clear();
   shared_share_ = 0.0;
+  last_above_ = -1;
 }
 
 void SparseBlockLdlt::planSubtrees(const std::vector<int>& supernode_of)
@@ -563,6 +564,7 @@ void SparseBlockLdlt::planSubtrees(const std::vector<int>& supernode_of)
   for (int t = 0; t < count; ++t)
   {
     if (share_of_[t] >= 0) continue;
+    last_above_ = t;
     const long m = 3L * (supernodes_[t].width + supernodes_[t].below), width = 3L * supernodes_[t].width;
     const long entries = width * m - width * (width - 1) / 2;
     long before = 0;
@@ -573,12 +575,36 @@ void SparseBlockLdlt::planSubtrees(const std::vector<int>& supernode_of)
   }
 }
 
+bool SparseBlockLdlt::factorizeAndSolve(const std::vector<Eigen::Matrix3d>& blocks, const std::vector<char>& pinned,
+                                        const Eigen::Matrix3Xd& b, Eigen::Matrix3Xd& x)
+{
+  if (!supernodal() || !twoThreads())
+  {
+    if (!factorize(blocks, pinned)) return false;
+    solve(b, x);
+    return true;
+  }
+  // b in the new order first, so that the shares' forward passes can run beside the factorization
+  // of the last panel above them.
+  const int n = static_cast<int>(pivot_.size());
+  for (int i = 0; i < n; ++i)
+  {
+    pinned_new_[i] = pinned[old_of_[i]];
+    work_.col(i) = b.col(old_of_[i]);
+  }
+  if (!factorizeSupernodes(blocks, true)) return false;
+  solveSupernodes(true);
+  for (int i = 0; i < n; ++i)
+    x.col(old_of_[i]) = work_.col(i);
+  return true;
+}
+
 bool SparseBlockLdlt::factorize(const std::vector<Eigen::Matrix3d>& blocks, const std::vector<char>& pinned)
 {
   const int n = static_cast<int>(pivot_.size());
   for (int i = 0; i < n; ++i)
     pinned_new_[i] = pinned[old_of_[i]];
-  if (supernodal()) return factorizeSupernodes(blocks);
+  if (supernodal()) return factorizeSupernodes(blocks, false);
   for (int i = 0; i < n; ++i)
   {
     if (pinned_new_[i])
@@ -667,7 +693,7 @@ void SparseBlockLdlt::solve(const Eigen::Matrix3Xd& b, Eigen::Matrix3Xd& x)
     x.col(old_of_[i]) = work_.col(i);
 }
 
-bool SparseBlockLdlt::factorizeSupernodes(const std::vector<Eigen::Matrix3d>& blocks)
+bool SparseBlockLdlt::factorizeSupernodes(const std::vector<Eigen::Matrix3d>& blocks, bool forward_beside)
 {
   // A's lower triangle into the panels; a pinned particle's row and column stay 0, its diagonal I.
   // Each scalar column's diagonal entry in A is the scale its pivot is judged by. Each block writes
@@ -750,7 +776,23 @@ bool SparseBlockLdlt::factorizeSupernodes(const std::vector<Eigen::Matrix3d>& bl
         });
       }
       if (end == count) break;
-      if (!factorPanel(end, scaled_.data(), tiles)) return false;
+      if (forward_beside && static_cast<int>(end) == last_above_)
+      {
+        // The last panel above the shares on one thread; the shares' forward passes (solve()), which
+        // read their own panels alone, on the other.
+        bool factored = true;
+        workers_->forEachChunk(2, 1, [&](int part, int) {
+          if (part == 0)
+            factored = factorPanel(end, scaled_.data(), tiles);
+          else
+            forwardShares(false);
+        });
+        if (!factored) return false;
+      }
+      else if (!factorPanel(end, scaled_.data(), tiles))
+      {
+        return false;
+      }
       workers_->forEachChunk(2, 1, [&](int half, int) { subtractRuns(end, scaled_.data(), kEveryShare, tiles, half); });
       s = end + 1;
     }
@@ -847,7 +889,7 @@ void SparseBlockLdlt::subtractRuns(std::size_t s, const double* scaled, int shar
   }
 }
 
-void SparseBlockLdlt::solveSupernodes()
+void SparseBlockLdlt::solveSupernodes(bool shares_forwarded)
 {
   // L y = b by supernodes (each panel's own triangle, then its rows below gathered as one sum a
   // row), y = D⁻¹ y, then Lᵀ x = y backwards; on work_'s numbers in the new order. With two threads
@@ -868,12 +910,7 @@ void SparseBlockLdlt::solveSupernodes()
       backwardSupernode(s, y, gathered_.data(), avx2);
     return;
   }
-  workers_->forEachChunk(2, 1, [&](int share, int) {
-    double* const gathered = share == 0 ? gathered_.data() : second_gathered_.data();
-    for (const int s : shared_order_[share])
-      forwardSupernode(s, y, gathered, avx2,
-                       kept_sums_at_[s] == kNotKept ? nullptr : kept_sums_.data() + kept_sums_at_[s]);
-  });
+  if (!shares_forwarded) forwardShares(true);
   for (std::size_t s = 0; s < count; ++s)
   {
     if (share_of_[s] < 0)
@@ -901,6 +938,27 @@ void SparseBlockLdlt::solveSupernodes()
     for (auto s = shared_order_[share].rbegin(); s != shared_order_[share].rend(); ++s)
       backwardSupernode(*s, y, gathered, avx2);
   });
+}
+
+void SparseBlockLdlt::forwardShares(bool two_threads)
+{
+  // Each share's supernodes in order, each share with its own scratch; the two at once, or one
+  // after the other on this thread.
+  double* const y = work_.data();
+  const bool avx2 = useAvx2();
+  auto forward = [&](int share) {
+    double* const gathered = share == 0 ? gathered_.data() : second_gathered_.data();
+    for (const int s : shared_order_[share])
+      forwardSupernode(s, y, gathered, avx2,
+                       kept_sums_at_[s] == kNotKept ? nullptr : kept_sums_.data() + kept_sums_at_[s]);
+  };
+  if (two_threads)
+  {
+    workers_->forEachChunk(2, 1, [&](int share, int) { forward(share); });
+    return;
+  }
+  forward(0);
+  forward(1);
 }
 
 void SparseBlockLdlt::forwardSupernode(std::size_t s, double* y, double* gathered, bool avx2, double* kept)

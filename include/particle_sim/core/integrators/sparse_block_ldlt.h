@@ -101,6 +101,11 @@ public:
   bool factorize(const std::vector<Eigen::Matrix3d>& blocks, const std::vector<char>& pinned);
   /// x = A⁻¹ b for the last factorization; pinned columns of b must be 0 (x's are then 0).
   void solve(const Eigen::Matrix3Xd& b, Eigen::Matrix3Xd& x);
+  /// factorize(), then solve() (false, and x untouched, where factorize() is false): the same
+  /// numbers, but with two threads the shares' forward passes of the solve run beside the
+  /// factorization of the last panel above them, which one thread does alone.
+  bool factorizeAndSolve(const std::vector<Eigen::Matrix3d>& blocks, const std::vector<char>& pinned,
+                         const Eigen::Matrix3Xd& b, Eigen::Matrix3Xd& x);
 
 private:
   // The order: new_of_[old] and old_of_[new] particle indices.
@@ -156,9 +161,14 @@ private:
   void analyzeSupernodes(const std::vector<int>& row_start, const std::vector<int>& block_column,
                          const std::vector<int>& supernode_of);
   // factorize() and solve() in the supernodal form (solve() on work_, in the new order; both with
-  // two threads where planSubtrees() planned them and there are workers).
-  bool factorizeSupernodes(const std::vector<Eigen::Matrix3d>& blocks);
-  void solveSupernodes();
+  // two threads where planSubtrees() planned them and there are workers). `forward_beside`: work_
+  // holds b, and the shares' forward passes run beside the last panel above them
+  // (forwardShares()); `shares_forwarded`: they have.
+  bool factorizeSupernodes(const std::vector<Eigen::Matrix3d>& blocks, bool forward_beside);
+  void solveSupernodes(bool shares_forwarded = false);
+  // The forward passes of the two shares' supernodes (L y = b on work_ for their rows, their sums
+  // for the rows above the shares kept): on two threads at once, or on this one.
+  void forwardShares(bool two_threads);
   // One supernode's panel factored (factorPanel()), false at a singular pivot; then its update
   // subtracted from the panels above it: all of its runs, or (`shared_only`) only those into
   // supernodes of its own share, the others left for subtractRuns().
@@ -197,6 +207,7 @@ private:
   std::vector<std::size_t> kept_sums_at_;
   std::vector<double> kept_sums_, second_gathered_;
   double shared_share_ = 0.0;
+  int last_above_ = -1;  // the last supernode above the shares (−1: none planned)
   WorkerPool* workers_ = nullptr;
   Eigen::Matrix3Xd work_;
   double factor_flops_ = 0.0, solve_flops_ = 0.0;
