@@ -240,6 +240,56 @@ TEST(WorkerPool, SharedSpringForcesByChunksOfParticlesEqualTheOneThreadLoopBitFo
   expectSharedEqualsAlone(core::SpringForces(springs), contexts, x, v, before);
 }
 
+TEST(WorkerPool, SharedSpringJacobiansEqualTheOneThreadLoopBitForBit)
+{
+  // The springs' implicit blocks (SpringForces::addJacobians()) by chunks of particles: each
+  // particle's diagonal block and right-hand side get the one-thread loop's terms in its order and
+  // each spring's pair is kept once, so one solve from the same start ends in the same bits. In the
+  // built order (long runs with both ends inside a chunk) and shuffled (runs of one, either end).
+  const int particles = 10000;
+  std::vector<core::Spring> springs;
+  for (int i = 0; i < particles; ++i)
+    for (int step : {1, 2, 37, 38})
+      if (i + step < particles)
+        springs.push_back(core::Spring{i, i + step, 0.1, 100.0 + i % 7, 0.01 * (i % 3), core::SpringClass::Stretch});
+  const Eigen::Matrix3Xd x = Eigen::Matrix3Xd::Random(3, particles) * 0.2;
+  const Eigen::Matrix3Xd v = Eigen::Matrix3Xd::Random(3, particles);
+  const Eigen::Matrix3Xd force = Eigen::Matrix3Xd::Random(3, particles);
+  TwoContexts contexts(particles);
+  core::IntegratorDef settings;
+  settings.linear_solver = core::LinearSolverType::ConjugateGradient;
+  auto velocityAfterOneSolve = [&](const std::vector<core::Spring>& list, const core::ForceContext& context) {
+    core::SpringForces forces(list);
+    std::vector<std::pair<int, int>> pairs;
+    forces.coupledPairs(pairs);
+    core::ImplicitEulerSolver solver;
+    solver.setPattern(particles, pairs);
+    forces.bindPattern(solver);
+    solver.begin(1.0 / 60.0, contexts.mass, force, &v);
+    forces.addJacobians(context, x, solver);
+    EXPECT_EQ(solver.keptPairs(), static_cast<int>(list.size()));
+    std::vector<core::RestingContact> contacts;
+    Eigen::Matrix3Xd x1 = x, v1 = v;
+    solver.solve(contexts.pinned, contacts, settings, x1, v1);
+    return v1;
+  };
+  for (const bool shuffled : {false, true})
+  {
+    if (shuffled)
+    {
+      std::mt19937 random(5);
+      std::shuffle(springs.begin(), springs.end(), random);
+      for (core::Spring& spring : springs)
+        if (random() % 2) std::swap(spring.i, spring.j);
+    }
+    const Eigen::Matrix3Xd alone = velocityAfterOneSolve(springs, contexts.alone());
+    const std::uint64_t shared_before = contexts.pool.sharedLoops();
+    const Eigen::Matrix3Xd shared = velocityAfterOneSolve(springs, contexts.shared());
+    EXPECT_GT(contexts.pool.sharedLoops(), shared_before);
+    EXPECT_TRUE(sameBits(alone, shared)) << (shuffled ? "shuffled" : "in the built order");
+  }
+}
+
 namespace
 {
 // Whether two doubles are the same bits.

@@ -366,6 +366,11 @@ void SpringForces::addJacobians(const ForceContext& context, const Eigen::Matrix
     springJacobianPartsOf(springs_.data(), first, last, x.data(), vectorized, jacobian_parts_);
   });
   const SpringJacobianParts& parts = jacobian_parts_;
+  if (sharesJacobians(context, solver, static_cast<int>(x.cols())))
+  {
+    addJacobiansShared(*context.workers, static_cast<int>(x.cols()), solver);
+    return;
+  }
   for (int s = 0; s < count; ++s)
   {
     const Spring& spring = springs_[s];
@@ -380,6 +385,56 @@ void SpringForces::addJacobians(const ForceContext& context, const Eigen::Matrix
                     dfdv);
     solver.addPairBlocks(blocks_[s], dfdx, dfdv);
   }
+}
+
+bool SpringForces::sharesJacobians(const ForceContext& context, const ImplicitEulerSolver& solver, int particles) const
+{
+  // By chunks of particles (as the forces, addForcesShared()), where the springs have the locality
+  // for it and none has coincident ends this step (those take addPairBlocks()).
+  if (!sharesForces(context) || !solver.pairEndsShareable()) return false;
+  indexEnds(particles);
+  if (!by_chunks_) return false;
+  const std::vector<char>& coincident = jacobian_parts_.coincident;
+  return std::find(coincident.begin(), coincident.begin() + static_cast<long>(springs_.size()), 1) ==
+         coincident.begin() + static_cast<long>(springs_.size());
+}
+
+void SpringForces::addJacobiansShared(WorkerPool& workers, int particles, ImplicitEulerSolver& solver) const
+{
+  // Each chunk's thread visits the springs that touch its particles, in spring order, and adds to
+  // their ends inside the chunk: every particle gets the one-thread loop's terms in its order (its
+  // bits); a spring's pair is kept by the run that holds its end i.
+  const int first_pair = solver.reservePairs(static_cast<int>(springs_.size()));
+  const int chunks = chunks_.chunks();
+  jacobian_chunk_changed_.assign(chunks, 0);
+  const SpringJacobianParts& parts = jacobian_parts_;
+  workers.forEachChunk(particles, kParticlesPerChunk, [&](int begin, int end) {
+    for (int chunk = begin / kParticlesPerChunk; chunk * kParticlesPerChunk < end; ++chunk)
+    {
+      bool changed = false;
+      for (int r = chunks_.runStart(chunk); r < chunks_.runStart(chunk + 1); ++r)
+      {
+        const PairChunks::Run run = chunks_.runs()[r];
+        for (int s = run.first; s < run.first + run.count; ++s)
+        {
+          const Eigen::Vector3d d(parts.d_x[s], parts.d_y[s], parts.d_z[s]);
+          const double along_v = -springs_[s].damping;
+          if (run.ends == PairChunks::kBothEnds)
+            changed |= solver.addAlongPairEnds<true, true>(first_pair + s, blocks_[s], d, parts.along_x[s],
+                                                           parts.isotropic_x[s], along_v);
+          else if (run.ends == PairChunks::kEndI)
+            changed |= solver.addAlongPairEnds<true, false>(first_pair + s, blocks_[s], d, parts.along_x[s],
+                                                            parts.isotropic_x[s], along_v);
+          else
+            solver.addAlongPairEnds<false, true>(first_pair + s, blocks_[s], d, parts.along_x[s], parts.isotropic_x[s],
+                                                 along_v);
+        }
+      }
+      jacobian_chunk_changed_[chunk] = changed;
+    }
+  });
+  if (std::find(jacobian_chunk_changed_.begin(), jacobian_chunk_changed_.end(), 1) != jacobian_chunk_changed_.end())
+    solver.notePairsChanged();
 }
 
 void SpringForces::addStabilityRows(const std::vector<Eigen::Vector3d>& /*rest*/, std::vector<double>& stiffness_rows,

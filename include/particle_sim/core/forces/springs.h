@@ -64,6 +64,12 @@ private:
   /// addForces(), with each spring's energy into `energy` unless it is null.
   void addForcesTo(const ForceContext& context, const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v,
                    Eigen::Matrix3Xd& force, double* energy) const;
+  /// Whether addJacobians() is shared between `context`'s threads (addJacobiansShared()): after the
+  /// springs' parts of this step.
+  bool sharesJacobians(const ForceContext& context, const ImplicitEulerSolver& solver, int particles) const;
+  /// addJacobians()'s blocks shared by chunks of particles, from the springs' parts of this step
+  /// (the pairs, A's diagonal blocks and b: ImplicitEulerSolver::addAlongPairEnds()).
+  void addJacobiansShared(WorkerPool& workers, int particles, ImplicitEulerSolver& solver) const;
   /// Rebuilds the chunks' spring lists (or ends_) for `particles` particles when the springs or
   /// the particle count changed.
   void indexEnds(int particles) const;
@@ -89,6 +95,7 @@ private:
   mutable std::vector<double> kept_chunk_energy_;
   mutable bool energy_kept_by_chunks_ = false;
   mutable SpringJacobianParts jacobian_parts_;  // addJacobians(): per spring of springs_, its parts
+  mutable std::vector<char> jacobian_chunk_changed_;  // addJacobiansShared(): per chunk, a pair's ends changed
 };
 
 }  // namespace core

@@ -104,31 +104,60 @@ public:
   /// isotropic_x I, dfdv = along_v d dᵀ (springJacobianParts()). Then C = (h along_v + h² along_x)
   /// d dᵀ + h² isotropic_x I, and b's term h² dfdx (v0_i − v0_j) = h² (along_x (d·u) d +
   /// isotropic_x u) with u = v0_i − v0_j: about half the arithmetic of the full blocks, the same
-  /// system but for rounding. C's entries are computed one by one as Eigen evaluates that
-  /// expression, (a d_r) d_c + b I_rc with a = h along_v + h² along_x and b = h² isotropic_x (so
-  /// C_rc and C_cr may differ in the last bit; the kept pair is the lower triangle), into numbers
-  /// the compiler keeps in registers: a 3x3 matrix written to the stack and read back in halves
-  /// stalled the assembly on every spring.
+  /// system but for rounding (C: alongPairC()).
   [[gnu::always_inline]] void addAlongPairBlocks(const std::array<int, 4>& blocks, const Eigen::Vector3d& d,
                                                  double along_x, double isotropic_x, double along_v)
   {
-    const double h2 = h_ * h_;
-    const double a = h_ * along_v + h2 * along_x, b = h2 * isotropic_x, b_off = b * 0.0;
-    const double ad[3] = {a * d[0], a * d[1], a * d[2]};
-    double c[9];  // column-major
-#pragma GCC unroll 3
-    for (int column = 0; column < 3; ++column)
-#pragma GCC unroll 3
-      for (int row = 0; row < 3; ++row)
-        c[row + 3 * column] = ad[row] * d[column] + (row == column ? b : b_off);
+    double c[9];
+    alongPairC(d, along_x, isotropic_x, along_v, c);
     addPairC(blocks, c);
     if (!v0_) return;
     const int i = block_row_[blocks[0]], j = block_row_[blocks[3]];
-    const Eigen::Vector3d u = v0_->col(i) - v0_->col(j);
-    const Eigen::Vector3d change = h2 * (along_x * d.dot(u) * d + isotropic_x * u);
+    const Eigen::Vector3d change = alongRhsChange(i, j, d, along_x, isotropic_x);
     rhs_.col(i) += change;
     rhs_.col(j) -= change;
   }
+  /// Whether addAlongPairEnds() may be used now: the diagonal blocks and the pairs are still kept
+  /// apart from A's blocks in this step.
+  bool pairEndsShareable() const { return !diagonal_in_blocks_ && !pairs_in_blocks_; }
+  /// Room for `count` more kept pairs, numbered from the index returned on (addAlongPairEnds()).
+  int reservePairs(int count)
+  {
+    while (kept_pairs_ + count > static_cast<int>(pair_ends_.size()))
+      growPairs();
+    const int first = kept_pairs_;
+    kept_pairs_ += count;
+    return first;
+  }
+  /// addAlongPairBlocks() of the pair numbered `pair` (reservePairs()) by its ends, for a loop shared
+  /// by chunks of particles in which each chunk's thread visits the springs that touch the chunk, in
+  /// order, and adds only to their ends inside it (PairChunks): A_ii −= C and b_i's term at end i
+  /// (kAddI), likewise at end j (kAddJ), each particle's terms in the order of the one-thread loop.
+  /// The call with end i keeps the pair; it returns whether the pair's particles differ from the
+  /// last step's pair at that place (the caller then calls notePairsChanged()). Only while
+  /// pairEndsShareable().
+  template <bool kAddI, bool kAddJ>
+  [[gnu::always_inline]] bool addAlongPairEnds(int pair, const std::array<int, 4>& blocks, const Eigen::Vector3d& d,
+                                               double along_x, double isotropic_x, double along_v)
+  {
+    double c[9];
+    alongPairC(d, along_x, isotropic_x, along_v, c);
+    const int i = block_row_[blocks[0]], j = block_row_[blocks[3]];
+    bool changed = false;
+    if (kAddI)
+    {
+      subtractC(diagonal_[i], c);
+      changed = storePair(pair, blocks, c);
+    }
+    if (kAddJ) subtractC(diagonal_[j], c);
+    if (!v0_) return changed;
+    const Eigen::Vector3d change = alongRhsChange(i, j, d, along_x, isotropic_x);
+    if (kAddI) rhs_.col(i) += change;
+    if (kAddJ) rhs_.col(j) -= change;
+    return changed;
+  }
+  /// After addAlongPairEnds() calls of which one returned true.
+  void notePairsChanged() { pairs_changed_ = true; }
   /// Solves for Δv with pinned rows filtered and resting contacts held, then v += Δv, x += h v.
   /// Pinned particles keep the velocity in v (the one that carries them to their target). Each
   /// contact whose particle is not leaving its surface is held (RestingContact: stuck, sliding or let
@@ -185,34 +214,61 @@ private:
     blocks_[block].noalias() -= h_ * dfdv + h_ * h_ * dfdx;
     if (v0_) rhs_.col(block_row_[block]).noalias() += h_ * h_ * (dfdx * v0_->col(block_column_[block]));
   }
+  // C of addAlongPairBlocks(), entry by entry as Eigen evaluates (a d dᵀ + b I): (a d_r) d_c +
+  // b I_rc with a = h along_v + h² along_x and b = h² isotropic_x (so C_rc and C_cr may differ in
+  // the last bit; a kept pair is the lower triangle), column-major, into numbers the compiler keeps
+  // in registers: a 3x3 matrix written to the stack and read back in halves stalled the assembly on
+  // every spring.
+  [[gnu::always_inline]] void alongPairC(const Eigen::Vector3d& d, double along_x, double isotropic_x, double along_v,
+                                         double* c) const
+  {
+    const double h2 = h_ * h_;
+    const double a = h_ * along_v + h2 * along_x, b = h2 * isotropic_x, b_off = b * 0.0;
+    const double ad[3] = {a * d[0], a * d[1], a * d[2]};
+#pragma GCC unroll 3
+    for (int column = 0; column < 3; ++column)
+#pragma GCC unroll 3
+      for (int row = 0; row < 3; ++row)
+        c[row + 3 * column] = ad[row] * d[column] + (row == column ? b : b_off);
+  }
+  // b's term of addAlongPairBlocks() at end i (its negative at j).
+  [[gnu::always_inline]] Eigen::Vector3d alongRhsChange(int i, int j, const Eigen::Vector3d& d, double along_x,
+                                                        double isotropic_x) const
+  {
+    const Eigen::Vector3d u = v0_->col(i) - v0_->col(j);
+    return h_ * h_ * (along_x * d.dot(u) * d + isotropic_x * u);
+  }
+  // block −= C and block += C, C's nine numbers column-major.
+  [[gnu::always_inline]] static void subtractC(Eigen::Matrix3d& block, const double* c)
+  {
+#pragma GCC unroll 9
+    for (int k = 0; k < 9; ++k)
+      block.data()[k] -= c[k];
+  }
+  [[gnu::always_inline]] static void addC(Eigen::Matrix3d& block, const double* c)
+  {
+#pragma GCC unroll 9
+    for (int k = 0; k < 9; ++k)
+      block.data()[k] += c[k];
+  }
   // A_ii −= C, A_jj −= C, and A_ij = A_ji += C, kept as a pair until the blocks are needed
   // (addPairBlocks()); C's nine numbers column-major.
   [[gnu::always_inline]] void addPairC(const std::array<int, 4>& blocks, const double* c)
   {
-    auto subtract = [c](Eigen::Matrix3d& block) {
-#pragma GCC unroll 9
-      for (int k = 0; k < 9; ++k)
-        block.data()[k] -= c[k];
-    };
-    auto add = [c](Eigen::Matrix3d& block) {
-#pragma GCC unroll 9
-      for (int k = 0; k < 9; ++k)
-        block.data()[k] += c[k];
-    };
     if (diagonal_in_blocks_)
     {
-      subtract(blocks_[blocks[0]]);
-      subtract(blocks_[blocks[3]]);
+      subtractC(blocks_[blocks[0]], c);
+      subtractC(blocks_[blocks[3]], c);
     }
     else
     {
-      subtract(diagonal_[block_row_[blocks[0]]]);
-      subtract(diagonal_[block_row_[blocks[3]]]);
+      subtractC(diagonal_[block_row_[blocks[0]]], c);
+      subtractC(diagonal_[block_row_[blocks[3]]], c);
     }
     if (pairs_in_blocks_)
     {
-      add(blocks_[blocks[1]]);
-      add(blocks_[blocks[2]]);
+      addC(blocks_[blocks[1]], c);
+      addC(blocks_[blocks[2]], c);
     }
     else
     {
@@ -224,12 +280,17 @@ private:
   [[gnu::always_inline]] void keepPair(const std::array<int, 4>& blocks, const double* c)
   {
     if (kept_pairs_ == static_cast<int>(pair_ends_.size())) growPairs();
-    const int k = kept_pairs_++;
+    if (storePair(kept_pairs_++, blocks, c)) pairs_changed_ = true;
+  }
+  // Pair C as number k of the kept list; whether its particles differ from the last step's there.
+  [[gnu::always_inline]] bool storePair(int k, const std::array<int, 4>& blocks, const double* c)
+  {
     const int i = block_row_[blocks[0]], j = block_row_[blocks[3]];
-    if (pair_ends_[k][0] != i || pair_ends_[k][1] != j) pairs_changed_ = true;
+    const bool changed = pair_ends_[k][0] != i || pair_ends_[k][1] != j;
     pair_ends_[k] = {i, j};
     pair_blocks_[k] = {blocks[1], blocks[2]};
     pair_c_[k] = {c[0], c[1], c[2], c[4], c[5], c[8]};
+    return changed;
   }
   // Writes the diagonal blocks A_ii from diagonal_ into their places in blocks_, once a step, for
   // what reads A whole (the direct solver, the multigrid's setup, resting contacts, the product by
