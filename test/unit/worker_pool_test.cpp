@@ -160,6 +160,29 @@ struct TwoContexts
   core::WorkerPool pool{2};
 };
 
+// Springs between near indices of `particles` particles (a strip 37 particles wide): few cross the
+// chunks of 2048 particles, and in this order a chunk's springs come in long runs with both ends
+// inside it.
+std::vector<core::Spring> stripSprings(int particles)
+{
+  std::vector<core::Spring> springs;
+  for (int i = 0; i < particles; ++i)
+    for (int step : {1, 2, 37, 38})
+      if (i + step < particles)
+        springs.push_back(core::Spring{i, i + step, 0.1, 100.0 + i % 7, 0.01 * (i % 3), core::SpringClass::Stretch});
+  return springs;
+}
+
+// The springs in a random order (`seed`), each with its ends swapped or not: a chunk's springs then
+// come in runs of one, either end inside it.
+void shuffleSprings(std::vector<core::Spring>& springs, unsigned seed)
+{
+  std::mt19937 random(seed);
+  std::shuffle(springs.begin(), springs.end(), random);
+  for (core::Spring& spring : springs)
+    if (random() % 2) std::swap(spring.i, spring.j);  // either end may be the lower index
+}
+
 // `forces` added onto `before` (forces already there, gravity say, come first in both sums) at
 // (x, v) by one thread and by two give the same bits, and the two did share a loop.
 void expectSharedEqualsAlone(const core::SpringForces& forces, TwoContexts& contexts, const Eigen::Matrix3Xd& x,
@@ -214,11 +237,7 @@ TEST(WorkerPool, SharedSpringForcesByChunksOfParticlesEqualTheOneThreadLoopBitFo
   // particles; the boundary springs are computed by both chunks. In the built order a chunk's
   // springs come in long runs with both ends inside it; shuffled, in runs of one, either end inside.
   const int particles = 10000;
-  std::vector<core::Spring> springs;
-  for (int i = 0; i < particles; ++i)
-    for (int step : {1, 2, 37, 38})
-      if (i + step < particles)
-        springs.push_back(core::Spring{i, i + step, 0.1, 100.0 + i % 7, 0.01 * (i % 3), core::SpringClass::Stretch});
+  std::vector<core::Spring> springs = stripSprings(particles);
   const Eigen::Matrix3Xd x = Eigen::Matrix3Xd::Random(3, particles);
   const Eigen::Matrix3Xd v = Eigen::Matrix3Xd::Random(3, particles);
   const Eigen::Matrix3Xd before = Eigen::Matrix3Xd::Random(3, particles);
@@ -233,10 +252,7 @@ TEST(WorkerPool, SharedSpringForcesByChunksOfParticlesEqualTheOneThreadLoopBitFo
   ASSERT_LT(torn.springs.size(), springs.size() / 2);
   expectSharedEqualsAlone(in_order, contexts, x, v, before);
 
-  std::mt19937 random(3);
-  std::shuffle(springs.begin(), springs.end(), random);
-  for (core::Spring& spring : springs)
-    if (random() % 2) std::swap(spring.i, spring.j);  // either end may be the lower index
+  shuffleSprings(springs, 3);
   expectSharedEqualsAlone(core::SpringForces(springs), contexts, x, v, before);
 }
 
@@ -247,11 +263,7 @@ TEST(WorkerPool, SharedSpringJacobiansEqualTheOneThreadLoopBitForBit)
   // each spring's pair is kept once, so one solve from the same start ends in the same bits. In the
   // built order (long runs with both ends inside a chunk) and shuffled (runs of one, either end).
   const int particles = 10000;
-  std::vector<core::Spring> springs;
-  for (int i = 0; i < particles; ++i)
-    for (int step : {1, 2, 37, 38})
-      if (i + step < particles)
-        springs.push_back(core::Spring{i, i + step, 0.1, 100.0 + i % 7, 0.01 * (i % 3), core::SpringClass::Stretch});
+  std::vector<core::Spring> springs = stripSprings(particles);
   const Eigen::Matrix3Xd x = Eigen::Matrix3Xd::Random(3, particles) * 0.2;
   const Eigen::Matrix3Xd v = Eigen::Matrix3Xd::Random(3, particles);
   const Eigen::Matrix3Xd force = Eigen::Matrix3Xd::Random(3, particles);
@@ -275,13 +287,7 @@ TEST(WorkerPool, SharedSpringJacobiansEqualTheOneThreadLoopBitForBit)
   };
   for (const bool shuffled : {false, true})
   {
-    if (shuffled)
-    {
-      std::mt19937 random(5);
-      std::shuffle(springs.begin(), springs.end(), random);
-      for (core::Spring& spring : springs)
-        if (random() % 2) std::swap(spring.i, spring.j);
-    }
+    if (shuffled) shuffleSprings(springs, 5);
     const Eigen::Matrix3Xd alone = velocityAfterOneSolve(springs, contexts.alone());
     const std::uint64_t shared_before = contexts.pool.sharedLoops();
     const Eigen::Matrix3Xd shared = velocityAfterOneSolve(springs, contexts.shared());

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <atomic>
 #include <condition_variable>
+#include <cstddef>
 #include <cstdint>
 #include <mutex>
 #include <thread>
@@ -109,6 +110,17 @@ void shareLoop(WorkerPool* workers, int items, int chunk, Body&& body)
     workers->forEachChunk(items, chunk, body);
   else if (items > 0)
     body(0, items);
+}
+
+/// body(first, last) on the two halves of [0, n), each as one chunk of its own (on two threads where
+/// `workers` has them): for a pass whose two parts are cut by something other than a chunk size.
+template <class Body>
+void byHalves(WorkerPool& workers, std::size_t n, Body&& body)
+{
+  workers.forEachChunk(2, 1, [&](int begin, int end) {
+    for (int half = begin; half < end; ++half)
+      body(half == 0 ? std::size_t{0} : n / 2, half == 0 ? n / 2 : n);
+  });
 }
 
 /// body(index, first, last) once for every chunk [first, last) of `chunk` items (the last one

@@ -287,25 +287,23 @@ void ImplicitEulerSolver::movePairsIntoBlocks()
   // Each block gets its pairs' C in the pairs' order. With threads, the blocks are cut in two at
   // the middle and each part's thread passes every pair, adding to its own blocks alone (a pair's
   // two blocks may lie in different parts).
-  auto addPairs = [&](int first_block, int last_block) {
+  auto addPairs = [&](std::size_t first_block, std::size_t last_block) {
+    auto mine = [&](int block) {
+      return static_cast<std::size_t>(block) >= first_block && static_cast<std::size_t>(block) < last_block;
+    };
     for (int k = 0; k < kept_pairs_; ++k)
     {
       const int ij = pair_blocks_[k][0], ji = pair_blocks_[k][1];
-      const bool add_ij = ij >= first_block && ij < last_block, add_ji = ji >= first_block && ji < last_block;
-      if (!add_ij && !add_ji) continue;
+      if (!mine(ij) && !mine(ji)) continue;
       const Eigen::Matrix3d c = symmetricBlock(pair_c_[k]);
-      if (add_ij) blocks_[ij] += c;
-      if (add_ji) blocks_[ji] += c;
+      if (mine(ij)) blocks_[ij] += c;
+      if (mine(ji)) blocks_[ji] += c;
     }
   };
-  const int blocks = static_cast<int>(blocks_.size());
   if (workers_ && workers_->threads() > 1 && kept_pairs_ > kRowsPerChunk)
-    workers_->forEachChunk(2, 1, [&](int begin, int end) {
-      for (int part = begin; part < end; ++part)
-        addPairs(part == 0 ? 0 : blocks / 2, part == 0 ? blocks / 2 : blocks);
-    });
+    byHalves(*workers_, blocks_.size(), addPairs);
   else
-    addPairs(0, blocks);
+    addPairs(0, blocks_.size());
   pairs_in_blocks_ = true;
   off_diagonal_zero_ = false;
 }

@@ -125,18 +125,6 @@ constexpr int kPanelColumns = 4;
 // A scalar pivot at most this fraction of its diagonal entry in A (or not finite) is singular.
 constexpr double kSingularPivot = 1e-14;
 
-// body(first, last) on the two halves of [0, n), one a thread (WorkerPool: each half on its own).
-template <class Body>
-void byHalves(WorkerPool& workers, std::size_t n, Body&& body)
-{
-  workers.forEachChunk(2, 1, [&](int half, int) {
-    if (half == 0)
-      body(std::size_t{0}, n / 2);
-    else
-      body(n / 2, n);
-  });
-}
-
 // The dense products' form (SparseBlockLdlt::setTiles()): the widest the processor has, by default.
 std::atomic<dense_panel::Tiles>& tilesSetting()
 {
@@ -586,24 +574,18 @@ bool SparseBlockLdlt::factorizeAndSolve(const std::vector<Eigen::Matrix3d>& bloc
   }
   // b in the new order first, so that the shares' forward passes can run beside the factorization
   // of the last panel above them.
-  const int n = static_cast<int>(pivot_.size());
-  for (int i = 0; i < n; ++i)
-  {
-    pinned_new_[i] = pinned[old_of_[i]];
-    work_.col(i) = b.col(old_of_[i]);
-  }
+  pinnedInNewOrder(pinned);
+  toNewOrder(b);
   if (!factorizeSupernodes(blocks, true)) return false;
   solveSupernodes(true);
-  for (int i = 0; i < n; ++i)
-    x.col(old_of_[i]) = work_.col(i);
+  fromNewOrder(x);
   return true;
 }
 
 bool SparseBlockLdlt::factorize(const std::vector<Eigen::Matrix3d>& blocks, const std::vector<char>& pinned)
 {
   const int n = static_cast<int>(pivot_.size());
-  for (int i = 0; i < n; ++i)
-    pinned_new_[i] = pinned[old_of_[i]];
+  pinnedInNewOrder(pinned);
   if (supernodal()) return factorizeSupernodes(blocks, false);
   for (int i = 0; i < n; ++i)
   {
@@ -664,13 +646,11 @@ bool SparseBlockLdlt::factorize(const std::vector<Eigen::Matrix3d>& blocks, cons
 void SparseBlockLdlt::solve(const Eigen::Matrix3Xd& b, Eigen::Matrix3Xd& x)
 {
   const int n = static_cast<int>(pivot_.size());
-  for (int i = 0; i < n; ++i)
-    work_.col(i) = b.col(old_of_[i]);
+  toNewOrder(b);
   if (supernodal())
   {
     solveSupernodes();
-    for (int i = 0; i < n; ++i)
-      x.col(old_of_[i]) = work_.col(i);
+    fromNewOrder(x);
     return;
   }
   // L y = b (forward), then z = D⁻¹ y, then Lᵀ x = z (backward).
@@ -689,8 +669,25 @@ void SparseBlockLdlt::solve(const Eigen::Matrix3Xd& b, Eigen::Matrix3Xd& x)
       xj.noalias() -= lower_[e].transpose() * work_.col(row_index_[e]);
     work_.col(j) = xj;
   }
-  for (int i = 0; i < n; ++i)
+  fromNewOrder(x);
+}
+
+void SparseBlockLdlt::toNewOrder(const Eigen::Matrix3Xd& b)
+{
+  for (int i = 0; i < static_cast<int>(old_of_.size()); ++i)
+    work_.col(i) = b.col(old_of_[i]);
+}
+
+void SparseBlockLdlt::fromNewOrder(Eigen::Matrix3Xd& x) const
+{
+  for (int i = 0; i < static_cast<int>(old_of_.size()); ++i)
     x.col(old_of_[i]) = work_.col(i);
+}
+
+void SparseBlockLdlt::pinnedInNewOrder(const std::vector<char>& pinned)
+{
+  for (int i = 0; i < static_cast<int>(old_of_.size()); ++i)
+    pinned_new_[i] = pinned[old_of_[i]];
 }
 
 bool SparseBlockLdlt::factorizeSupernodes(const std::vector<Eigen::Matrix3d>& blocks, bool forward_beside)

@@ -156,6 +156,11 @@ private:
   std::vector<double> scalar_pivot_;                // D, one number a scalar column
   std::vector<double> scaled_, gathered_;           // T = L D of a panel, R's x
   std::vector<int> ascending_;                      // 0, 1, 2, ...: a panel's own rows as row offsets
+  // b into work_ in the new order, work_ into x in the old order, and the pinned flags in the new
+  // order (pinned_new_).
+  void toNewOrder(const Eigen::Matrix3Xd& b);
+  void fromNewOrder(Eigen::Matrix3Xd& x) const;
+  void pinnedInNewOrder(const std::vector<char>& pinned);
   // analyze()'s rest for the supernodal form (supernodes_ holds each one's columns): the panels,
   // where A's blocks go in them and the update runs.
   void analyzeSupernodes(const std::vector<int>& row_start, const std::vector<int>& block_column,
