@@ -18,7 +18,7 @@ namespace
 {
 constexpr int kTileRows = 8;
 constexpr int kTileColumns = 4;
-// The longest sums whose strip of L is packed (on the stack: 64 KiB).
+// The longest sums whose last strip of L can be packed (on the stack: 64 KiB).
 constexpr int kMaxPacked = 2048;
 
 // One entry: its products summed from zero in the order of p, each product added to the sum with
@@ -44,21 +44,21 @@ void subtractLowerProductsScalar(int rows, int columns, int k, const double* t, 
 }
 
 #if defined(__x86_64__)
-// The sums of an 8 × 4 tile, T's rows t .. t + 7 against the four columns of a packed strip of L
+// The sums of an 8 × 4 tile, T's rows t .. t + 7 against the four columns of a strip of L
 // (four numbers a p): at each p, T's eight rows in two registers times each of L's four numbers,
 // broadcast, fused into eight 4-lane sums, named so that they stay in registers; each lane is one
 // entry's sum in the scalar order. sums[q] holds column q's eight rows. Only the tiles and the
 // function that drives them (which multiplies nothing itself) are built with FMA: the passes
 // further down are built for AVX2 alone, so that the compiler cannot fuse their multiplies and adds,
 // which their scalar forms round twice.
-__attribute__((target("avx2,fma"))) void tileSumsAvx2(int k, const double* t, int ldt, const double* packed,
-                                                      double (*sums)[kTileRows])
+__attribute__((target("avx2,fma"))) void tileSumsAvx2(int k, const double* t, int ldt, const double* strip,
+                                                      long strip_stride, double (*sums)[kTileRows])
 {
   __m256d u0 = _mm256_setzero_pd(), u1 = u0, u2 = u0, u3 = u0, w0 = u0, w1 = u0, w2 = u0, w3 = u0;
   for (int p = 0; p < k; ++p)
   {
     const double* const tp = t + static_cast<long>(p) * ldt;
-    const double* const lp = packed + static_cast<long>(p) * kTileColumns;
+    const double* const lp = strip + p * strip_stride;
     const __m256d upper = _mm256_loadu_pd(tp), lower = _mm256_loadu_pd(tp + 4);
     const __m256d l0 = _mm256_broadcast_sd(lp), l1 = _mm256_broadcast_sd(lp + 1);
     const __m256d l2 = _mm256_broadcast_sd(lp + 2), l3 = _mm256_broadcast_sd(lp + 3);
@@ -82,8 +82,8 @@ __attribute__((target("avx2,fma"))) void tileSumsAvx2(int k, const double* t, in
 }
 
 // The same for a tile of up to four rows (`rows`; T is not read past them): sums[q][0 .. 3].
-__attribute__((target("avx2,fma"))) void tileSums4Avx2(int k, const double* t, int ldt, const double* packed, int rows,
-                                                       double (*sums)[kTileRows])
+__attribute__((target("avx2,fma"))) void tileSums4Avx2(int k, const double* t, int ldt, const double* strip,
+                                                       long strip_stride, int rows, double (*sums)[kTileRows])
 {
   const __m256i lanes = _mm256_setr_epi64x(0, 1, 2, 3);
   const __m256i mask = _mm256_cmpgt_epi64(_mm256_set1_epi64x(rows), lanes);  // lane < rows
@@ -91,7 +91,7 @@ __attribute__((target("avx2,fma"))) void tileSums4Avx2(int k, const double* t, i
   for (int p = 0; p < k; ++p)
   {
     const __m256d column = _mm256_maskload_pd(t + static_cast<long>(p) * ldt, mask);
-    const double* const lp = packed + static_cast<long>(p) * kTileColumns;
+    const double* const lp = strip + p * strip_stride;
     u0 = _mm256_fmadd_pd(column, _mm256_broadcast_sd(lp), u0);
     u1 = _mm256_fmadd_pd(column, _mm256_broadcast_sd(lp + 1), u1);
     u2 = _mm256_fmadd_pd(column, _mm256_broadcast_sd(lp + 2), u2);
@@ -103,16 +103,25 @@ __attribute__((target("avx2,fma"))) void tileSums4Avx2(int k, const double* t, i
   _mm256_store_pd(sums[3], u3);
 }
 
-// A strip of L's four rows j .. j + 3 (the first `strip_columns` of them; zero past them) packed
-// side by side, p after p.
-void packStrip(int k, const double* l, int ldl, int j, int strip_columns, double* packed)
+// A strip of L: its four rows j .. j + 3, p after p, at strip + p stride. A whole strip is read where
+// it lies in L (its four numbers of a p side by side, the next p a column of L further on); the
+// last strip of fewer rows (`strip_columns`) is packed side by side into `packed`, zero past them,
+// so that the tiles never read past L.
+struct Strip
 {
+  const double* strip;
+  long stride;
+};
+Strip stripOf(int k, const double* l, int ldl, int j, int strip_columns, double* packed)
+{
+  if (strip_columns == kTileColumns) return {l + j, ldl};
   for (int p = 0; p < k; ++p)
     for (int q = 0; q < kTileColumns; ++q)
       packed[kTileColumns * p + q] = q < strip_columns ? l[j + q + static_cast<long>(p) * ldl] : 0.0;
+  return {packed, kTileColumns};
 }
 
-// The strips of subtractLowerProducts() in AVX2 tiles: each strip of L packed, then its tiles of
+// The strips of subtractLowerProducts() in AVX2 tiles: each strip of L (stripOf()), then its tiles of
 // eight rows from the strip's diagonal down and the last rows in tiles of up to four, each entry on
 // or below the diagonal subtracted where it belongs, four at once where four rows lie one after the
 // other in C.
@@ -126,11 +135,11 @@ __attribute__((target("avx2,fma"))) void subtractLowerProductsAvx2(int rows, int
   for (int j = 0; j < columns; j += kTileColumns)
   {
     const int strip_columns = std::min(kTileColumns, columns - j);
-    packStrip(k, l, ldl, j, strip_columns, packed);
+    const Strip strip = stripOf(k, l, ldl, j, strip_columns, packed);
     int i = j;
     for (; i + kTileRows <= rows; i += kTileRows)
     {
-      tileSumsAvx2(k, t + i, ldt, packed, sums);
+      tileSumsAvx2(k, t + i, ldt, strip.strip, strip.stride, sums);
       const int* const at = row_offset + i;
       for (int q = 0; q < strip_columns; ++q)
       {
@@ -152,7 +161,7 @@ __attribute__((target("avx2,fma"))) void subtractLowerProductsAvx2(int rows, int
     for (; i < rows; i += 4)
     {
       const int tile_rows = std::min(4, rows - i);
-      tileSums4Avx2(k, t + i, ldt, packed, tile_rows, sums);
+      tileSums4Avx2(k, t + i, ldt, strip.strip, strip.stride, tile_rows, sums);
       for (int q = 0; q < strip_columns; ++q)
       {
         double* const cq = c + column_offset[j + q];
@@ -169,15 +178,15 @@ __attribute__((target("avx2,fma"))) void subtractLowerProductsAvx2(int rows, int
 // belong: eight at once, masked, where the eight rows follow each other in C, else gathered and
 // scattered by their row offsets. The same sums in the same order as the other forms: their bits.
 __attribute__((target("avx512f,avx512vl,fma"))) void tileSumsAvx512(int k, const double* t, int ldt,
-                                                                    const double* packed, __mmask8 upper_rows,
-                                                                    __mmask8 lower_rows, __m512d (&upper)[4],
-                                                                    __m512d (&lower)[4])
+                                                                    const double* strip, long strip_stride,
+                                                                    __mmask8 upper_rows, __mmask8 lower_rows,
+                                                                    __m512d (&upper)[4], __m512d (&lower)[4])
 {
   __m512d u0 = _mm512_setzero_pd(), u1 = u0, u2 = u0, u3 = u0, w0 = u0, w1 = u0, w2 = u0, w3 = u0;
   for (int p = 0; p < k; ++p)
   {
     const double* const tp = t + static_cast<long>(p) * ldt;
-    const double* const lp = packed + static_cast<long>(p) * kTileColumns;
+    const double* const lp = strip + p * strip_stride;
     const __m512d top = _mm512_maskz_loadu_pd(upper_rows, tp), bottom = _mm512_maskz_loadu_pd(lower_rows, tp + 8);
     const __m512d l0 = _mm512_set1_pd(lp[0]), l1 = _mm512_set1_pd(lp[1]);
     const __m512d l2 = _mm512_set1_pd(lp[2]), l3 = _mm512_set1_pd(lp[3]);
@@ -222,13 +231,13 @@ __attribute__((target("avx512f,avx512vl,fma"))) void subtractLowerProductsAvx512
   for (int j = 0; j < columns; j += kTileColumns)
   {
     const int strip_columns = std::min(kTileColumns, columns - j);
-    packStrip(k, l, ldl, j, strip_columns, packed);
+    const Strip strip = stripOf(k, l, ldl, j, strip_columns, packed);
     for (int i = j; i < rows; i += 2 * kTileRows)
     {
       const int left = rows - i;
       const __mmask8 upper_rows = firstLanes(left), lower_rows = firstLanes(left - kTileRows);
       __m512d upper[4], lower[4];
-      tileSumsAvx512(k, t + i, ldt, packed, upper_rows, lower_rows, upper, lower);
+      tileSumsAvx512(k, t + i, ldt, strip.strip, strip.stride, upper_rows, lower_rows, upper, lower);
       const int* const at = row_offset + i;
       const int upper_last = std::min(left, kTileRows) - 1, lower_last = std::min(left, 2 * kTileRows) - kTileRows - 1;
       const bool upper_contiguous = at[upper_last] == at[0] + upper_last;
