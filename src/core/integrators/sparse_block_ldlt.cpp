@@ -122,6 +122,10 @@ constexpr double kWideShare = 0.5;
 // product (dense_panel), those among them one by one. Few, so that most of the work is in the
 // product's tiles (hang64's step 4 % faster than with 16).
 constexpr int kPanelColumns = 4;
+// The blocks of columns that the updates into a panel above the two threads' shares are cut into
+// (planSubtrees()): enough for the two threads to even out their work by taking blocks from each
+// other, few enough that a run's product is not cut into many narrow ones.
+constexpr int kBlocksPerPanel = 8;
 // A scalar pivot at most this fraction of its diagonal entry in A (or not finite) is singular.
 constexpr double kSingularPivot = 1e-14;
 
@@ -400,7 +404,9 @@ void SparseBlockLdlt::forgetSubtrees()
   shared_order_[0].clear();
   shared_order_[1].clear();
   kept_scaled_at_.clear();
-  split_column_.clear();
+  block_start_.clear();
+  piece_start_.clear();
+  pieces_.clear();
   first_row_above_.clear();
   kept_sums_at_.clear();
   kept_scaled_.clear();
@@ -545,22 +551,46 @@ void SparseBlockLdlt::planSubtrees(const std::vector<int>& supernode_of)
   }
   kept_sums_.assign(sums, 0.0);
   second_gathered_.assign(gathered_.size(), 0.0);
-  // Each supernode above the shares: the column that splits the updates it takes between the two
-  // threads, about half of its panel's entries on and below the diagonal (column c of m rows has
-  // m − c of them) before it.
-  split_column_.assign(count, 0);
+  // Each supernode above the shares: its columns in kBlocksPerPanel blocks of about equal entries on
+  // and below the diagonal (column c of m rows has m − c of them), and each block's pieces, source
+  // after source: the part of every update run into the supernode that lands in the block's columns
+  // (a run's columns land in ascending columns of its target).
+  block_start_.assign(count + 1, 0);
+  piece_start_.assign(1, 0);
   for (int t = 0; t < count; ++t)
   {
+    block_start_[t] = static_cast<int>(piece_start_.size()) - 1;
     if (share_of_[t] >= 0) continue;
     last_above_ = t;
-    const long m = 3L * (supernodes_[t].width + supernodes_[t].below), width = 3L * supernodes_[t].width;
+    const Supernode& target = supernodes_[t];
+    const long m = 3L * (target.width + target.below), width = 3L * target.width;
     const long entries = width * m - width * (width - 1) / 2;
-    long before = 0;
-    int split = 0;
-    for (; split < width && 2 * (before + m - split) <= entries; ++split)
-      before += m - split;
-    split_column_[t] = split;
+    const long parts = std::min<long>(kBlocksPerPanel, width);
+    long before = 0, first = 0;
+    for (long part = 1; part <= parts; ++part)
+    {
+      long last = first;
+      for (; last < width && (part == parts || (before + m - last) * parts <= part * entries); ++last)
+        before += m - last;
+      for (int source = 0; source < t; ++source)
+        for (int q = run_start_[source]; q < run_start_[source + 1]; ++q)
+        {
+          const UpdateRun& run = runs_[q];
+          if (run.target != t) continue;
+          const long* const landing = update_column_offset_.data() + run.columns;
+          const int columns = 3 * (run.end - run.begin);
+          auto columnOf = [&](long offset) { return (offset - static_cast<long>(target.panel)) / m; };
+          const int from = static_cast<int>(
+              std::partition_point(landing, landing + columns, [&](long o) { return columnOf(o) < first; }) - landing);
+          const int to = static_cast<int>(
+              std::partition_point(landing, landing + columns, [&](long o) { return columnOf(o) < last; }) - landing);
+          if (from < to) pieces_.push_back({source, q, from, to});
+        }
+      piece_start_.push_back(static_cast<int>(pieces_.size()));
+      first = last;
+    }
   }
+  block_start_[count] = static_cast<int>(piece_start_.size()) - 1;
 }
 
 bool SparseBlockLdlt::factorizeAndSolve(const std::vector<Eigen::Matrix3d>& blocks, const std::vector<char>& pinned,
@@ -755,42 +785,36 @@ bool SparseBlockLdlt::factorizeSupernodes(const std::vector<Eigen::Matrix3d>& bl
       }
     });
     if (!factored[0] || !factored[1]) return false;
-    // Then, in order, the held-back runs and the supernodes above the shares, each run's columns
-    // split between the two threads (each column's entries on one thread, their terms in the order
-    // of one thread: supernode after supernode); the panels above on one thread.
+    // Then, in order, the supernodes above the shares, each after the held-back runs into it; the
+    // updates into the panels above by blocks of their columns (subtractBlocks()).
     for (std::size_t s = 0; s < count;)
     {
       std::size_t end = s;
       bool held_back = false;
       for (; end < count && share_of_[end] >= 0; ++end)
         held_back = held_back || kept_scaled_at_[end] != kNotKept;
-      if (held_back)
-      {
-        workers_->forEachChunk(2, 1, [&](int half, int) {
-          for (std::size_t t = s; t < end; ++t)
-            if (kept_scaled_at_[t] != kNotKept)
-              subtractRuns(t, kept_scaled_.data() + kept_scaled_at_[t], kAboveShares, tiles, half);
-        });
-      }
-      if (end == count) break;
-      if (forward_beside && static_cast<int>(end) == last_above_)
-      {
-        // The last panel above the shares on one thread; the shares' forward passes (solve()), which
-        // read their own panels alone, on the other.
-        bool factored = true;
-        workers_->forEachChunk(2, 1, [&](int part, int) {
-          if (part == 0)
+      if (end == count) break;  // (held back: none, as every supernode above comes later)
+      const int source_end = static_cast<int>(end);
+      const int later_blocks = block_start_[end + 1], all_blocks = block_start_[count];
+      if (held_back) subtractBlocks(block_start_[end], later_blocks, static_cast<int>(s), source_end, nullptr, tiles);
+      // `end`'s panel on one thread; beside it, the held-back runs into the supernodes after it, or
+      // beside the last one the shares' forward passes (solve()), which read their own panels alone.
+      const bool forward_here = forward_beside && source_end == last_above_;
+      const int beside = forward_here ? 1 : (held_back ? all_blocks - later_blocks : 0);
+      bool factored = true;
+      workers_->forEachChunk(1 + beside, 1, [&](int first, int last) {
+        for (int item = first; item < last; ++item)
+        {
+          if (item == 0)
             factored = factorPanel(end, scaled_.data(), tiles);
-          else
+          else if (forward_here)
             forwardShares(false);
-        });
-        if (!factored) return false;
-      }
-      else if (!factorPanel(end, scaled_.data(), tiles))
-      {
-        return false;
-      }
-      workers_->forEachChunk(2, 1, [&](int half, int) { subtractRuns(end, scaled_.data(), kEveryShare, tiles, half); });
+          else
+            subtractBlock(later_blocks + item - 1, static_cast<int>(s), source_end, nullptr, tiles);
+        }
+      });
+      if (!factored) return false;
+      subtractBlocks(later_blocks, all_blocks, source_end, source_end + 1, scaled_.data(), tiles);
       s = end + 1;
     }
     return true;
@@ -798,6 +822,29 @@ bool SparseBlockLdlt::factorizeSupernodes(const std::vector<Eigen::Matrix3d>& bl
   for (std::size_t s = 0; s < count; ++s)
     if (!factorSupernode(s, scaled_.data(), false, tiles)) return false;
   return true;
+}
+
+void SparseBlockLdlt::subtractBlocks(int first, int last, int first_source, int last_source, const double* scaled,
+                                     dense_panel::Tiles tiles)
+{
+  workers_->forEachChunk(last - first, 1, [&](int begin, int end) {
+    for (int b = first + begin; b < first + end; ++b)
+      subtractBlock(b, first_source, last_source, scaled, tiles);
+  });
+}
+
+void SparseBlockLdlt::subtractBlock(int b, int first_source, int last_source, const double* scaled,
+                                    dense_panel::Tiles tiles)
+{
+  for (int k = piece_start_[b]; k < piece_start_[b + 1]; ++k)
+  {
+    const BlockPiece& piece = pieces_[k];
+    if (piece.source < first_source) continue;
+    if (piece.source >= last_source) break;
+    const double* const source_scaled =
+        share_of_[piece.source] >= 0 ? kept_scaled_.data() + kept_scaled_at_[piece.source] : scaled;
+    subtractRun(piece.source, source_scaled, piece.run, piece.from, piece.to, tiles);
+  }
 }
 
 bool SparseBlockLdlt::twoThreads() const
@@ -808,7 +855,7 @@ bool SparseBlockLdlt::twoThreads() const
 bool SparseBlockLdlt::factorSupernode(std::size_t s, double* scaled, bool shared_only, dense_panel::Tiles tiles)
 {
   if (!factorPanel(s, scaled, tiles)) return false;
-  subtractRuns(s, scaled, shared_only ? share_of_[s] : kEveryShare, tiles, kWholeRun);
+  subtractRuns(s, scaled, shared_only ? share_of_[s] : kEveryShare, tiles);
   return true;
 }
 
@@ -851,39 +898,29 @@ bool SparseBlockLdlt::factorPanel(std::size_t s, double* scaled, dense_panel::Ti
   return true;
 }
 
-void SparseBlockLdlt::subtractRuns(std::size_t s, const double* scaled, int share, dense_panel::Tiles tiles, int half)
+void SparseBlockLdlt::subtractRuns(std::size_t s, const double* scaled, int share, dense_panel::Tiles tiles)
 {
-  // The update of the rows below, −L_R D L_Rᵀ, subtracted run by run where it belongs in the
-  // panels that hold those rows.
-  const Supernode& supernode = supernodes_[s];
-  const int width = 3 * supernode.width, below = 3 * supernode.below, m = width + below;
-  const double* const panel = panels_.data() + supernode.panel;
   for (int q = run_start_[s]; q < run_start_[s + 1]; ++q)
   {
     const UpdateRun& run = runs_[q];
     if (share != kEveryShare && share_of_[run.target] != share) continue;
-    const int first_row = 3 * run.begin, rows = below - first_row, columns = 3 * (run.end - run.begin);
-    // Half 0 takes the run's columns that land in the target's columns before its split column,
-    // half 1 the others (the run's columns land in ascending columns of the target): every column of
-    // a panel above the shares is written by one thread alone, whichever supernode's update it is.
-    int from = 0, to = columns;
-    if (half != kWholeRun)
-    {
-      const Supernode& target = supernodes_[run.target];
-      const long target_m = 3L * (target.width + target.below);
-      const long* const landing = update_column_offset_.data() + run.columns;
-      int split = 0;
-      while (split < columns &&
-             (landing[split] - static_cast<long>(target.panel)) / target_m < split_column_[run.target])
-        ++split;
-      from = half == 0 ? 0 : split;
-      to = half == 0 ? split : columns;
-    }
-    if (from == to) continue;
-    dense_panel::subtractLowerProducts(tiles, rows - from, to - from, width, scaled + width + first_row + from, m,
-                                       panel + width + first_row + from, m, update_row_offset_.data() + run.rows + from,
-                                       update_column_offset_.data() + run.columns + from, panels_.data());
+    subtractRun(s, scaled, q, 0, 3 * (run.end - run.begin), tiles);
   }
+}
+
+void SparseBlockLdlt::subtractRun(std::size_t s, const double* scaled, int q, int from, int to,
+                                  dense_panel::Tiles tiles)
+{
+  // The update of the run's rows, −L_R D L_Rᵀ, subtracted where it belongs in the panel that holds
+  // them; its columns [from, to) alone, each from its diagonal down.
+  const Supernode& supernode = supernodes_[s];
+  const int width = 3 * supernode.width, below = 3 * supernode.below, m = width + below;
+  const double* const panel = panels_.data() + supernode.panel;
+  const UpdateRun& run = runs_[q];
+  const int first_row = 3 * run.begin, rows = below - first_row;
+  dense_panel::subtractLowerProducts(tiles, rows - from, to - from, width, scaled + width + first_row + from, m,
+                                     panel + width + first_row + from, m, update_row_offset_.data() + run.rows + from,
+                                     update_column_offset_.data() + run.columns + from, panels_.data());
 }
 
 void SparseBlockLdlt::solveSupernodes(bool shares_forwarded)

@@ -181,10 +181,11 @@ private:
   // Supernode s's panel factored, T = L D into `scaled` (a panel's size); false at a singular pivot.
   bool factorPanel(std::size_t s, double* scaled, dense_panel::Tiles tiles);
   // The update runs of supernode s into the supernodes of share `share` (0 or 1, kAboveShares or
-  // kEveryShare), from its T in `scaled`: each run whole (kWholeRun), or the first (0) or second (1)
-  // part of its columns by the target's split column.
-  void subtractRuns(std::size_t s, const double* scaled, int share, dense_panel::Tiles tiles, int half);
-  static constexpr int kAboveShares = -1, kEveryShare = 2, kWholeRun = -1;
+  // kEveryShare), from its T in `scaled`, each run whole.
+  void subtractRuns(std::size_t s, const double* scaled, int share, dense_panel::Tiles tiles);
+  static constexpr int kAboveShares = -1, kEveryShare = 2;
+  // Update run q of supernode s (T in `scaled`), its columns [from, to) alone.
+  void subtractRun(std::size_t s, const double* scaled, int q, int from, int to, dense_panel::Tiles tiles);
   // One supernode of the solve forwards (L y = b; its sums for the rows above the shares into
   // `kept` when that is not null) and backwards (Lᵀ x = y), `gathered` its scratch.
   void forwardSupernode(std::size_t s, double* y, double* gathered, bool avx2, double* kept);
@@ -203,8 +204,24 @@ private:
   std::vector<int> shared_order_[2];
   std::vector<std::size_t> kept_scaled_at_;
   std::vector<double> kept_scaled_, second_scaled_;  // the kept T's; the second thread's T
-  // A supernode above the shares: the column where subtractRuns()'s halves meet.
-  std::vector<int> split_column_;
+  // The columns of each supernode above the shares cut into blocks of about equal entries (on and
+  // below the diagonal), which two threads take from each other as they come (WorkerPool): the
+  // updates into a block are subtracted by one thread, in supernode order, so every entry gets its
+  // terms in the order of one thread. A block's pieces, in the order of their sources: the part of
+  // a source's update run (runs_[run]) whose columns [from, to) land in the block. A supernode's
+  // blocks are block_start_[s] .. block_start_[s + 1] − 1 (none for a shared supernode).
+  struct BlockPiece
+  {
+    int source = 0, run = 0, from = 0, to = 0;
+  };
+  std::vector<int> block_start_, piece_start_;  // block b's pieces: piece_start_[b] .. piece_start_[b + 1] − 1
+  std::vector<BlockPiece> pieces_;
+  // Block b's pieces from the sources in [first_source, last_source): a shared source's from its
+  // kept T, an above one's from `scaled`.
+  void subtractBlock(int b, int first_source, int last_source, const double* scaled, dense_panel::Tiles tiles);
+  // Blocks [first, last) on the threads, each whole on one, sources as for subtractBlock().
+  void subtractBlocks(int first, int last, int first_source, int last_source, const double* scaled,
+                      dense_panel::Tiles tiles);
   // The solve's (solveSupernodes()): a shared supernode's first row below that lies above the
   // shares, where its sums for those rows wait (kept_sums_at_[s] in kept_sums_, else kNotKept), and
   // the second thread's sums.
