@@ -9,6 +9,7 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -305,6 +306,96 @@ TEST(SparseBlockLdlt, TwoThreadsFactorASheetToTheSameBitsAsOne)
         << "singular particle " << singular;
     EXPECT_TRUE((x.array() == 7.0).all()) << "x written after a singular pivot, particle " << singular;
   }
+}
+
+TEST(SparseBlockLdlt, APairedMatrixFactorsToTheSameBitsAsItsBlocks)
+{
+  // The implicit solver hands a sheet's matrix over as its diagonal blocks and its pairs (a spring's
+  // C on blocks (i, j) and (j, i)), which go straight into the panels: the solution is the one from
+  // the blocks the pairs add up to, bit for bit, at one thread and two, pins included. Some particle
+  // pairs carry three pairs, whose sum depends on their order; a pair's blocks come either way round.
+  std::mt19937_64 random(23);
+  std::uniform_real_distribution<double> uniform(-1.0, 1.0);
+  WorkerPool two(2);
+  const int nu = 40, nv = 36, n = nu * nv;
+  const std::vector<std::pair<int, int>> grid = gridPairs(nu, nv);
+  const Pattern p = patternOf(n, grid);
+  std::vector<std::array<int, 2>> pair_blocks;
+  std::vector<std::array<double, 6>> pair_c;
+  std::vector<Eigen::Matrix3d> diagonal(n), blocks(p.block_column.size(), Eigen::Matrix3d::Zero());
+  std::vector<int> diagonal_block(n);
+  for (int i = 0; i < n; ++i)
+  {
+    diagonal_block[i] = p.blockIndex(i, i);
+    diagonal[i] = (0.1 + 0.5 * (1.0 + uniform(random))) * Eigen::Matrix3d::Identity();
+  }
+  for (std::size_t e = 0; e < grid.size(); ++e)
+  {
+    const auto [i, j] = grid[e];
+    for (int repeat = 0; repeat < (e % 5 == 0 ? 3 : 1); ++repeat)
+    {
+      Eigen::Matrix3d g;
+      for (int a = 0; a < 3; ++a)
+        for (int b = 0; b < 3; ++b)
+          g(a, b) = uniform(random);
+      const Eigen::Matrix3d k = 100.0 * g * g.transpose();
+      diagonal[i] += k;
+      diagonal[j] += k;
+      const std::array<double, 6> c{-k(0, 0), -k(1, 0), -k(2, 0), -k(1, 1), -k(2, 1), -k(2, 2)};
+      const int ij = p.blockIndex(i, j), ji = p.blockIndex(j, i);
+      pair_blocks.push_back(uniform(random) < 0.0 ? std::array<int, 2>{ij, ji} : std::array<int, 2>{ji, ij});
+      pair_c.push_back(c);
+      Eigen::Matrix3d symmetric;
+      symmetric << c[0], c[1], c[2], c[1], c[3], c[4], c[2], c[4], c[5];
+      blocks[ij] += symmetric;
+      blocks[ji] += symmetric;
+    }
+  }
+  for (int i = 0; i < n; ++i)
+    blocks[diagonal_block[i]] = diagonal[i];
+  const SparseBlockLdlt::PairedMatrix paired{diagonal.data(), diagonal_block.data(), static_cast<int>(pair_c.size()),
+                                             pair_blocks.data(), pair_c.data()};
+  std::vector<char> pinned(n, 0);
+  pinned[0] = pinned[nu - 1] = pinned[n / 2 + 7] = 1;
+  Eigen::Matrix3Xd b = Eigen::Matrix3Xd::Random(3, n);
+  for (int i = 0; i < n; ++i)
+    if (pinned[i]) b.col(i).setZero();
+
+  for (const bool two_threads : {false, true})
+  {
+    SparseBlockLdlt from_blocks, from_pairs;
+    from_blocks.analyze(p.row_start, p.block_column);
+    from_pairs.analyze(p.row_start, p.block_column);
+    if (two_threads)
+    {
+      from_blocks.setWorkers(&two);
+      from_pairs.setWorkers(&two);
+    }
+    ASSERT_TRUE(from_pairs.supernodal());
+    Eigen::Matrix3Xd x_blocks(3, n), x_pairs(3, n);
+    ASSERT_TRUE(from_blocks.factorizeAndSolve(blocks, pinned, b, x_blocks));
+    for (int round = 0; round < 2; ++round)  // and again on the same analysis
+    {
+      x_pairs.setConstant(7.0);
+      ASSERT_TRUE(from_pairs.factorizeAndSolve(paired, pinned, b, x_pairs));
+      EXPECT_EQ(std::memcmp(x_blocks.data(), x_pairs.data(), sizeof(double) * 3 * n), 0)
+          << (two_threads ? "two threads" : "one thread") << ", round " << round;
+    }
+  }
+  EXPECT_GT(two.sharedLoops(), 0);
+
+  // A chain keeps its 3x3 blocks (no supernodes): the pairs are refused, x left alone.
+  std::vector<std::pair<int, int>> chain;
+  for (int i = 0; i + 1 < 10; ++i)
+    chain.emplace_back(i, i + 1);
+  const Pattern q = patternOf(10, chain);
+  SparseBlockLdlt rope;
+  rope.analyze(q.row_start, q.block_column);
+  ASSERT_FALSE(rope.supernodal());
+  Eigen::Matrix3Xd x = Eigen::Matrix3Xd::Constant(3, 10, 7.0);
+  EXPECT_FALSE(rope.factorizeAndSolve(SparseBlockLdlt::PairedMatrix{}, std::vector<char>(10, 0),
+                                      Eigen::Matrix3Xd::Ones(3, 10), x));
+  EXPECT_TRUE((x.array() == 7.0).all());
 }
 
 TEST(SparseBlockLdlt, SolvesAnIndefiniteButRegularSystem)

@@ -681,10 +681,18 @@ bool ImplicitEulerSolver::autoMultigrid(const std::vector<char>& pinned, const I
 
 bool ImplicitEulerSolver::solveDirectly(const std::vector<char>& pinned)
 {
-  movePairsIntoBlocks();
-  moveDiagonalIntoBlocks();
   residual_ = rhs_;
   filter(pinned, residual_);
+  // The supernodal form takes A straight from the diagonal and the kept pairs while neither is in
+  // the blocks (the same numbers): the off-diagonal blocks are then never filled, read or cleared.
+  if (!pairs_in_blocks_ && !diagonal_in_blocks_ && direct_.supernodal())
+  {
+    const SparseBlockLdlt::PairedMatrix matrix{diagonal_.data(), diagonal_block_.data(), kept_pairs_,
+                                               pair_blocks_.data(), pair_c_.data()};
+    return direct_.factorizeAndSolve(matrix, pinned, residual_, delta_v_);
+  }
+  movePairsIntoBlocks();
+  moveDiagonalIntoBlocks();
   return direct_.factorizeAndSolve(blocks_, pinned, residual_, delta_v_);
 }
 

@@ -606,8 +606,23 @@ bool SparseBlockLdlt::factorizeAndSolve(const std::vector<Eigen::Matrix3d>& bloc
   // of the last panel above them.
   pinnedInNewOrder(pinned);
   toNewOrder(b);
-  if (!factorizeSupernodes(blocks, true)) return false;
+  scatterBlocks(blocks);
+  if (!factorizeSupernodes(true)) return false;
   solveSupernodes(true);
+  fromNewOrder(x);
+  return true;
+}
+
+bool SparseBlockLdlt::factorizeAndSolve(const PairedMatrix& matrix, const std::vector<char>& pinned,
+                                        const Eigen::Matrix3Xd& b, Eigen::Matrix3Xd& x)
+{
+  if (!supernodal()) return false;
+  pinnedInNewOrder(pinned);
+  toNewOrder(b);
+  scatterPairs(matrix);
+  const bool forward_beside = twoThreads();  // the shares' forward passes beside the last panel above
+  if (!factorizeSupernodes(forward_beside)) return false;
+  solveSupernodes(forward_beside);
   fromNewOrder(x);
   return true;
 }
@@ -616,7 +631,11 @@ bool SparseBlockLdlt::factorize(const std::vector<Eigen::Matrix3d>& blocks, cons
 {
   const int n = static_cast<int>(pivot_.size());
   pinnedInNewOrder(pinned);
-  if (supernodal()) return factorizeSupernodes(blocks, false);
+  if (supernodal())
+  {
+    scatterBlocks(blocks);
+    return factorizeSupernodes(false);
+  }
   for (int i = 0; i < n; ++i)
   {
     if (pinned_new_[i])
@@ -720,51 +739,98 @@ void SparseBlockLdlt::pinnedInNewOrder(const std::vector<char>& pinned)
     pinned_new_[i] = pinned[old_of_[i]];
 }
 
-bool SparseBlockLdlt::factorizeSupernodes(const std::vector<Eigen::Matrix3d>& blocks, bool forward_beside)
+void SparseBlockLdlt::zeroPanels()
 {
-  // A's lower triangle into the panels; a pinned particle's row and column stay 0, its diagonal I.
-  // Each scalar column's diagonal entry in A is the scale its pivot is judged by. Each block writes
-  // its own entries, so with two threads planned (planSubtrees()) they share the zeroing and the
-  // blocks by halves.
-  const bool two_threads = twoThreads();
-  auto scatter = [&](std::size_t first, std::size_t last) {
-    for (std::size_t b = first; b < last; ++b)
-    {
-      const auto [offset, ld] = block_place_[b];
-      if (offset < 0) continue;
-      const int i = block_row_new_[b], k = block_column_new_[b];
-      double* const corner = panels_.data() + offset;
-      if (pinned_new_[i] || pinned_new_[k])
-      {
-        if (i == k)
-          for (int r = 0; r < 3; ++r)
-          {
-            corner[r + r * ld] = 1.0;
-            scalar_pivot_[3 * i + r] = 1.0;
-          }
-        continue;
-      }
-      for (int c = 0; c < 3; ++c)
-        for (int r = 0; r < 3; ++r)
-          corner[r + c * ld] = blocks[b](r, c);
-      if (i == k)
-        for (int r = 0; r < 3; ++r)
-          scalar_pivot_[3 * i + r] = std::abs(blocks[b](r, r));
-    }
-  };
-  if (two_threads)
-  {
+  if (twoThreads())
     byHalves(*workers_, panels_.size(), [&](std::size_t first, std::size_t last) {
       std::fill(panels_.begin() + first, panels_.begin() + last, 0.0);
     });
-    byHalves(*workers_, blocks.size(), scatter);
-  }
   else
-  {
     std::fill(panels_.begin(), panels_.end(), 0.0);
-    scatter(0, blocks.size());
-  }
+}
 
+void SparseBlockLdlt::scatterBlocks(const std::vector<Eigen::Matrix3d>& blocks)
+{
+  // Each block writes its own entries: with two threads, the blocks by halves.
+  zeroPanels();
+  auto scatter = [&](std::size_t first, std::size_t last) {
+    for (std::size_t b = first; b < last; ++b)
+    {
+      if (block_place_[b][0] >= 0) putBlock(block_place_[b], block_row_new_[b], block_column_new_[b], blocks[b]);
+    }
+  };
+  if (twoThreads())
+    byHalves(*workers_, blocks.size(), scatter);
+  else
+    scatter(0, blocks.size());
+}
+
+void SparseBlockLdlt::putBlock(const std::array<long, 2>& place, int i, int k, const Eigen::Matrix3d& value)
+{
+  const auto [offset, ld] = place;
+  double* const corner = panels_.data() + offset;
+  if (pinned_new_[i] || pinned_new_[k])
+  {
+    if (i == k)
+      for (int r = 0; r < 3; ++r)
+      {
+        corner[r + r * ld] = 1.0;
+        scalar_pivot_[3 * i + r] = 1.0;
+      }
+    return;
+  }
+  for (int c = 0; c < 3; ++c)
+    for (int r = 0; r < 3; ++r)
+      corner[r + c * ld] = value(r, c);
+  if (i == k)
+    for (int r = 0; r < 3; ++r)
+      scalar_pivot_[3 * i + r] = std::abs(value(r, r));
+}
+
+void SparseBlockLdlt::scatterPairs(const PairedMatrix& matrix)
+{
+  // The diagonal blocks, particle by particle; then each pair's C added onto the one of its two
+  // blocks that lies in the lower triangle, pair after pair: each entry gets its terms in the order
+  // its block would have had them, onto zero. With two threads, each takes half of the particles
+  // and passes every pair, adding only to the blocks in its half of A's blocks.
+  zeroPanels();
+  const std::size_t rows = old_of_.size(), blocks = block_place_.size();
+  auto diagonal = [&](std::size_t first, std::size_t last) {
+    for (std::size_t old = first; old < last; ++old)
+      putBlock(block_place_[matrix.diagonal_block[old]], new_of_[old], new_of_[old], matrix.diagonal[old]);
+  };
+  auto pairs = [&](std::size_t first_block, std::size_t last_block) {
+    for (int k = 0; k < matrix.pairs; ++k)
+    {
+      const std::size_t lower = static_cast<std::size_t>(
+          block_place_[matrix.blocks[k][0]][0] >= 0 ? matrix.blocks[k][0] : matrix.blocks[k][1]);
+      if (lower < first_block || lower >= last_block) continue;
+      const int i = block_row_new_[lower], j = block_column_new_[lower];
+      if (i == j || pinned_new_[i] || pinned_new_[j]) continue;
+      const auto [offset, ld] = block_place_[lower];
+      double* const corner = panels_.data() + offset;
+      const std::array<double, 6>& c = matrix.c[k];
+      const double entry[3][3] = {{c[0], c[1], c[2]}, {c[1], c[3], c[4]}, {c[2], c[4], c[5]}};
+      for (int column = 0; column < 3; ++column)
+        for (int r = 0; r < 3; ++r)
+          corner[r + column * ld] += entry[r][column];
+    }
+  };
+  if (twoThreads())
+  {
+    workers_->forEachChunk(2, 1, [&](int half, int) {
+      diagonal(half == 0 ? 0 : rows / 2, half == 0 ? rows / 2 : rows);
+      pairs(half == 0 ? 0 : blocks / 2, half == 0 ? blocks / 2 : blocks);
+    });
+    return;
+  }
+  diagonal(0, rows);
+  pairs(0, blocks);
+}
+
+bool SparseBlockLdlt::factorizeSupernodes(bool forward_beside)
+{
+  const bool two_threads = twoThreads();
   const dense_panel::Tiles tiles = SparseBlockLdlt::tiles();
   const std::size_t count = supernodes_.size();
   if (two_threads)

@@ -107,6 +107,24 @@ public:
   bool factorizeAndSolve(const std::vector<Eigen::Matrix3d>& blocks, const std::vector<char>& pinned,
                          const Eigen::Matrix3Xd& b, Eigen::Matrix3Xd& x);
 
+  /// A matrix by its diagonal blocks and its pairs of off-diagonal blocks (ImplicitEulerSolver's
+  /// kept pairs): block (i, i), at diagonal_block[i] in analyze()'s block order, is diagonal[i]; pair
+  /// k adds its symmetric C (lower triangle C00, C10, C20, C11, C21, C22: c[k]) to blocks
+  /// blocks[k] = ((i, j), (j, i)), pair after pair, onto zero; every other block is zero.
+  struct PairedMatrix
+  {
+    const Eigen::Matrix3d* diagonal = nullptr;
+    const int* diagonal_block = nullptr;
+    int pairs = 0;
+    const std::array<int, 2>* blocks = nullptr;
+    const std::array<double, 6>* c = nullptr;
+  };
+  /// factorizeAndSolve() of that matrix, taken into the supernodes' panels straight from its
+  /// diagonal and pairs (its blocks are never built): the same numbers as from its blocks. For the
+  /// supernodal form (supernodal()); false without it.
+  bool factorizeAndSolve(const PairedMatrix& matrix, const std::vector<char>& pinned, const Eigen::Matrix3Xd& b,
+                         Eigen::Matrix3Xd& x);
+
 private:
   // The order: new_of_[old] and old_of_[new] particle indices.
   std::vector<int> new_of_, old_of_;
@@ -165,11 +183,21 @@ private:
   // where A's blocks go in them and the update runs.
   void analyzeSupernodes(const std::vector<int>& row_start, const std::vector<int>& block_column,
                          const std::vector<int>& supernode_of);
-  // factorize() and solve() in the supernodal form (solve() on work_, in the new order; both with
-  // two threads where planSubtrees() planned them and there are workers). `forward_beside`: work_
-  // holds b, and the shares' forward passes run beside the last panel above them
-  // (forwardShares()); `shares_forwarded`: they have.
-  bool factorizeSupernodes(const std::vector<Eigen::Matrix3d>& blocks, bool forward_beside);
+  // factorize() (of the panels once scattered) and solve() in the supernodal form (solve() on work_,
+  // in the new order; both with two threads where planSubtrees() planned them and there are
+  // workers). `forward_beside`: work_ holds b, and the shares' forward passes run beside the last
+  // panel above them (forwardShares()); `shares_forwarded`: they have.
+  bool factorizeSupernodes(bool forward_beside);
+  // A's lower triangle into the zeroed panels, from its blocks or from its diagonal and pairs; a
+  // pinned particle's row and column left 0, its diagonal I; each scalar column's diagonal entry in
+  // A kept as the scale its pivot is judged by. With two threads planned, shared by halves.
+  void scatterBlocks(const std::vector<Eigen::Matrix3d>& blocks);
+  void scatterPairs(const PairedMatrix& matrix);
+  void zeroPanels();
+  // Block (i, k) of A's lower triangle (new order) at `place` in the panels (block_place_): its
+  // entries, or none but the identity's ones on a pinned particle's diagonal block and nothing off
+  // it; a diagonal block's entries also as its columns' pivot scales.
+  void putBlock(const std::array<long, 2>& place, int i, int k, const Eigen::Matrix3d& value);
   void solveSupernodes(bool shares_forwarded = false);
   // The forward passes of the two shares' supernodes (L y = b on work_ for their rows, their sums
   // for the rows above the shares kept): on two threads at once, or on this one.
