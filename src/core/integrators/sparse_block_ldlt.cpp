@@ -555,6 +555,10 @@ void SparseBlockLdlt::planSubtrees(const std::vector<int>& supernode_of)
   // and below the diagonal (column c of m rows has m − c of them), and each block's pieces, source
   // after source: the part of every update run into the supernode that lands in the block's columns
   // (a run's columns land in ascending columns of its target).
+  std::vector<std::vector<std::array<int, 2>>> runs_into(count);  // (source, run), source after source
+  for (int source = 0; source < count; ++source)
+    for (int q = run_start_[source]; q < run_start_[source + 1]; ++q)
+      if (share_of_[runs_[q].target] < 0) runs_into[runs_[q].target].push_back({source, q});
   block_start_.assign(count + 1, 0);
   piece_start_.assign(1, 0);
   for (int t = 0; t < count; ++t)
@@ -572,20 +576,18 @@ void SparseBlockLdlt::planSubtrees(const std::vector<int>& supernode_of)
       long last = first;
       for (; last < width && (part == parts || (before + m - last) * parts <= part * entries); ++last)
         before += m - last;
-      for (int source = 0; source < t; ++source)
-        for (int q = run_start_[source]; q < run_start_[source + 1]; ++q)
-        {
-          const UpdateRun& run = runs_[q];
-          if (run.target != t) continue;
-          const long* const landing = update_column_offset_.data() + run.columns;
-          const int columns = 3 * (run.end - run.begin);
-          auto columnOf = [&](long offset) { return (offset - static_cast<long>(target.panel)) / m; };
-          const int from = static_cast<int>(
-              std::partition_point(landing, landing + columns, [&](long o) { return columnOf(o) < first; }) - landing);
-          const int to = static_cast<int>(
-              std::partition_point(landing, landing + columns, [&](long o) { return columnOf(o) < last; }) - landing);
-          if (from < to) pieces_.push_back({source, q, from, to});
-        }
+      for (const auto& [source, q] : runs_into[t])
+      {
+        const UpdateRun& run = runs_[q];
+        const long* const landing = update_column_offset_.data() + run.columns;
+        const int columns = 3 * (run.end - run.begin);
+        auto columnOf = [&](long offset) { return (offset - static_cast<long>(target.panel)) / m; };
+        const int from = static_cast<int>(
+            std::partition_point(landing, landing + columns, [&](long o) { return columnOf(o) < first; }) - landing);
+        const int to = static_cast<int>(
+            std::partition_point(landing, landing + columns, [&](long o) { return columnOf(o) < last; }) - landing);
+        if (from < to) pieces_.push_back({source, q, from, to});
+      }
       piece_start_.push_back(static_cast<int>(pieces_.size()));
       first = last;
     }
