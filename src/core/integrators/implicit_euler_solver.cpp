@@ -685,7 +685,7 @@ bool ImplicitEulerSolver::solveDirectly(const std::vector<char>& pinned)
   filter(pinned, residual_);
   // The supernodal form takes A straight from the diagonal and the kept pairs while neither is in
   // the blocks (the same numbers): the off-diagonal blocks are then never filled, read or cleared.
-  if (!pairs_in_blocks_ && !diagonal_in_blocks_ && direct_.supernodal())
+  if (keptApart() && direct_.supernodal())
   {
     const SparseBlockLdlt::PairedMatrix matrix{diagonal_.data(), diagonal_block_.data(), kept_pairs_,
                                                pair_blocks_.data(), pair_c_.data()};

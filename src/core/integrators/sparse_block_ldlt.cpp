@@ -604,15 +604,9 @@ bool SparseBlockLdlt::factorizeAndSolve(const std::vector<Eigen::Matrix3d>& bloc
     solve(b, x);
     return true;
   }
-  // b in the new order first, so that the shares' forward passes can run beside the factorization
-  // of the last panel above them.
   pinnedInNewOrder(pinned);
-  toNewOrder(b);
   scatterBlocks(blocks);
-  if (!factorizeSupernodes(true)) return false;
-  solveSupernodes(true);
-  fromNewOrder(x);
-  return true;
+  return factorizeAndSolveScattered(b, x);
 }
 
 bool SparseBlockLdlt::factorizeAndSolve(const PairedMatrix& matrix, const std::vector<char>& pinned,
@@ -620,9 +614,16 @@ bool SparseBlockLdlt::factorizeAndSolve(const PairedMatrix& matrix, const std::v
 {
   if (!supernodal()) return false;
   pinnedInNewOrder(pinned);
-  toNewOrder(b);
   scatterPairs(matrix);
-  const bool forward_beside = twoThreads();  // the shares' forward passes beside the last panel above
+  return factorizeAndSolveScattered(b, x);
+}
+
+bool SparseBlockLdlt::factorizeAndSolveScattered(const Eigen::Matrix3Xd& b, Eigen::Matrix3Xd& x)
+{
+  // b in the new order first, so that with two threads the shares' forward passes can run beside
+  // the factorization of the last panel above them.
+  toNewOrder(b);
+  const bool forward_beside = twoThreads();
   if (!factorizeSupernodes(forward_beside)) return false;
   solveSupernodes(forward_beside);
   fromNewOrder(x);

@@ -119,7 +119,7 @@ public:
   }
   /// Whether addAlongPairEnds() may be used now: the diagonal blocks and the pairs are still kept
   /// apart from A's blocks in this step.
-  bool pairEndsShareable() const { return !diagonal_in_blocks_ && !pairs_in_blocks_; }
+  bool pairEndsShareable() const { return keptApart(); }
   /// Room for `count` more kept pairs, numbered from the index returned on (addAlongPairEnds()).
   int reservePairs(int count)
   {
@@ -281,6 +281,11 @@ private:
   {
     if (kept_pairs_ == static_cast<int>(pair_ends_.size())) growPairs();
     if (storePair(kept_pairs_++, blocks, c)) pairs_changed_ = true;
+  }
+  // Whether the diagonal blocks and the pairs are both still kept apart from A's blocks this step.
+  bool keptApart() const
+  {
+    return !diagonal_in_blocks_ && !pairs_in_blocks_;
   }
   // Pair C as number k of the kept list; whether its particles differ from the last step's there.
   [[gnu::always_inline]] bool storePair(int k, const std::array<int, 4>& blocks, const double* c)

@@ -194,6 +194,9 @@ private:
   void scatterBlocks(const std::vector<Eigen::Matrix3d>& blocks);
   void scatterPairs(const PairedMatrix& matrix);
   void zeroPanels();
+  // Both factorizeAndSolve()s once A is in the panels (pinned_new_ set): the supernodal
+  // factorization and solve, x untouched where a pivot is singular.
+  bool factorizeAndSolveScattered(const Eigen::Matrix3Xd& b, Eigen::Matrix3Xd& x);
   // Block (i, k) of A's lower triangle (new order) at `place` in the panels (block_place_): its
   // entries, or none but the identity's ones on a pinned particle's diagonal block and nothing off
   // it; a diagonal block's entries also as its columns' pivot scales.
