@@ -173,21 +173,25 @@ __attribute__((target("avx2,fma"))) void subtractLowerProductsAvx2(int rows, int
 }
 
 // AVX-512's form of subtractLowerProductsAvx2(): tiles of 16 rows (two registers of eight) by the
-// strip's four columns, eight 8-lane sums fused at each p; the rows past the last masked off (not
-// read, not written). Each column's entries on or below the diagonal are then subtracted where they
+// strip's four columns, eight 8-lane sums fused at each p. A whole tile is read without masks
+// (kWholeTile: no mask is moved into a mask register in the loop, where the move would take a port
+// of the 512-bit multiply-adds); in the last tile the rows past the last are masked off (not read,
+// not written). Each column's entries on or below the diagonal are then subtracted where they
 // belong: eight at once, masked, where the eight rows follow each other in C, else gathered and
 // scattered by their row offsets. The same sums in the same order as the other forms: their bits.
-__attribute__((target("avx512f,avx512vl,fma"))) void tileSumsAvx512(int k, const double* t, int ldt,
-                                                                    const double* strip, long strip_stride,
-                                                                    __mmask8 upper_rows, __mmask8 lower_rows,
-                                                                    __m512d (&upper)[4], __m512d (&lower)[4])
+template <bool kWholeTile>
+__attribute__((target("avx512f,avx512vl,fma"))) inline void tileSumsAvx512(int k, const double* t, int ldt,
+                                                                           const double* strip, long strip_stride,
+                                                                           __mmask8 upper_rows, __mmask8 lower_rows,
+                                                                           __m512d (&upper)[4], __m512d (&lower)[4])
 {
   __m512d u0 = _mm512_setzero_pd(), u1 = u0, u2 = u0, u3 = u0, w0 = u0, w1 = u0, w2 = u0, w3 = u0;
   for (int p = 0; p < k; ++p)
   {
     const double* const tp = t + static_cast<long>(p) * ldt;
     const double* const lp = strip + p * strip_stride;
-    const __m512d top = _mm512_maskz_loadu_pd(upper_rows, tp), bottom = _mm512_maskz_loadu_pd(lower_rows, tp + 8);
+    const __m512d top = kWholeTile ? _mm512_loadu_pd(tp) : _mm512_maskz_loadu_pd(upper_rows, tp);
+    const __m512d bottom = kWholeTile ? _mm512_loadu_pd(tp + 8) : _mm512_maskz_loadu_pd(lower_rows, tp + 8);
     const __m512d l0 = _mm512_set1_pd(lp[0]), l1 = _mm512_set1_pd(lp[1]);
     const __m512d l2 = _mm512_set1_pd(lp[2]), l3 = _mm512_set1_pd(lp[3]);
     u0 = _mm512_fmadd_pd(top, l0, u0);
@@ -237,7 +241,10 @@ __attribute__((target("avx512f,avx512vl,fma"))) void subtractLowerProductsAvx512
       const int left = rows - i;
       const __mmask8 upper_rows = firstLanes(left), lower_rows = firstLanes(left - kTileRows);
       __m512d upper[4], lower[4];
-      tileSumsAvx512(k, t + i, ldt, strip.strip, strip.stride, upper_rows, lower_rows, upper, lower);
+      if (left >= 2 * kTileRows)  // a whole tile: its loads need no mask
+        tileSumsAvx512<true>(k, t + i, ldt, strip.strip, strip.stride, upper_rows, lower_rows, upper, lower);
+      else
+        tileSumsAvx512<false>(k, t + i, ldt, strip.strip, strip.stride, upper_rows, lower_rows, upper, lower);
       const int* const at = row_offset + i;
       const int upper_last = std::min(left, kTileRows) - 1, lower_last = std::min(left, 2 * kTileRows) - kTileRows - 1;
       const bool upper_contiguous = at[upper_last] == at[0] + upper_last;
