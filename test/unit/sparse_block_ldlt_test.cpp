@@ -740,3 +740,70 @@ TEST(DensePanel, ScatteredProductsLandWhereTheyBelong)
     scatteredProductsLandWhereTheyBelong(consecutive);
   }
 }
+
+// The passes over a panel's columns (factorPanel(), forwardSupernode(), backwardSupernode()): the
+// rows' −Σ of the columns taken row by row (subtractScaledColumns, also with T's column kept and L's
+// scaled) and four columns' dots at once (dotColumns) give the bits of the column-by-column passes
+// they replace, in either form (AVX2 or scalar), with sizes that leave rows past the last eight and
+// four and columns past the last four; and they are the sums (against long double).
+TEST(DensePanel, ColumnsAtOnceGiveTheBitsOfColumnAfterColumn)
+{
+  std::mt19937 random(29);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0), exponent(-3.0, 3.0);
+  const int n = 23, count = 19;
+  const long ld = n + 5;
+  namespace dense_panel = particle_sim::core::dense_panel;
+  for (int trial = 0; trial < 20; ++trial)
+  {
+    SCOPED_TRACE("trial " + std::to_string(trial));
+    std::vector<double> columns(static_cast<std::size_t>(ld) * count), factors(count), x(n), start(n);
+    for (std::vector<double>* numbers : {&columns, &factors, &x, &start})
+      for (double& v : *numbers)
+        v = unit(random) * std::pow(10.0, exponent(random));
+    for (const bool avx2 : {false, true})
+    {
+      SCOPED_TRACE(avx2 ? "avx2" : "scalar");
+      std::vector<double> one_by_one = start, at_once = start;
+      for (int c = 0; c < count; ++c)
+        dense_panel::subtractScaled(avx2, n, columns.data() + c * ld, factors[c], one_by_one.data());
+      dense_panel::subtractScaledColumns(avx2, n, count, columns.data(), ld, factors.data(), at_once.data());
+      EXPECT_EQ(std::memcmp(one_by_one.data(), at_once.data(), sizeof(double) * n), 0);
+      // With T's column kept and L's scaled in the same pass: the kept entries are those bits, the
+      // scaled ones each of them times the scale.
+      const double scale = 1.0 / factors[0];
+      std::vector<double> scaled = start, kept(n);
+      dense_panel::subtractScaledColumnsKeepAndScale(avx2, n, count, columns.data(), ld, factors.data(), scale,
+                                                     scaled.data(), kept.data());
+      EXPECT_EQ(std::memcmp(one_by_one.data(), kept.data(), sizeof(double) * n), 0);
+      for (int r = 0; r < n; ++r)
+      {
+        const double expected = one_by_one[r] * scale;
+        EXPECT_EQ(std::memcmp(&expected, &scaled[r], sizeof(double)), 0) << "row " << r;
+      }
+      std::vector<double> dots(count, 0.0);
+      dense_panel::dotColumns(avx2, n, count, columns.data(), ld, x.data(), dots.data());
+      for (int c = 0; c < count; ++c)
+      {
+        const double alone = dense_panel::dot(avx2, n, columns.data() + c * ld, x.data());
+        EXPECT_EQ(std::memcmp(&alone, &dots[c], sizeof(double)), 0) << "column " << c;
+        long double sum = 0.0L, magnitude = 0.0L;
+        for (int r = 0; r < n; ++r)
+        {
+          sum += static_cast<long double>(columns[c * ld + r]) * x[r];
+          magnitude += std::abs(static_cast<long double>(columns[c * ld + r]) * x[r]);
+        }
+        EXPECT_NEAR(dots[c], static_cast<double>(sum), 1e-14 * static_cast<double>(magnitude)) << "column " << c;
+      }
+      for (int r = 0; r < n; ++r)
+      {
+        long double entry = start[r], magnitude = std::abs(start[r]);
+        for (int c = 0; c < count; ++c)
+        {
+          entry -= static_cast<long double>(columns[c * ld + r]) * factors[c];
+          magnitude += std::abs(static_cast<long double>(columns[c * ld + r]) * factors[c]);
+        }
+        EXPECT_NEAR(at_once[r], static_cast<double>(entry), 1e-14 * static_cast<double>(magnitude)) << "row " << r;
+      }
+    }
+  }
+}

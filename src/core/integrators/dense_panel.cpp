@@ -262,8 +262,8 @@ __attribute__((target("avx512f,avx512vl,fma"))) void subtractLowerProductsAvx512
   }
 }
 
-// The whole fours of subtractScaled() and keepAndScale(): how many entries they did (the callers
-// do the rest, entry by entry, as their scalar form does all of them).
+// The whole fours of subtractScaled(): how many entries it did (the caller does the rest, entry by
+// entry, as its scalar form does all of them).
 __attribute__((target("avx2"))) int subtractScaledAvx2(int n, const double* t, double factor, double* column)
 {
   const __m256d f = _mm256_set1_pd(factor);
@@ -273,16 +273,74 @@ __attribute__((target("avx2"))) int subtractScaledAvx2(int n, const double* t, d
   return r;
 }
 
-__attribute__((target("avx2"))) int keepAndScaleAvx2(int n, double factor, double* column, double* kept)
+// Four entries done: stored, or (kKeepAndScale) kept, then stored scaled.
+template <bool kKeepAndScale>
+__attribute__((target("avx2"))) inline void finishFour(double* out, double* kept, __m256d entry, __m256d scale)
 {
-  const __m256d f = _mm256_set1_pd(factor);
+  if (kKeepAndScale)
+  {
+    _mm256_storeu_pd(kept, entry);
+    entry = _mm256_mul_pd(entry, scale);
+  }
+  _mm256_storeu_pd(out, entry);
+}
+
+// The whole fours of subtractScaledColumns() (kKeepAndScale: of subtractScaledColumnsKeepAndScale()),
+// eight rows at a time while eight are left, each row's terms column after column in a register:
+// how many rows they did.
+template <bool kKeepAndScale>
+__attribute__((target("avx2"))) int subtractScaledColumnsAvx2(int n, int count, const double* columns, long ld,
+                                                              const double* factors, double* out, double scale,
+                                                              double* kept)
+{
+  const __m256d by = _mm256_set1_pd(scale);
+  int r = 0;
+  for (; r + 8 <= n; r += 8)
+  {
+    __m256d upper = _mm256_loadu_pd(out + r), lower = _mm256_loadu_pd(out + r + 4);
+    for (int c = 0; c < count; ++c)
+    {
+      const double* const column = columns + c * ld + r;
+      const __m256d f = _mm256_broadcast_sd(factors + c);
+      upper = _mm256_sub_pd(upper, _mm256_mul_pd(_mm256_loadu_pd(column), f));
+      lower = _mm256_sub_pd(lower, _mm256_mul_pd(_mm256_loadu_pd(column + 4), f));
+    }
+    finishFour<kKeepAndScale>(out + r, kept + r, upper, by);
+    finishFour<kKeepAndScale>(out + r + 4, kept + r + 4, lower, by);
+  }
+  for (; r + 4 <= n; r += 4)
+  {
+    __m256d sum = _mm256_loadu_pd(out + r);
+    for (int c = 0; c < count; ++c)
+      sum = _mm256_sub_pd(sum, _mm256_mul_pd(_mm256_loadu_pd(columns + c * ld + r), _mm256_broadcast_sd(factors + c)));
+    finishFour<kKeepAndScale>(out + r, kept + r, sum, by);
+  }
+  return r;
+}
+
+// The whole fours of four columns' dots at once (each column its four lane sums, as dotAvx2()), x
+// loaded once for the four; the four sums added as dotAvx2() adds them, the rest left to the caller.
+__attribute__((target("avx2"))) int dotFourColumnsAvx2(int n, const double* columns, long ld, const double* x,
+                                                       double* dots)
+{
+  __m256d s0 = _mm256_setzero_pd(), s1 = s0, s2 = s0, s3 = s0;
+  const double *const c0 = columns, *const c1 = c0 + ld, *const c2 = c1 + ld, *const c3 = c2 + ld;
   int r = 0;
   for (; r + 4 <= n; r += 4)
   {
-    const __m256d value = _mm256_loadu_pd(column + r);
-    _mm256_storeu_pd(kept + r, value);
-    _mm256_storeu_pd(column + r, _mm256_mul_pd(value, f));
+    const __m256d v = _mm256_loadu_pd(x + r);
+    s0 = _mm256_add_pd(s0, _mm256_mul_pd(_mm256_loadu_pd(c0 + r), v));
+    s1 = _mm256_add_pd(s1, _mm256_mul_pd(_mm256_loadu_pd(c1 + r), v));
+    s2 = _mm256_add_pd(s2, _mm256_mul_pd(_mm256_loadu_pd(c2 + r), v));
+    s3 = _mm256_add_pd(s3, _mm256_mul_pd(_mm256_loadu_pd(c3 + r), v));
   }
+  alignas(32) double lanes[4][4];
+  _mm256_store_pd(lanes[0], s0);
+  _mm256_store_pd(lanes[1], s1);
+  _mm256_store_pd(lanes[2], s2);
+  _mm256_store_pd(lanes[3], s3);
+  for (int c = 0; c < 4; ++c)
+    dots[c] = (lanes[c][0] + lanes[c][1]) + (lanes[c][2] + lanes[c][3]);
   return r;
 }
 
@@ -353,17 +411,59 @@ void subtractScaled(bool avx2, int n, const double* t, double factor, double* co
     column[r] -= t[r] * factor;
 }
 
-void keepAndScale(bool avx2, int n, double factor, double* column, double* kept)
+namespace
+{
+template <bool kKeepAndScale>
+void subtractScaledColumnsOf(bool avx2, int n, int count, const double* columns, long ld, const double* factors,
+                             double* out, double scale, double* kept)
 {
   int r = 0;
 #if defined(__x86_64__)
-  if (avx2 && available()) r = keepAndScaleAvx2(n, factor, column, kept);
+  if (avx2 && available())
+    r = subtractScaledColumnsAvx2<kKeepAndScale>(n, count, columns, ld, factors, out, scale, kept);
 #endif
   for (; r < n; ++r)
   {
-    kept[r] = column[r];
-    column[r] *= factor;
+    double entry = out[r];
+    for (int c = 0; c < count; ++c)
+      entry -= columns[c * ld + r] * factors[c];
+    if (kKeepAndScale)
+    {
+      kept[r] = entry;
+      entry *= scale;
+    }
+    out[r] = entry;
   }
+}
+}  // namespace
+
+void subtractScaledColumns(bool avx2, int n, int count, const double* columns, long ld, const double* factors,
+                           double* out)
+{
+  subtractScaledColumnsOf<false>(avx2, n, count, columns, ld, factors, out, 1.0, nullptr);
+}
+
+void subtractScaledColumnsKeepAndScale(bool avx2, int n, int count, const double* columns, long ld,
+                                       const double* factors, double scale, double* out, double* kept)
+{
+  subtractScaledColumnsOf<true>(avx2, n, count, columns, ld, factors, out, scale, kept);
+}
+
+void dotColumns(bool avx2, int n, int count, const double* columns, long ld, const double* x, double* dots)
+{
+  int c = 0;
+#if defined(__x86_64__)
+  if (avx2 && available())
+    for (; c + 4 <= count; c += 4)
+    {
+      const int r = dotFourColumnsAvx2(n, columns + c * ld, ld, x, dots + c);
+      for (int q = c; q < c + 4; ++q)
+        for (int rest = r; rest < n; ++rest)
+          dots[q] += columns[q * ld + rest] * x[rest];
+    }
+#endif
+  for (; c < count; ++c)
+    dots[c] = dot(avx2, n, columns + c * ld, x);
 }
 
 double dot(bool avx2, int n, const double* a, const double* b)

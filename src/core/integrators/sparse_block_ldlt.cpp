@@ -310,7 +310,7 @@ void SparseBlockLdlt::analyzeSupernodes(const std::vector<int>& row_start, const
   lower_.shrink_to_fit();
   // Each supernode's rows below it (those of its last column) and its panel.
   super_rows_.clear();
-  std::size_t panel = 0, largest_panel = 0, largest_below = 0, largest_rows = 0;
+  std::size_t panel = 0, largest_panel = 0, largest_rows = 0;
   for (Supernode& supernode : supernodes_)
   {
     const int last = supernode.first + supernode.width - 1;
@@ -324,11 +324,10 @@ void SparseBlockLdlt::analyzeSupernodes(const std::vector<int>& row_start, const
     panel += size;
     largest_panel = std::max(largest_panel, size);
     largest_rows = std::max(largest_rows, m);
-    largest_below = std::max(largest_below, 3 * static_cast<std::size_t>(supernode.below));
   }
   panels_.assign(panel, 0.0);
   scaled_.assign(largest_panel, 0.0);
-  gathered_.assign(largest_below, 0.0);
+  gathered_.assign(largest_rows, 0.0);  // a panel's rows below, then its columns' dots (backwardSupernode())
   ascending_.resize(largest_rows);
   for (std::size_t r = 0; r < largest_rows; ++r)
     ascending_[r] = static_cast<int>(r);
@@ -951,17 +950,23 @@ bool SparseBlockLdlt::factorPanel(std::size_t s, double* scaled, dense_panel::Ti
     }
     for (int c = c0; c < c1; ++c)
     {
+      // The group's columns before c subtracted from column c: its pivot first, then the rows below
+      // the pivot in one pass that also keeps T's column and scales L's (each entry's terms in the
+      // order of the columns, each a multiply and a subtraction: the bits of a pass a column).
       double* const column = panel + static_cast<long>(c) * m;
+      double factors[kPanelColumns];
+      double pivot = column[c];
       for (int p = c0; p < c; ++p)
       {
-        dense_panel::subtractScaled(avx2, m - c, scaled + static_cast<long>(p) * m + c,
-                                    panel[c + static_cast<long>(p) * m], column + c);
+        factors[p - c0] = panel[c + static_cast<long>(p) * m];
+        pivot -= scaled[c + static_cast<long>(p) * m] * factors[p - c0];
       }
-      const double pivot = column[c];
+      column[c] = pivot;
       if (!std::isfinite(pivot) || !(std::abs(pivot) > kSingularPivot * pivots[c])) return false;
       pivots[c] = pivot;
-      dense_panel::keepAndScale(avx2, m - c - 1, 1.0 / pivot, column + c + 1,
-                                scaled + static_cast<long>(c) * m + c + 1);
+      dense_panel::subtractScaledColumnsKeepAndScale(
+          avx2, m - c - 1, c - c0, scaled + static_cast<long>(c0) * m + c + 1, m, factors, 1.0 / pivot, column + c + 1,
+          scaled + static_cast<long>(c) * m + c + 1);
     }
   }
   return true;
@@ -1078,8 +1083,9 @@ void SparseBlockLdlt::forwardSupernode(std::size_t s, double* y, double* gathere
   {
     const double* const column = panel + static_cast<long>(c) * m;
     dense_panel::subtractScaled(avx2, width - c - 1, column + c + 1, own[c], own + c + 1);
-    dense_panel::subtractScaled(avx2, below, column + width, own[c], gathered);  // −Σ of the rows below
   }
+  // −Σ of the rows below, column after column for each row (own is final once its triangle is done).
+  dense_panel::subtractScaledColumns(avx2, below, width, panel + width, m, own, gathered);
   const int* const rows = super_rows_.data() + supernode.rows;
   const int added = kept ? first_row_above_[s] : supernode.below;
   for (int a = 0; a < added; ++a)
@@ -1098,11 +1104,14 @@ void SparseBlockLdlt::backwardSupernode(std::size_t s, double* y, double* gather
   for (int a = 0; a < supernode.below; ++a)
     for (int r = 0; r < 3; ++r)
       gathered[3 * a + r] = y[3L * rows[a] + r];
+  // The rows below's dots first, all columns at once (they read only `gathered`), into the scratch
+  // after it; then the own triangle backwards.
+  double* const dots = gathered + below;
+  dense_panel::dotColumns(avx2, below, width, panel + width, m, gathered, dots);
   for (int c = width - 1; c >= 0; --c)
   {
     const double* const column = panel + static_cast<long>(c) * m;
-    own[c] -= dense_panel::dot(avx2, below, column + width, gathered) +
-              dense_panel::dot(avx2, width - c - 1, column + c + 1, own + c + 1);
+    own[c] -= dots[c] + dense_panel::dot(avx2, width - c - 1, column + c + 1, own + c + 1);
   }
 }
 

@@ -36,11 +36,20 @@ Tiles subtractLowerProducts(Tiles tiles, int rows, int columns, int k, const dou
 
 /// column[r] −= t[r] factor for r < n (each entry one multiply and one subtraction, either way).
 void subtractScaled(bool avx2, int n, const double* t, double factor, double* column);
-/// kept[r] = column[r], then column[r] *= factor, for r < n.
-void keepAndScale(bool avx2, int n, double factor, double* column, double* kept);
+/// out[r] −= columns[c ld + r] factors[c] for r < n, c = 0, 1, ..., count − 1 in that order: the
+/// bits of subtractScaled() column after column, each entry kept in a register meanwhile.
+void subtractScaledColumns(bool avx2, int n, int count, const double* columns, long ld, const double* factors,
+                           double* out);
+/// subtractScaledColumns(), then kept[r] = out[r] and out[r] *= scale, in one pass (a panel's
+/// column: T's kept, L's scaled by the pivot's inverse).
+void subtractScaledColumnsKeepAndScale(bool avx2, int n, int count, const double* columns, long ld,
+                                       const double* factors, double scale, double* out, double* kept);
 /// Σ a[r] b[r] for r < n in four sums (r mod 4, up to the last whole four), added as (s0 + s1) +
 /// (s2 + s3), then the rest one by one: the same bits either way.
 double dot(bool avx2, int n, const double* a, const double* b);
+/// dots[c] = dot(avx2, n, columns + c ld, x) for c < count, four columns at a time (x read once for
+/// the four): the same bits.
+void dotColumns(bool avx2, int n, int count, const double* columns, long ld, const double* x, double* dots);
 }  // namespace dense_panel
 }  // namespace core
 }  // namespace particle_sim
