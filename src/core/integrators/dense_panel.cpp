@@ -273,16 +273,17 @@ __attribute__((target("avx2"))) int subtractScaledAvx2(int n, const double* t, d
   return r;
 }
 
-// Four entries done: stored, or (kKeepAndScale) kept, then stored scaled.
+// Entries r .. r + 3 done: stored, or (kKeepAndScale) kept, then stored scaled (`kept` is only
+// offset when it is kept to: it is null otherwise).
 template <bool kKeepAndScale>
-__attribute__((target("avx2"))) inline void finishFour(double* out, double* kept, __m256d entry, __m256d scale)
+__attribute__((target("avx2"))) inline void finishFour(double* out, double* kept, int r, __m256d entry, __m256d scale)
 {
   if (kKeepAndScale)
   {
-    _mm256_storeu_pd(kept, entry);
+    _mm256_storeu_pd(kept + r, entry);
     entry = _mm256_mul_pd(entry, scale);
   }
-  _mm256_storeu_pd(out, entry);
+  _mm256_storeu_pd(out + r, entry);
 }
 
 // The whole fours of subtractScaledColumns() (kKeepAndScale: of subtractScaledColumnsKeepAndScale()),
@@ -305,15 +306,15 @@ __attribute__((target("avx2"))) int subtractScaledColumnsAvx2(int n, int count, 
       upper = _mm256_sub_pd(upper, _mm256_mul_pd(_mm256_loadu_pd(column), f));
       lower = _mm256_sub_pd(lower, _mm256_mul_pd(_mm256_loadu_pd(column + 4), f));
     }
-    finishFour<kKeepAndScale>(out + r, kept + r, upper, by);
-    finishFour<kKeepAndScale>(out + r + 4, kept + r + 4, lower, by);
+    finishFour<kKeepAndScale>(out, kept, r, upper, by);
+    finishFour<kKeepAndScale>(out, kept, r + 4, lower, by);
   }
   for (; r + 4 <= n; r += 4)
   {
     __m256d sum = _mm256_loadu_pd(out + r);
     for (int c = 0; c < count; ++c)
       sum = _mm256_sub_pd(sum, _mm256_mul_pd(_mm256_loadu_pd(columns + c * ld + r), _mm256_broadcast_sd(factors + c)));
-    finishFour<kKeepAndScale>(out + r, kept + r, sum, by);
+    finishFour<kKeepAndScale>(out, kept, r, sum, by);
   }
   return r;
 }
