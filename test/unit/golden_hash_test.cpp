@@ -403,7 +403,8 @@ TEST(GoldenHash, EveryPairEndsInTheSameStateWithTwoThreadsPerWorld)
 // the processor has AVX2, give the same bits as its scalar passes: with the scalar passes forced,
 // every pair of the methods that solve with CG ends in its golden state too (a golden file written
 // on a machine with AVX2 thus holds on one without, and the other way round). The switch forces the
-// direct solver's supernodal tiles (dense_panel.h) to their scalar form as well.
+// direct solver's supernodal tiles (dense_panel.h) and the springs' force pass (four springs at a
+// time, addSpringForcesOf()) to their scalar form as well: the explicit methods run here too.
 TEST(GoldenHash, TheConjugateGradientsScalarAndAvx2PassesGiveTheSameStates)
 {
   const bool avx2 = core::ImplicitEulerSolver::useAvx2();
@@ -412,8 +413,8 @@ TEST(GoldenHash, TheConjugateGradientsScalarAndAvx2PassesGiveTheSameStates)
   core::ImplicitEulerSolver::setUseAvx2(false);
   EXPECT_FALSE(core::ImplicitEulerSolver::useAvx2());
   std::uint64_t shared_loops = 0;
-  checkGoldenStates(1, shared_loops, {"implicit_euler", "bdf2", "auto"});
+  checkGoldenStates(1, shared_loops, {"implicit_euler", "bdf2", "auto", "symplectic_euler", "verlet"});
   core::ImplicitEulerSolver::setUseAvx2(avx2);
-  std::printf("[golden] the CG's %s passes checked against the file (AVX2 %s on this processor)\n",
+  std::printf("[golden] the CG's and the springs' %s passes checked against the file (AVX2 %s on this processor)\n",
               avx2 ? "scalar" : "only", core::cg_avx2::available() ? "available" : "not available");
 }

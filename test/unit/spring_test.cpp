@@ -7,11 +7,14 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <limits>
 #include <random>
+#include <string>
+#include <utility>
 #include <vector>
 
 using namespace particle_sim::core;
@@ -314,6 +317,94 @@ TEST(Spring, JacobianPartsOfManyAreEachSpringsBitForBit)
             << "spring " << s << " number " << k << (vectorized ? ", four at a time" : "");
     }
     EXPECT_EQ(coincident, 2);
+  }
+}
+
+TEST(Spring, ForcesOfManyAreEachSpringsAddedInOrderBitForBit)
+{
+  // addSpringForcesOf(), four springs at a time or two, gives every particle the bits of adding
+  // springForce() of each spring in the order of the list (+f at end i, −f at end j), and each
+  // spring springEnergy()'s bits. The network: runs of springs that share their end i (as a cloth's
+  // point starts five of its springs, which the vector form holds in registers), ends shared across
+  // runs, a spring of zero length inside a group of four, and a count that leaves springs over after
+  // the groups of four; then both ends, end i alone and end j alone (a chunk's runs).
+  std::mt19937_64 rng(47);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  const int particles = 60;
+  std::vector<double> x(3 * particles), v(3 * particles);
+  for (double& c : x)
+    c = unit(rng);
+  for (double& c : v)
+    c = unit(rng);
+  std::vector<Spring> springs;
+  std::uniform_int_distribution<int> particle(0, particles - 1), run_length(1, 6);
+  while (springs.size() < 203)
+  {
+    const int i = particle(rng);
+    for (int k = run_length(rng); k > 0; --k)
+    {
+      Spring spring;
+      spring.i = i;
+      spring.j = particle(rng);
+      if (spring.j == i) continue;
+      spring.rest_length = 0.5 + 0.5 * (unit(rng) + 1.0);
+      spring.stiffness = std::pow(10.0, 2.0 + unit(rng));
+      spring.damping = 0.5 * (unit(rng) + 1.0);
+      springs.push_back(spring);
+    }
+  }
+  springs.resize(203);
+  // Springs 41 and 42 join two particles at the same place (no direction: no force), one of them
+  // to a particle that other springs pull.
+  std::copy_n(&x[3 * 7], 3, &x[3 * 8]);
+  springs[41].i = 7;
+  springs[41].j = 8;
+  springs[42].i = 8;
+  springs[42].j = 7;
+  const int count = static_cast<int>(springs.size());
+  ASSERT_NE(count % 4, 0);
+
+  auto bits = [](double value) {
+    std::uint64_t b = 0;
+    std::memcpy(&b, &value, sizeof b);
+    return b;
+  };
+  for (const auto& [add_i, add_j] : {std::pair{true, true}, std::pair{true, false}, std::pair{false, true}})
+  {
+    // The definition: one spring after the other.
+    std::vector<double> expected(3 * particles, 0.0);
+    std::vector<double> expected_energy(count);
+    double expected_sum = 0.25;
+    for (int s = 0; s < count; ++s)
+    {
+      const Spring& spring = springs[s];
+      const Eigen::Map<const Eigen::Vector3d> xi(&x[3 * spring.i]), xj(&x[3 * spring.j]);
+      const Eigen::Vector3d f = springForce(xi, xj, Eigen::Map<const Eigen::Vector3d>(&v[3 * spring.i]),
+                                            Eigen::Map<const Eigen::Vector3d>(&v[3 * spring.j]), spring.rest_length,
+                                            spring.stiffness, spring.damping);
+      if (add_i) Eigen::Map<Eigen::Vector3d>(&expected[3 * spring.i]) += f;
+      if (add_j) Eigen::Map<Eigen::Vector3d>(&expected[3 * spring.j]) -= f;
+      expected_energy[s] = springEnergy(xi, xj, spring.rest_length, spring.stiffness);
+      expected_sum += expected_energy[s];
+    }
+    for (bool vectorized : {true, false})
+    {
+      const std::string form =
+          std::string(vectorized ? "four at a time" : "scalar") + (add_i ? ", end i" : "") + (add_j ? ", end j" : "");
+      std::vector<double> force(3 * particles, 0.0);
+      std::vector<double> energy(count);
+      double sum = 0.25;
+      // Two calls, the first ending inside a group of four.
+      addSpringForcesOf(springs.data(), springs.data() + 10, x.data(), v.data(), force.data(), energy.data(), &sum,
+                        add_i, add_j, vectorized);
+      addSpringForcesOf(springs.data() + 10, springs.data() + count, x.data(), v.data(), force.data(),
+                        energy.data() + 10, &sum, add_i, add_j, vectorized);
+      for (int c = 0; c < 3 * particles; ++c)
+        EXPECT_EQ(bits(force[c]), bits(expected[c])) << "particle " << c / 3 << " coordinate " << c % 3 << ", " << form;
+      for (int s = 0; s < count; ++s)
+        EXPECT_EQ(bits(energy[s]), bits(expected_energy[s])) << "spring " << s << ", " << form;
+      EXPECT_EQ(bits(sum), bits(expected_sum)) << form;
+    }
   }
 }
 

@@ -118,6 +118,18 @@ struct Spring
   return true;
 }
 
+/// The forces of the consecutive springs [first, last) from the positions x and velocities v (3
+/// numbers a particle): springForce() added to `force` at each spring's end i (if add_i) and taken
+/// from it at its end j (if add_j), spring after spring in the order of the list; with `energy` not
+/// null, each spring's springEnergy() into energy[s − first] as well, and with `energy_sum` not null
+/// (and `energy` given) added to *energy_sum one after the other in the order of the list. The
+/// explicit methods' force pass (SpringForces), one thread's whole list or a chunk's run of springs.
+/// With `vectorized` (where
+/// the processor has AVX2: springPartsVectorized()), four springs at a time, each lane in
+/// springForce()'s operations and order (no fused multiply-add), so the same bits as without.
+void addSpringForcesOf(const Spring* first, const Spring* last, const double* x, const double* v, double* force,
+                       double* energy, double* energy_sum, bool add_i, bool add_j, bool vectorized);
+
 /// springJacobianParts() of many springs, one entry a spring in each array: d = (d_x, d_y, d_z),
 /// along_x and isotropic_x (along_v is −k_d), and `coincident` 1 where it returned false (then the
 /// other numbers are not used).
@@ -136,7 +148,8 @@ struct SpringJacobianParts
 /// multiply-add), so the numbers are the same bits as one spring at a time.
 void springJacobianPartsOf(const Spring* springs, int first, int last, const double* x, bool vectorized,
                            SpringJacobianParts& parts);
-/// Whether this processor runs springJacobianPartsOf() four springs at a time (x86-64 with AVX2).
+/// Whether this processor runs springJacobianPartsOf() and addSpringForcesOf() four springs at a time
+/// (x86-64 with AVX2).
 bool springPartsVectorized();
 
 }  // namespace core

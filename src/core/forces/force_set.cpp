@@ -89,8 +89,8 @@ double ForceSet::computeForcesAndEnergy(const ForceContext& context, const Eigen
     force.setZero();
     return 0.0;
   }
-  // computeForces()'s order; the first element (gravity) keeps nothing, its addKeptEnergy() computes.
-  elements_.front()->setForces(context, x, v, force);
+  // computeForces()'s order, each element keeping its energy on the way where it can.
+  elements_.front()->setForcesKeepingEnergy(context, x, v, force);
   for (std::size_t e = 1; e < elements_.size(); ++e)
     elements_[e]->addForcesKeepingEnergy(context, x, v, force);
   double energy = 0.0;

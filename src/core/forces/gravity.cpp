@@ -27,9 +27,36 @@ void GravityForce::setForces(const ForceContext& context, const Eigen::Matrix3Xd
 void GravityForce::addEnergy(const ForceContext& context, const Eigen::Matrix3Xd& x, double& energy) const
 {
   // Summed in fixed chunks of particles, shared between threads: the same bits at any thread count.
-  energy -=
-      sumByChunks(context.workers, static_cast<int>(x.cols()), kParticlesPerVectorChunk, chunk_energy_,
-                  [&](int i) { return context.pinned[i] ? 0.0 : context.mass[i] * context.gravity.dot(x.col(i)); });
+  energy -= sumByChunks(context.workers, static_cast<int>(x.cols()), kParticlesPerVectorChunk, chunk_energy_,
+                        [&](int i) { return energyOf(context, x, i); });
+}
+
+void GravityForce::setForcesKeepingEnergy(const ForceContext& context, const Eigen::Matrix3Xd& x,
+                                          const Eigen::Matrix3Xd& /*v*/, Eigen::Matrix3Xd& force) const
+{
+  // setForces()'s forces and addEnergy()'s chunks, summed in its order: the same bits as both.
+  kept_sum_ = sumChunks(context.workers, static_cast<int>(x.cols()), kParticlesPerVectorChunk, chunk_energy_,
+                        [&](int first, int last) {
+                          double sum = 0.0;
+                          for (int i = first; i < last; ++i)
+                          {
+                            force.col(i) = (context.mass[i] * context.gravity).array() + 0.0;
+                            sum += energyOf(context, x, i);
+                          }
+                          return sum;
+                        });
+  energy_kept_ = true;
+}
+
+void GravityForce::addKeptEnergy(const ForceContext& context, const Eigen::Matrix3Xd& x, double& energy) const
+{
+  if (!energy_kept_)
+  {
+    addEnergy(context, x, energy);
+    return;
+  }
+  energy_kept_ = false;
+  energy -= kept_sum_;
 }
 
 }  // namespace core

@@ -20,108 +20,6 @@ std::size_t chunksOf(std::size_t springs)
   return (springs + kSpringsPerChunk - 1) / kSpringsPerChunk;
 }
 
-// One spring's force (springForce()), added to its end i (if kAddI) and taken from its end j (if kAddJ);
-// its energy (springEnergy()) into *energy when that is not null.
-template <bool kAddI, bool kAddJ>
-[[gnu::always_inline]] inline void addSpringForce(const Spring* s, const double* xs, const double* vs, double* fs,
-                                                  double* energy)
-{
-  const Eigen::Vector3d f = springForce(Eigen::Vector3d::Map(xs + 3 * s->i), Eigen::Vector3d::Map(xs + 3 * s->j),
-                                        Eigen::Vector3d::Map(vs + 3 * s->i), Eigen::Vector3d::Map(vs + 3 * s->j),
-                                        s->rest_length, s->stiffness, s->damping);
-  if (kAddI) Eigen::Vector3d::Map(fs + 3 * s->i) += f;
-  if (kAddJ) Eigen::Vector3d::Map(fs + 3 * s->j) -= f;
-  if (energy)
-  {
-    *energy = springEnergy(Eigen::Vector3d::Map(xs + 3 * s->i), Eigen::Vector3d::Map(xs + 3 * s->j), s->rest_length,
-                           s->stiffness);
-  }
-}
-
-// The forces of the consecutive springs [first, last), added to their ends i (if kAddI) and j (if
-// kAddJ) only: those inside the chunk being summed. Which ends is fixed for the whole run, not tested
-// per spring, so that a chunk's run costs what the one-thread loop costs (this function over every
-// spring, both ends).
-//
-// Two springs at a time, one in each lane of a pair of doubles: springForce()'s operations, lane by
-// lane (|δ| as sqrt((δx² + δy²) + δz²) and the dot product as (a_x b_x + a_y b_y) + a_z b_z, Eigen's
-// order), so the same bits, with one square root and three divisions for the two springs instead of
-// two and six: the divider bounds this loop while the particles are in cache (a 128² cloth's step,
-// 3-9 % faster); beyond that memory does (256²: no change). The forces are then added spring after
-// spring, in the order of the list. A pair with a spring of zero length (no direction) takes
-// springForce() itself.
-//
-// With `energy` not null, each spring's energy goes to energy[spring − first], in springEnergy()'s
-// operations (the stretch is the force's): the energy of the state costs no pass of its own.
-//
-// The spring records kSpringsAhead ahead are asked into the cache as the loop goes: beyond the
-// second-level cache (a 256² cloth's 15.6 MB of springs) the hardware's own prefetching leaves the
-// loop waiting for them (2-6 % of a 256² step; no change while they fit).
-constexpr std::ptrdiff_t kSpringsAhead = 32;
-template <bool kAddI, bool kAddJ>
-[[gnu::always_inline]] inline void addRunForces(const Spring* first, const Spring* last, const double* xs,
-                                                const double* vs, double* fs, double* energy)
-{
-  using Pair = Eigen::Array2d;
-  const Spring* s = first;
-  for (; last - s >= 2; s += 2)
-  {
-    if (last - s > kSpringsAhead + 1)
-    {
-      // Both records' starts: every 64-byte line of 40-byte records holds the start of one.
-      __builtin_prefetch(s + kSpringsAhead);
-      __builtin_prefetch(s + kSpringsAhead + 1);
-    }
-    const Spring& a = s[0];
-    const Spring& b = s[1];
-    const double *const xai = xs + 3 * a.i, *const xaj = xs + 3 * a.j;
-    const double *const xbi = xs + 3 * b.i, *const xbj = xs + 3 * b.j;
-    const Pair dx(xaj[0] - xai[0], xbj[0] - xbi[0]);
-    const Pair dy(xaj[1] - xai[1], xbj[1] - xbi[1]);
-    const Pair dz(xaj[2] - xai[2], xbj[2] - xbi[2]);
-    const Pair length = ((dx * dx + dy * dy) + dz * dz).sqrt();
-    if (length(0) == 0.0 || length(1) == 0.0)
-    {
-      addSpringForce<kAddI, kAddJ>(s, xs, vs, fs, energy ? energy + (s - first) : nullptr);
-      addSpringForce<kAddI, kAddJ>(s + 1, xs, vs, fs, energy ? energy + (s + 1 - first) : nullptr);
-      continue;
-    }
-    const Pair ux = dx / length, uy = dy / length, uz = dz / length;
-    const double *const vai = vs + 3 * a.i, *const vaj = vs + 3 * a.j;
-    const double *const vbi = vs + 3 * b.i, *const vbj = vs + 3 * b.j;
-    const Pair along = (Pair(vaj[0] - vai[0], vbj[0] - vbi[0]) * ux + Pair(vaj[1] - vai[1], vbj[1] - vbi[1]) * uy) +
-                       Pair(vaj[2] - vai[2], vbj[2] - vbi[2]) * uz;
-    const Pair stiffness(a.stiffness, b.stiffness);
-    const Pair stretch = length - Pair(a.rest_length, b.rest_length);
-    const Pair magnitude = stiffness * stretch + Pair(a.damping, b.damping) * along;
-    if (energy)
-    {
-      const Pair spring_energy = 0.5 * stiffness * stretch * stretch;
-      energy[s - first] = spring_energy(0);
-      energy[s + 1 - first] = spring_energy(1);
-    }
-    const Pair fx = magnitude * ux, fy = magnitude * uy, fz = magnitude * uz;
-    for (int lane = 0; lane < 2; ++lane)
-    {
-      const Spring& spring = s[lane];
-      if (kAddI)
-      {
-        double* const fi = fs + 3 * spring.i;
-        fi[0] += fx(lane);
-        fi[1] += fy(lane);
-        fi[2] += fz(lane);
-      }
-      if (kAddJ)
-      {
-        double* const fj = fs + 3 * spring.j;
-        fj[0] -= fx(lane);
-        fj[1] -= fy(lane);
-        fj[2] -= fz(lane);
-      }
-    }
-  }
-  if (s != last) addSpringForce<kAddI, kAddJ>(s, xs, vs, fs, energy ? energy + (s - first) : nullptr);
-}
 }  // namespace
 
 SpringForces::SpringForces(std::vector<Spring> springs)
@@ -159,12 +57,11 @@ void SpringForces::addForcesKeepingEnergy(const ForceContext& context, const Eig
   // bits), instead of a store a spring and a pass of their own over the springs afterwards.
   kept_chunk_energy_.resize(chunksOf(springs_.size()));  // reserved at construction: never larger
   std::array<double, kSpringsPerChunk> chunk_energy;
+  const bool vectorized = ImplicitEulerSolver::useAvx2();
   forEachFixedChunk(nullptr, static_cast<int>(springs_.size()), kSpringsPerChunk, [&](int chunk, int first, int last) {
-    addRunForces<true, true>(springs_.data() + first, springs_.data() + last, x.data(), v.data(), force.data(),
-                             chunk_energy.data());
     double sum = 0.0;
-    for (int k = 0; k < last - first; ++k)
-      sum += chunk_energy[k];
+    addSpringForcesOf(springs_.data() + first, springs_.data() + last, x.data(), v.data(), force.data(),
+                      chunk_energy.data(), &sum, true, true, vectorized);
     kept_chunk_energy_[chunk] = sum;
   });
 }
@@ -201,8 +98,8 @@ void SpringForces::addForcesTo(const ForceContext& context, const Eigen::Matrix3
     addForcesShared(*context.workers, x, v, force, energy);
     return;
   }
-  addRunForces<true, true>(springs_.data(), springs_.data() + springs_.size(), x.data(), v.data(), force.data(),
-                           energy);
+  addSpringForcesOf(springs_.data(), springs_.data() + springs_.size(), x.data(), v.data(), force.data(), energy,
+                    nullptr, true, true, ImplicitEulerSolver::useAvx2());
 }
 
 void SpringForces::addForcesShared(WorkerPool& workers, const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v,
@@ -220,6 +117,7 @@ void SpringForces::addForcesShared(WorkerPool& workers, const Eigen::Matrix3Xd& 
     const Spring* const all = springs_.data();
     const PairChunks::Run* const runs = chunks_.runs();
     const PairChunks& chunks = chunks_;
+    const bool vectorized = ImplicitEulerSolver::useAvx2();
     workers.forEachChunk(particles, kParticlesPerChunk, [=, &chunks](int begin, int end) {
       for (int chunk = begin / kParticlesPerChunk; chunk * kParticlesPerChunk < end; ++chunk)
       {
@@ -230,12 +128,8 @@ void SpringForces::addForcesShared(WorkerPool& workers, const Eigen::Matrix3Xd& 
           const Spring* const last = first + run.count;
           // A spring's energy is written by the run that holds its end i (one writer a spring).
           double* const run_energy = energy ? energy + run.first : nullptr;
-          if (run.ends == PairChunks::kBothEnds)
-            addRunForces<true, true>(first, last, xs, vs, fs, run_energy);
-          else if (run.ends == PairChunks::kEndI)
-            addRunForces<true, false>(first, last, xs, vs, fs, run_energy);
-          else
-            addRunForces<false, true>(first, last, xs, vs, fs, nullptr);
+          addSpringForcesOf(first, last, xs, vs, fs, run.ends == PairChunks::kEndJ ? nullptr : run_energy, nullptr,
+                            run.ends != PairChunks::kEndJ, run.ends != PairChunks::kEndI, vectorized);
         }
       }
     });

@@ -89,8 +89,15 @@ public:
   {
     addForces(context, x, v, force);
   }
-  /// addEnergy() at the x of the last addForcesKeepingEnergy(), with the same bits; an element that
-  /// kept nothing since (the default) computes it now.
+  /// setForces() that may keep what addKeptEnergy() then adds, as addForcesKeepingEnergy() does. By
+  /// default, setForces().
+  virtual void setForcesKeepingEnergy(const ForceContext& context, const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v,
+                                      Eigen::Matrix3Xd& force) const
+  {
+    setForces(context, x, v, force);
+  }
+  /// addEnergy() at the x of the last addForcesKeepingEnergy() or setForcesKeepingEnergy(), with the
+  /// same bits; an element that kept nothing since (the default) computes it now.
   virtual void addKeptEnergy(const ForceContext& context, const Eigen::Matrix3Xd& x, double& energy) const
   {
     addEnergy(context, x, energy);

@@ -20,9 +20,21 @@ public:
   void setForces(const ForceContext& context, const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v,
                  Eigen::Matrix3Xd& force) const override;
   void addEnergy(const ForceContext& context, const Eigen::Matrix3Xd& x, double& energy) const override;
+  /// setForces() and addEnergy()'s sums in one pass over the particles.
+  void setForcesKeepingEnergy(const ForceContext& context, const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v,
+                              Eigen::Matrix3Xd& force) const override;
+  void addKeptEnergy(const ForceContext& context, const Eigen::Matrix3Xd& x, double& energy) const override;
 
 private:
+  // The energy of one particle at x (addEnergy()'s term).
+  static double energyOf(const ForceContext& context, const Eigen::Matrix3Xd& x, int i)
+  {
+    return context.pinned[i] ? 0.0 : context.mass[i] * context.gravity.dot(x.col(i));
+  }
+
   mutable std::vector<double> chunk_energy_;  // addEnergy(): per chunk of particles, its energy
+  mutable double kept_sum_ = 0.0;             // setForcesKeepingEnergy(): addEnergy()'s sum at its x
+  mutable bool energy_kept_ = false;          // kept_sum_ is of the last setForcesKeepingEnergy()'s x
 };
 
 }  // namespace core

@@ -203,7 +203,8 @@ public:
   /// register (cg_avx2.h), which they do where the processor has AVX2, with the same bits as the
   /// scalar passes. Off forces the scalar passes (for the test that compares the two, and for
   /// benchmarks); on takes effect only where the processor has AVX2. For every solver at once, and
-  /// for the direct solver's supernodal products too (SparseBlockLdlt::setUseAvx2()).
+  /// for the direct solver's supernodal products too (SparseBlockLdlt::setUseAvx2()), and the
+  /// springs' force pass and Jacobian parts (addSpringForcesOf(), springJacobianPartsOf()).
   static bool useAvx2();
   static void setUseAvx2(bool use);
 
