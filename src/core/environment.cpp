@@ -301,5 +301,12 @@ void resolveCollisions(const Environment& env, ParticlePool& pool, const Eigen::
   });
 }
 
+void resolveCollisionsIn(int begin, int end, const Environment& env, ParticlePool& pool,
+                         const Eigen::Matrix3Xd* start_velocity, const Eigen::Matrix3Xd* start_position,
+                         double thickness, double h)
+{
+  if (env.hasColliders()) resolveCollisionsOf(begin, end, env, pool, start_velocity, start_position, thickness, h);
+}
+
 }  // namespace core
 }  // namespace particle_sim

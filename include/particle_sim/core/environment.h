@@ -132,6 +132,11 @@ struct Environment
 void resolveCollisions(const Environment& env, ParticlePool& pool, const Eigen::Matrix3Xd* start_velocity = nullptr,
                        const Eigen::Matrix3Xd* start_position = nullptr, double thickness = 0.0, double h = 0.0,
                        WorkerPool* workers = nullptr);
+/// resolveCollisions() for the particles [begin, end) alone (the same bits for each), for a pass
+/// that moves a chunk of particles and resolves its collisions while the chunk is in the cache.
+void resolveCollisionsIn(int begin, int end, const Environment& env, ParticlePool& pool,
+                         const Eigen::Matrix3Xd* start_velocity = nullptr,
+                         const Eigen::Matrix3Xd* start_position = nullptr, double thickness = 0.0, double h = 0.0);
 
 }  // namespace core
 }  // namespace particle_sim
