@@ -6,6 +6,7 @@
 
 #include "particle_sim/core/names.h"
 #include "particle_sim/core/validation.h"
+#include "particle_sim/core/worker_pool.h"
 
 namespace particle_sim
 {
@@ -219,20 +220,22 @@ void EmitterBody::step(double dt, const Environment& env)
   double* const x = p.position.data();
   double* const v = p.velocity.data();
   double* const age = p.age.data();
-  for (int begin = 0; begin < p.live_count; begin += kChunk)
-  {
-    const int end = std::min(begin + kChunk, p.live_count);
-    for (int i = begin; i < end; ++i)
+  shareLoop(workers_, p.live_count, kParticlesPerVectorChunk, [&](int first, int last) {
+    for (int begin = first; begin < last; begin += kChunk)
     {
-      for (int c = 0; c < 3; ++c)
+      const int end = std::min(begin + kChunk, last);
+      for (int i = begin; i < end; ++i)
       {
-        x[3 * i + c] = start[3 * i + c] + (dt * v[3 * i + c] + half_g_dt2[c]);
-        v[3 * i + c] += g_dt[c];
+        for (int c = 0; c < 3; ++c)
+        {
+          x[3 * i + c] = start[3 * i + c] + (dt * v[3 * i + c] + half_g_dt2[c]);
+          v[3 * i + c] += g_dt[c];
+        }
+        age[i] += dt;
       }
-      age[i] += dt;
+      resolveCollisionsIn(begin, end, env, p, nullptr, &p.previous_position, def_.contact_thickness, dt);
     }
-    resolveCollisionsIn(begin, end, env, p, nullptr, &p.previous_position, def_.contact_thickness, dt);
-  }
+  });
 
   // 2. Recycle particles older than their lifetime: the last live particle takes the slot.
   for (int i = 0; i < p.live_count;)

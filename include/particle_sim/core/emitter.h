@@ -69,9 +69,11 @@ public:
   BodyKind kind() const override { return BodyKind::Emitter; }
   const EmitterDef& definition() const { return def_; }
 
-  /// Ages, recycles, emits, then moves every particle along its exact ballistic path
-  /// x += v dt + g dt^2 / 2, v += g dt, and resolves collisions.
+  /// Moves every particle along its exact ballistic path x += v dt + g dt^2 / 2, v += g dt, ages it
+  /// and resolves its collisions (shared with the workers by chunks of particles), then recycles
+  /// and emits.
   void step(double dt, const Environment& env) override;
+  void setWorkers(WorkerPool* workers) override { workers_ = workers; }
   void reset() override;
   /// Σ ½ m |v|² over the live particles [J].
   double kineticEnergy() const override;
@@ -93,6 +95,7 @@ private:
   double pending_ = 0.0;  // fractional particles owed by the continuous rate
   long long emitted_ = 0;
   long long dropped_ = 0;
+  WorkerPool* workers_ = nullptr;  // the world's, for the motion's pass
 };
 
 }  // namespace core
