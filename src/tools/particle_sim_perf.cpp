@@ -1122,6 +1122,7 @@ void emitters(std::ostream& out, bool quick)
   {
     core::WorldDef world_def;
     world_def.dt = 1.0 / 60.0;
+    world_def.threads = 1;  // the throughput of one core
     world_def.max_particles_per_body = n;
     world_def.max_particles_per_world = n;
     core::World world(world_def);
