@@ -124,9 +124,9 @@ struct Spring
 /// null, each spring's springEnergy() into energy[s − first] as well, and with `energy_sum` not null
 /// (and `energy` given) added to *energy_sum one after the other in the order of the list. The
 /// explicit methods' force pass (SpringForces), one thread's whole list or a chunk's run of springs.
-/// With `vectorized` (where
-/// the processor has AVX2: springPartsVectorized()), four springs at a time, each lane in
-/// springForce()'s operations and order (no fused multiply-add), so the same bits as without.
+/// With `vectorized` (where the processor has AVX2: springPartsVectorized()), four springs at a time,
+/// each lane in springForce()'s operations and order (no fused multiply-add), so the same bits as
+/// without.
 void addSpringForcesOf(const Spring* first, const Spring* last, const double* x, const double* v, double* force,
                        double* energy, double* energy_sum, bool add_i, bool add_j, bool vectorized);
 
