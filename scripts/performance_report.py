@@ -993,7 +993,13 @@ def main():
                  'lanes of 128-bit registers and every coordinate loaded and added alone: what is left is most '
                  'likely the instructions it issues, so the way to 2× the floor is fewer of them a spring (wider '
                  'registers, a particle\'s coordinates loaded at once) and the passes over the particles folded into '
-                 'the force pass.')
+                 'the force pass. Since 2026-12-07 the pass takes four springs at a time in AVX2\'s lanes where the '
+                 'processor has it (README, "The explicit force pass": two particles\' first two coordinates in one '
+                 'register, the third by broadcasts and blends, end i\'s force in registers, each chunk\'s '
+                 'energies summed as it goes; the same bits): side by side with the two-lane pass, 6.6–7.0 against '
+                 '8.6–8.9 ns a step and spring at 64², 7.4–7.9 against 9.7–10.7 ns at 256² (one thread). The '
+                 'divider still does not bound it (one division and three products instead of three divisions: '
+                 'no faster), nor does end i in registers alone.')
     lines.append('')
     collision_rows = [r for r in rows if r['case'] == 'selfcollision']
     if collision_rows:
