@@ -70,9 +70,9 @@ private:
   /// addJacobians()'s blocks shared by chunks of particles, from the springs' parts of this step
   /// (the pairs, A's diagonal blocks and b: ImplicitEulerSolver::addAlongPairEnds()).
   void addJacobiansShared(WorkerPool& workers, int particles, ImplicitEulerSolver& solver) const;
-  /// Rebuilds the chunks' spring lists (or ends_) for `particles` particles when the springs or
-  /// the particle count changed.
-  void indexEnds(int particles) const;
+  /// Rebuilds the chunks' spring lists (or ends_) for `particles` particles shared by `threads`
+  /// threads when the springs, the particle count or the chunk size changed.
+  void indexEnds(int particles, int threads) const;
 
   std::vector<Spring> built_;                     // as built (reset puts these constants back)
   std::vector<std::array<int, 4>> built_blocks_;  // per built spring: its blocks ii, ij, ji, jj
@@ -86,6 +86,7 @@ private:
   mutable std::vector<int> ends_;       // 2 s for end i of spring s, 2 s + 1 for end j, ascending s
   mutable bool ends_valid_ = false;
   mutable bool by_chunks_ = false;  // chunks_ in use (else the two passes); decided once
+  mutable int particle_chunk_ = 0;  // particles per chunk of chunks_ (indexEnds())
   mutable bool mode_decided_ = false;
   mutable PairChunks chunks_;                 // the springs by chunks of particles (by_chunks_)
   mutable std::vector<double> chunk_energy_;  // addEnergy(): per chunk of springs, its energy
