@@ -78,6 +78,13 @@ template <bool kAddI, bool kAddJ>
   }
 }
 
+// *sum += values[0], values[1], ... values[count − 1], one after the other (the energies' running sum).
+inline void addInOrder(double* sum, const double* values, long count)
+{
+  for (long k = 0; k < count; ++k)
+    *sum += values[k];
+}
+
 // addSpringForcesOf()'s scalar form. Which ends is fixed for the whole run, not tested per spring,
 // so that a chunk's run costs what the one-thread loop costs (this function over every spring, both
 // ends).
@@ -224,9 +231,7 @@ __attribute__((target("avx2"))) void addRunForcesAvx2(const Spring* first, const
       store_held();
       for (int k = 0; k < 4; ++k)
         addSpringForce<kAddI, kAddJ>(s + k, xs, vs, fs, energy ? energy + (s + k - first) : nullptr);
-      if (energy_sum)
-        *energy_sum = (((*energy_sum + energy[s - first]) + energy[s + 1 - first]) + energy[s + 2 - first]) +
-                      energy[s + 3 - first];
+      if (energy_sum) addInOrder(energy_sum, energy + (s - first), 4);
       continue;
     }
     const __m256d ux = _mm256_div_pd(dx, length), uy = _mm256_div_pd(dy, length), uz = _mm256_div_pd(dz, length);
@@ -252,7 +257,7 @@ __attribute__((target("avx2"))) void addRunForcesAvx2(const Spring* first, const
       const __m256d spring_energy = _mm256_mul_pd(_mm256_mul_pd(_mm256_mul_pd(half, stiffness), stretch), stretch);
       double* const four = energy + (s - first);
       _mm256_storeu_pd(four, _mm256_permute4x64_pd(spring_energy, 0xD8));  // lanes a, b, c, d
-      if (energy_sum) *energy_sum = (((*energy_sum + four[0]) + four[1]) + four[2]) + four[3];
+      if (energy_sum) addInOrder(energy_sum, four, 4);
     }
     const __m256d fx = _mm256_mul_pd(magnitude, ux), fy = _mm256_mul_pd(magnitude, uy);
     _mm256_store_pd(first_two, _mm256_unpacklo_pd(fx, fy));
@@ -285,7 +290,7 @@ __attribute__((target("avx2"))) void addRunForcesAvx2(const Spring* first, const
   for (; s != last; ++s)
   {
     addSpringForce<kAddI, kAddJ>(s, xs, vs, fs, energy ? energy + (s - first) : nullptr);
-    if (energy_sum) *energy_sum += energy[s - first];
+    if (energy_sum) addInOrder(energy_sum, energy + (s - first), 1);
   }
 }
 #endif
@@ -364,11 +369,7 @@ void addRunForces(const Spring* first, const Spring* last, const double* x, cons
 #endif
   (void)vectorized;
   addRunForcesScalar<kAddI, kAddJ>(first, last, x, v, force, energy);
-  if (energy_sum)
-  {
-    for (long k = 0; k < last - first; ++k)
-      *energy_sum += energy[k];
-  }
+  if (energy_sum) addInOrder(energy_sum, energy, last - first);
 }
 
 void addSpringForcesOf(const Spring* first, const Spring* last, const double* x, const double* v, double* force,

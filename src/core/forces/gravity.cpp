@@ -20,7 +20,7 @@ void GravityForce::setForces(const ForceContext& context, const Eigen::Matrix3Xd
   // (it turns a −0 into +0), kept by the compiler as it would change that sign.
   shareLoop(context.workers, static_cast<int>(x.cols()), kParticlesPerVectorChunk, [&](int begin, int end) {
     for (int i = begin; i < end; ++i)
-      force.col(i) = (context.mass[i] * context.gravity).array() + 0.0;
+      force.col(i) = forceOn(context, i);
   });
 }
 
@@ -40,7 +40,7 @@ void GravityForce::setForcesKeepingEnergy(const ForceContext& context, const Eig
                           double sum = 0.0;
                           for (int i = first; i < last; ++i)
                           {
-                            force.col(i) = (context.mass[i] * context.gravity).array() + 0.0;
+                            force.col(i) = forceOn(context, i);
                             sum += energyOf(context, x, i);
                           }
                           return sum;

@@ -26,6 +26,11 @@ public:
   void addKeptEnergy(const ForceContext& context, const Eigen::Matrix3Xd& x, double& energy) const override;
 
 private:
+  // setForces()'s force on particle i: 0 + m_i g.
+  static Eigen::Vector3d forceOn(const ForceContext& context, int i)
+  {
+    return (context.mass[i] * context.gravity).array() + 0.0;
+  }
   // The energy of one particle at x (addEnergy()'s term).
   static double energyOf(const ForceContext& context, const Eigen::Matrix3Xd& x, int i)
   {
