@@ -202,15 +202,54 @@ double EmitterBody::potentialEnergy(const Eigen::Vector3d& gravity) const
   return energy;
 }
 
+void EmitterBody::snapshotNextStep(int stride, ParticleSnapshot* into)
+{
+  snapshot_stride_ = into != nullptr ? std::max(stride, 1) : 0;
+  snapshot_ = into;
+}
+
+namespace
+{
+// Copies particle i into slot i / stride of the snapshot.
+inline void copyIntoSnapshot(const ParticlePool& p, int i, int stride, ParticleSnapshot& snapshot)
+{
+  const int k = i / stride;
+  for (int c = 0; c < 3; ++c)
+    snapshot.position[3 * static_cast<std::size_t>(k) + c] = p.position(c, i);
+  snapshot.age[static_cast<std::size_t>(k)] = p.age[i];
+}
+
+// Resizes the snapshot for the particles [0, live): ⌈live / stride⌉ of them.
+void sizeSnapshot(int live, int stride, ParticleSnapshot& snapshot)
+{
+  const std::size_t copied = static_cast<std::size_t>((live + stride - 1) / stride);
+  snapshot.position.resize(3 * copied);
+  snapshot.age.resize(copied);
+}
+
+// The first multiple of `stride` at or after `i`.
+inline int firstMultipleFrom(int i, int stride)
+{
+  return (i + stride - 1) / stride * stride;
+}
+}  // namespace
+
 void EmitterBody::step(double dt, const Environment& env)
 {
   ParticlePool& p = particles_;
+  // A snapshot asked for by snapshotNextStep(): this step only.
+  ParticleSnapshot* const snapshot = snapshot_;
+  const int stride = snapshot_stride_;
+  snapshot_ = nullptr;
+  snapshot_stride_ = 0;
+  if (snapshot) sizeSnapshot(p.live_count, stride, *snapshot);
 
   // 1. Exact ballistic motion under constant gravity (free particles need no integrator), then the
   //    colliders, a chunk of particles at a time while its particles are still in the cache (each
   //    particle alone: the same bits as a pass of each over all of them). The positions become the
   //    previous ones by a swap of the arrays, not a copy; the new ones are written over the old
-  //    previous ones (x' = x + (h v + h² g / 2), as before).
+  //    previous ones (x' = x + (h v + h² g / 2), as before). A snapshot copies the chunk's
+  //    particles it takes while they are in the cache, too.
   constexpr int kChunk = 1024;
   const Eigen::Vector3d half_g_dt2 = 0.5 * dt * dt * env.gravity;
   const Eigen::Vector3d g_dt = dt * env.gravity;
@@ -234,17 +273,27 @@ void EmitterBody::step(double dt, const Environment& env)
         age[i] += dt;
       }
       resolveCollisionsIn(begin, end, env, p, nullptr, &p.previous_position, def_.contact_thickness, dt);
+      if (snapshot)
+        for (int i = firstMultipleFrom(begin, stride); i < end; i += stride)
+          copyIntoSnapshot(p, i, stride, *snapshot);
     }
   });
 
-  // 2. Recycle particles older than their lifetime: the last live particle takes the slot.
+  // 2. Recycle particles older than their lifetime: the last live particle takes the slot (and a
+  //    snapshot takes it again there).
   for (int i = 0; i < p.live_count;)
   {
     if (p.age[i] >= def_.lifetime)
+    {
       p.copy(--p.live_count, i);
+      if (snapshot && i % stride == 0 && i < p.live_count) copyIntoSnapshot(p, i, stride, *snapshot);
+    }
     else
+    {
       ++i;
+    }
   }
+  const int survivors = p.live_count;
 
   // 3. Emit what the continuous rate owes for this step; new particles start at age 0. The debt
   //    is counted in doubles (capped at 2^53, where they stop being exact integers) and only what
@@ -260,6 +309,15 @@ void EmitterBody::step(double dt, const Environment& env)
   dropped_ = dropped_ > std::numeric_limits<long long>::max() - not_emitted ? std::numeric_limits<long long>::max()
                                                                             : dropped_ + not_emitted;
   emit(due);
+
+  // The snapshot of what emission added.
+  if (snapshot)
+  {
+    sizeSnapshot(p.live_count, stride, *snapshot);
+    for (int i = firstMultipleFrom(survivors, stride); i < p.live_count; i += stride)
+      copyIntoSnapshot(p, i, stride, *snapshot);
+    snapshot->stride = stride;
+  }
 }
 
 }  // namespace core

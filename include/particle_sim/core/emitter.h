@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <random>
 #include <string>
+#include <vector>
 
 #include "particle_sim/core/body.h"
 #include "particle_sim/core/status.h"
@@ -58,6 +59,16 @@ Status validate(const EmitterDef& def, int max_particles_cap = kDefaultMaxPartic
 /// one step than the pool can ever hold, so everything above it could only be dropped.
 double maxEmitterRate(int max_particles, double dt);
 
+/// Every `stride`-th live particle of an emitter (indices 0, stride, 2 stride, ...), as a step left
+/// them: what a drawing of the particles needs, copied out for another thread to read while the
+/// emitter steps on (EmitterBody::snapshotNextStep()).
+struct ParticleSnapshot
+{
+  int stride = 0;                ///< of the copy taken; 0 while none is
+  std::vector<double> position;  ///< [m] x, y, z of each copied particle, in index order
+  std::vector<double> age;       ///< [s] each copied particle's
+};
+
 /// An emitter and the particles it has emitted. Its pool holds `max_particles` particles, the
 /// live ones first; a particle older than `lifetime` is recycled, and an emission that finds the
 /// pool full is dropped (counted in `droppedCount()`).
@@ -80,6 +91,13 @@ public:
   /// Σ −m g · x over the live particles [J]; free particles store no other energy.
   double potentialEnergy(const Eigen::Vector3d& gravity) const override;
 
+  /// Asks the next step() for a snapshot of every `stride`-th live particle (stride ≥ 1) into
+  /// `into`, kept by the caller (its vectors keep their capacity); the step sets into->stride to
+  /// `stride` once it is taken. It is taken while the step has each particle in the cache: the
+  /// motion's chunks copy theirs, and the slots that recycling and emission write afterwards are
+  /// copied again, so it equals a copy made after the step, at a fraction of the memory traffic.
+  /// Only the next step; snapshotNextStep(0, nullptr) takes the request back.
+  void snapshotNextStep(int stride, ParticleSnapshot* into);
   long long emittedCount() const { return emitted_; }
   long long droppedCount() const { return dropped_; }
 
@@ -96,6 +114,8 @@ private:
   long long emitted_ = 0;
   long long dropped_ = 0;
   WorkerPool* workers_ = nullptr;  // the world's, for the motion's pass
+  int snapshot_stride_ = 0;                   // snapshotNextStep()'s request, for the next step only
+  ParticleSnapshot* snapshot_ = nullptr;
 };
 
 }  // namespace core
