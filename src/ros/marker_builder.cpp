@@ -238,40 +238,85 @@ void addSpringBody(const core::SpringNetworkBody& body, int stride, const ros::T
   out.markers.push_back(std::move(pins));
 }
 
-// `stride`: every how many live particles one is drawn.
+// `stride`: every how many live particles one is drawn. The marker goes into the array without
+// points; its particles are in the next of `samples`, for finishMarkers(): the snapshot its step
+// took for it, or else a copy made here.
 void addEmitter(const core::EmitterBody& emitter, int stride, const ros::Time& stamp, const MarkerStyle& style,
-                visualization_msgs::MarkerArray& out)
+                visualization_msgs::MarkerArray& out, MarkerSamples& samples)
 {
-  const core::ParticlePool& p = emitter.particles();
   visualization_msgs::Marker marker = makeMarker(emitter.name(), kParticlesMarkerId, stamp, style);
   marker.type = visualization_msgs::Marker::POINTS;
   marker.scale.x = marker.scale.y = style.particle_size;
-  marker.points.reserve(p.size() / stride + 1);
-  marker.colors.reserve(p.size() / stride + 1);
-  const double lifetime = emitter.definition().lifetime;
-  for (int i = 0; i < p.size(); i += stride)
+  out.markers.push_back(std::move(marker));
+
+  if (samples.used == samples.emitters.size()) samples.emitters.emplace_back();
+  EmitterMarkerSample& sample = samples.emitters[samples.used++];
+  sample.marker = out.markers.size() - 1;
+  sample.lifetime = emitter.definition().lifetime;
+  core::ParticleSnapshot& copy = sample.particles;
+  if (samples.asked && sample.emitter == &emitter && copy.stride == stride) return;  // the step's snapshot
+
+  const core::ParticlePool& p = emitter.particles();
+  const std::size_t drawn = static_cast<std::size_t>((p.size() + stride - 1) / stride);
+  copy.stride = stride;
+  copy.position.resize(3 * drawn);
+  copy.age.resize(drawn);
+  for (int i = 0, k = 0; i < p.size(); i += stride, ++k)
   {
-    const auto x = p.position.col(i);
+    for (int c = 0; c < 3; ++c)
+      copy.position[3 * static_cast<std::size_t>(k) + c] = p.position(c, i);
+    copy.age[static_cast<std::size_t>(k)] = p.age[i];
+  }
+}
+
+// An emitter's marker from its sample: a point and a colour by age for each finite particle.
+void finishEmitter(const EmitterMarkerSample& sample, visualization_msgs::Marker& marker)
+{
+  const core::ParticleSnapshot& copy = sample.particles;
+  const std::size_t count = copy.age.size();
+  marker.points.reserve(count);
+  marker.colors.reserve(count);
+  for (std::size_t k = 0; k < count; ++k)
+  {
+    const Eigen::Map<const Eigen::Vector3d> x(&copy.position[3 * k]);
     if (!x.allFinite()) continue;  // never publish NaN; such a body is reported elsewhere
     marker.points.push_back(toPoint(x));
-    marker.colors.push_back(ageColor(p.age[i] / lifetime));
+    marker.colors.push_back(ageColor(copy.age[k] / sample.lifetime));
   }
-  if (marker.points.empty())
-  {
-    marker.action = visualization_msgs::Marker::DELETE;
-    marker.colors.clear();
-  }
-  else
-  {
-    marker.action = visualization_msgs::Marker::ADD;
-  }
-  out.markers.push_back(std::move(marker));
+  marker.action = marker.points.empty() ? visualization_msgs::Marker::DELETE : visualization_msgs::Marker::ADD;
+}
+
+// The strides of the bodies' particle markers: style.max_points shared between them.
+std::vector<int> particleStrides(const core::World& world, const MarkerStyle& style)
+{
+  std::vector<int> counts;
+  counts.reserve(world.bodies().size());
+  for (const auto& body : world.bodies())
+    counts.push_back(drawnParticleCount(*body));
+  return decimationStrides(counts, style.max_points);
 }
 }  // namespace
 
 visualization_msgs::MarkerArray buildMarkers(const core::World& world, const ros::Time& stamp, const MarkerStyle& style,
                                              bool delete_all, const std::vector<std::string>& removed)
 {
+  MarkerSamples samples;
+  visualization_msgs::MarkerArray out = buildMarkersDeferred(world, stamp, style, delete_all, removed, samples);
+  finishMarkers(samples, out);
+  return out;
+}
+
+void finishMarkers(const MarkerSamples& samples, visualization_msgs::MarkerArray& markers)
+{
+  for (std::size_t e = 0; e < samples.used; ++e)
+    finishEmitter(samples.emitters[e], markers.markers.at(samples.emitters[e].marker));
+}
+
+visualization_msgs::MarkerArray buildMarkersDeferred(const core::World& world, const ros::Time& stamp,
+                                                     const MarkerStyle& style, bool delete_all,
+                                                     const std::vector<std::string>& removed, MarkerSamples& samples)
+{
+  samples.used = 0;
   visualization_msgs::MarkerArray out;
   if (delete_all)
   {
@@ -326,20 +371,44 @@ visualization_msgs::MarkerArray buildMarkers(const core::World& world, const ros
                Eigen::Quaterniond::Identity(), Eigen::Vector3d::Constant(diameter));
   }
   // The bodies' particle markers share style.max_points between them.
-  std::vector<int> counts;
-  counts.reserve(world.bodies().size());
-  for (const auto& body : world.bodies())
-    counts.push_back(drawnParticleCount(*body));
-  const std::vector<int> strides = decimationStrides(counts, style.max_points);
+  const std::vector<int> strides = particleStrides(world, style);
   for (std::size_t b = 0; b < world.bodies().size(); ++b)
   {
     const core::Body& body = *world.bodies()[b];
     if (body.kind() == core::BodyKind::Emitter)
-      addEmitter(static_cast<const core::EmitterBody&>(body), strides[b], stamp, style, out);
+      addEmitter(static_cast<const core::EmitterBody&>(body), strides[b], stamp, style, out, samples);
     else if (body.kind() == core::BodyKind::SpringNetwork)
       addSpringBody(static_cast<const core::SpringNetworkBody&>(body), strides[b], stamp, style, out);
   }
+  samples.asked = false;
   return out;
+}
+
+void snapshotNextStep(core::World& world, const MarkerStyle& style, MarkerSamples& samples)
+{
+  const std::vector<int> strides = particleStrides(world, style);
+  // Every emitter's entry first: the emitters keep pointers into them.
+  const auto emitters = static_cast<std::size_t>(
+      std::count_if(world.bodies().begin(), world.bodies().end(),
+                    [](const auto& body) { return body->kind() == core::BodyKind::Emitter; }));
+  if (samples.emitters.size() < emitters) samples.emitters.resize(emitters);
+  std::size_t e = 0;
+  for (std::size_t b = 0; b < world.bodies().size(); ++b)
+  {
+    if (world.bodies()[b]->kind() != core::BodyKind::Emitter) continue;
+    auto& emitter = static_cast<core::EmitterBody&>(*world.bodies()[b]);
+    EmitterMarkerSample& sample = samples.emitters[e++];
+    sample.emitter = &emitter;
+    sample.particles.stride = 0;  // until the step takes it
+    emitter.snapshotNextStep(strides[b], &sample.particles);
+  }
+  samples.asked = true;
+}
+
+void forgetSnapshotRequests(core::World& world)
+{
+  for (const auto& body : world.bodies())
+    if (body->kind() == core::BodyKind::Emitter) static_cast<core::EmitterBody&>(*body).snapshotNextStep(0, nullptr);
 }
 
 }  // namespace ros_interface

@@ -330,8 +330,16 @@ std::uint64_t SimNode::stepPhysics(std::uint64_t steps, ServeRequests serve)
   double serving = 0.0;  // [s] spent on requests between steps, not on physics
   std::uint64_t ran = 0;
   std::uint64_t segment = 0;  // the step the frame targets were last computed at
+  bool snapshot_asked = false;
   while (ran < steps)
   {
+    // The tick's last step copies the emitters' particles that the markers will draw as it moves
+    // them (marker_builder.h), when markers are wanted.
+    if (ran + 1 == steps && markers_pub_.getNumSubscribers() > 0)
+    {
+      snapshotNextStep(*world_, style_, marker_samples_[free_samples_]);
+      snapshot_asked = true;
+    }
     // tf-followed pins move in equal parts towards this tick's frame pose.
     frame_followers_.moveTargets(*world_, ran - segment, steps - segment);
     // The step every front-end shares: scripted frames where they are at the end of this step
@@ -352,6 +360,7 @@ std::uint64_t SimNode::stepPhysics(std::uint64_t steps, ServeRequests serve)
       segment = ran;
     }
   }
+  if (snapshot_asked) forgetSnapshotRequests(*world_);
   const double seconds = secondsSince(start) - serving;
   for (Window* window : {&status_window_, &diagnostics_window_})
   {
@@ -501,10 +510,19 @@ void SimNode::publishHeavyMessages(const ros::Time& stamp)
   if (points_wanted)
     sends_.push_back(sendOf(points_pub_, boost::make_shared<sensor_msgs::PointCloud2>(buildPointCloud(
                                              *world_, stamp, settings_.frame_id, settings_.points_surface_only))));
+  // Markers: the emitters' particles (up to ~max_marker_points of them) come from the tick's last
+  // step, and their points and colours are written by the thread that sends them, off the physics
+  // thread. The other set of samples is free for the next tick.
   if (markers_wanted)
   {
-    sends_.push_back(sendOf(markers_pub_, boost::make_shared<visualization_msgs::MarkerArray>(buildMarkers(
-                                              *world_, stamp, style_, delete_all_pending_, removed_bodies_))));
+    MarkerSamples& samples = marker_samples_[free_samples_];
+    free_samples_ = 1 - free_samples_;
+    auto markers = boost::make_shared<visualization_msgs::MarkerArray>(
+        buildMarkersDeferred(*world_, stamp, style_, delete_all_pending_, removed_bodies_, samples));
+    sends_.push_back([publisher = markers_pub_, markers, samples = &samples] {
+      finishMarkers(*samples, *markers);
+      publisher.publish(markers);
+    });
     delete_all_pending_ = false;
     removed_bodies_.clear();
   }

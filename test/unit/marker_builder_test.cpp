@@ -240,6 +240,78 @@ TEST(MarkerBuilder, AParticleMarkerHoldsAtMostMaxPointsEveryKthParticle)
   EXPECT_EQ(markers[ros_interface::kPinsMarkerId].points.size(), 1u);
 }
 
+TEST(MarkerBuilder, DeferredMarkersShowTheWorldAsItWasWhenBuiltWhateverItDoesMeanwhile)
+{
+  // The node builds the array at a tick and the publishing thread writes the emitters' points while
+  // the physics steps on: finished after 50 more steps, the array still equals, field by field, the
+  // one built whole at the tick; and the samples' vectors serve the next array, of another size.
+  core::World world = makeWorld();
+  ros_interface::MarkerStyle style;
+  style.max_points = 40;  // the fountain's particles decimated
+  ros_interface::MarkerSamples samples;
+  auto deferred = ros_interface::buildMarkersDeferred(world, ros::Time(3.0), style, true, {"gone"}, samples);
+  const auto whole = ros_interface::buildMarkers(world, ros::Time(3.0), style, true, {"gone"});
+  const core::Body& fountain = *world.findBody("fountain");
+  const Eigen::Vector3d first_then = fountain.particles().position.col(0);
+  for (int k = 0; k < 50; ++k)
+    world.step();
+  ASSERT_NE(fountain.particles().position.col(0), first_then);
+  ros_interface::finishMarkers(samples, deferred);
+  ASSERT_EQ(deferred.markers.size(), whole.markers.size());
+  for (std::size_t m = 0; m < whole.markers.size(); ++m)
+  {
+    SCOPED_TRACE("marker " + whole.markers[m].ns);
+    EXPECT_EQ(deferred.markers[m], whole.markers[m]);
+  }
+  const Marker& fountain_marker = whole.markers[samples.emitters[0].marker];
+  EXPECT_EQ(fountain_marker.ns, "fountain");
+  ASSERT_FALSE(fountain_marker.points.empty());
+  EXPECT_EQ(fountain_marker.points[0].x, first_then.x());
+
+  style.max_points = 1000000;  // all of them now: longer sample vectors
+  auto next = ros_interface::buildMarkersDeferred(world, ros::Time(4.0), style, false, {}, samples);
+  ros_interface::finishMarkers(samples, next);
+  const auto next_whole = ros_interface::buildMarkers(world, ros::Time(4.0), style, false, {});
+  EXPECT_EQ(next, next_whole);
+  EXPECT_EQ(samples.used, 2u);  // the fountain and the idle emitter
+}
+
+TEST(MarkerBuilder, TheEmittersOwnStepSnapshotsTheParticlesTheMarkersDraw)
+{
+  // Asked before a step, each emitter copies its drawn particles as it steps; the array built from
+  // those copies equals the one built from the world after the step. The copy is what the array
+  // uses (a value changed in it shows); a request taken back before the step is not used, and the
+  // particles are copied from the world instead.
+  core::World world = makeWorld();
+  ros_interface::MarkerStyle style;
+  style.max_points = 40;
+  ros_interface::MarkerSamples samples;
+  ros_interface::snapshotNextStep(world, style, samples);
+  world.step();
+  ros_interface::forgetSnapshotRequests(world);
+  ASSERT_GE(samples.emitters.size(), 2u);
+  const int fountain_count = world.findBody("fountain")->particles().size();
+  EXPECT_EQ(samples.emitters[0].particles.stride, ros_interface::decimationStride(fountain_count, 40));
+  auto from_step = ros_interface::buildMarkersDeferred(world, ros::Time(5.0), style, false, {}, samples);
+  ros_interface::finishMarkers(samples, from_step);
+  EXPECT_EQ(from_step, ros_interface::buildMarkers(world, ros::Time(5.0), style, false, {}));
+
+  ros_interface::snapshotNextStep(world, style, samples);
+  world.step();
+  ros_interface::forgetSnapshotRequests(world);
+  samples.emitters[0].particles.position[0] = 123.0;
+  auto marked = ros_interface::buildMarkersDeferred(world, ros::Time(6.0), style, false, {}, samples);
+  ros_interface::finishMarkers(samples, marked);
+  EXPECT_EQ(marked.markers[samples.emitters[0].marker].points[0].x, 123.0);
+
+  ros_interface::snapshotNextStep(world, style, samples);
+  ros_interface::forgetSnapshotRequests(world);
+  world.step();
+  auto copied = ros_interface::buildMarkersDeferred(world, ros::Time(7.0), style, false, {}, samples);
+  ros_interface::finishMarkers(samples, copied);
+  EXPECT_EQ(copied, ros_interface::buildMarkers(world, ros::Time(7.0), style, false, {}));
+}
+
 TEST(MarkerBuilder, BodiesShareMaxPointsFairlyAndASmallBodyIsDrawnWhole)
 {
   // A fountain of about 100 live particles beside a 10-particle network with one pin (9 free), and

@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "particle_sim/core/emitter.h"
 #include "particle_sim/core/world.h"
 
 namespace particle_sim
@@ -46,6 +47,46 @@ struct MarkerStyle
 /// point, finite values (non-finite particles are left out).
 visualization_msgs::MarkerArray buildMarkers(const core::World& world, const ros::Time& stamp, const MarkerStyle& style,
                                              bool delete_all, const std::vector<std::string>& removed);
+
+/// The particles an emitter's marker draws (every k-th live one, decimationStrides()), copied out of
+/// the world so that the marker's points and colours can be written on another thread.
+struct EmitterMarkerSample
+{
+  std::size_t marker = 0;               ///< the index of the emitter's marker in its array
+  double lifetime = 1.0;                ///< [s] the emitter's, for the colours by age
+  core::ParticleSnapshot particles;     ///< the drawn particles' positions and ages
+  const core::Body* emitter = nullptr;  ///< the emitter snapshotNextStep() asked
+};
+
+/// The emitters' samples of one array, in the order of the world's bodies. Kept from array to
+/// array, its vectors keep their capacity.
+struct MarkerSamples
+{
+  std::vector<EmitterMarkerSample> emitters;
+  std::size_t used = 0;  ///< emitters[0, used) belong to the last array
+  bool asked = false;    ///< snapshotNextStep() asked the emitters for this array's particles
+};
+
+/// Asks each emitter's next step for the particles its marker will draw (at the strides their
+/// counts give now), into `samples` (core::EmitterBody::snapshotNextStep(): copied as the step has
+/// them in the cache). buildMarkersDeferred() takes a snapshot where the emitter's step took one at
+/// the stride that still holds, and copies the particles out of the world where it did not (no step
+/// ran, the count moved to another stride). Call forgetSnapshotRequests() after the step.
+void snapshotNextStep(core::World& world, const MarkerStyle& style, MarkerSamples& samples);
+/// Takes back the requests of snapshotNextStep() that no step took.
+void forgetSnapshotRequests(core::World& world);
+
+/// buildMarkers() in two halves, so that the heavy half runs off the physics thread: this one, with
+/// the world at hand, builds every marker but leaves the emitters' without points, their particles
+/// copied into `samples` instead (a copy of the few numbers each point needs, into vectors reused
+/// from tick to tick); finishMarkers() then writes those markers' points and colours, anywhere, as
+/// long as nothing else touches the array and `samples` meanwhile. Together: buildMarkers()'s array.
+visualization_msgs::MarkerArray buildMarkersDeferred(const core::World& world, const ros::Time& stamp,
+                                                     const MarkerStyle& style, bool delete_all,
+                                                     const std::vector<std::string>& removed, MarkerSamples& samples);
+/// The second half of buildMarkersDeferred(): the emitters' points and colours (by age) from `samples`;
+/// an emitter with no finite particle gets a DELETE.
+void finishMarkers(const MarkerSamples& samples, visualization_msgs::MarkerArray& markers);
 
 /// Every k-th of `count` particles keeps a drawing within `max_points`: k = ⌈count / max_points⌉
 /// (1 when they fit).

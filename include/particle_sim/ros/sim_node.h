@@ -6,6 +6,7 @@
 #include <std_srvs/Trigger.h>
 #include <tf2_ros/transform_broadcaster.h>
 
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
@@ -114,7 +115,8 @@ private:
   // many ran.
   std::uint64_t stepPhysics(std::uint64_t steps, ServeRequests serve);
   void publish();
-  // Markers, meshes and point clouds: built here, sent by the publishing thread.
+  // Markers, meshes and point clouds: built here (the emitters' marker points by the publishing
+  // thread, from a copy of their particles), sent by the publishing thread.
   void publishHeavyMessages(const ros::Time& stamp);
   // ~pin_wrench/<body> of every body that has pins, each built only while subscribed.
   void publishPinWrenches(const ros::Time& stamp);
@@ -193,6 +195,12 @@ private:
   std::map<std::string, std::string> pin_wrench_topic_owner_;
   ros::Publisher clock_pub_;
   ros::Publisher status_pub_;
+  // The emitters' particles that markers draw, copied by the tick's last step (snapshotNextStep());
+  // the publishing thread writes the markers' points from them (buildMarkersDeferred()). Two sets:
+  // the loop fills marker_samples_[free_samples_] while the thread may still read the other, the
+  // set of the last markers sent. Before the thread, so that they outlive it.
+  std::array<MarkerSamples, 2> marker_samples_;
+  int free_samples_ = 0;
   // Sends markers, meshes and clouds (~publishing_thread); after the publishers, so that it stops
   // before they go. sends_ is the batch being built, its capacity kept from tick to tick.
   PublishingThread publishing_;
