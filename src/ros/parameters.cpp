@@ -30,6 +30,7 @@ NodeSettings readNodeSettings(const ros::NodeHandle& private_node)
   private_node.param(names::kRateParam, s.rate, s.rate);
   private_node.param(names::kDtParam, s.dt, s.dt);
   private_node.param(names::kRealTimeFactorParam, s.real_time_factor, s.real_time_factor);
+  private_node.param(names::kMaxLagParam, s.max_lag, s.max_lag);
   private_node.param(names::kPausedParam, s.paused, s.paused);
   private_node.param(names::kFrameIdParam, s.frame_id, s.frame_id);
   private_node.param(names::kParentFrameIdParam, s.parent_frame_id, s.parent_frame_id);
@@ -63,6 +64,9 @@ core::Status validate(const NodeSettings& s)
   if (!(s.real_time_factor >= kRealTimeFactor.min && s.real_time_factor <= kRealTimeFactor.max))
     return Status::failure(outOfRange("~real_time_factor", s.real_time_factor, kRealTimeFactor) +
                            " (0 = as fast as possible; negative values have no meaning)");
+  if (!(s.max_lag >= core::limits::kMaxLag.min && s.max_lag <= core::limits::kMaxLag.max))
+    return Status::failure(outOfRange("~max_lag", s.max_lag, core::limits::kMaxLag) +
+                           " (0 = never make up a late tick)");
   if (!(s.particle_size > 0.0 && std::isfinite(s.particle_size)))
     return Status::failure("~particle_size = " + formatReceived(s.particle_size) + " must be > 0 m");
   if (!(s.max_marker_points >= core::limits::kMarkerPoints.min &&

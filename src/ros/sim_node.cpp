@@ -19,6 +19,7 @@
 #include "particle_sim/ros/request_conversions.h"
 #include "particle_sim/ros/spring_constants.h"
 #include "particle_sim/ros/status_report.h"
+#include "particle_sim/ros/tick_schedule.h"
 #include "particle_sim/scene/scene.h"
 
 namespace particle_sim
@@ -284,11 +285,17 @@ void SimNode::run()
         settings_.real_time_factor > 0.0 ? sim_per_tick / settings_.real_time_factor : 0.0);
     const auto paused_period = std::chrono::duration<double>(1.0 / settings_.rate);
 
-    // Wait for the next tick; if we fell more than a tick behind, do not try to catch up.
-    next_tick += std::chrono::duration_cast<SteadyClock::duration>(paused_ ? paused_period : wall_period);
-    const auto now = SteadyClock::now();
-    if (next_tick < now - std::chrono::duration_cast<SteadyClock::duration>(paused_period)) next_tick = now;
-    if (step_job_.active) next_tick = now;  // a ~step in slices: the next slice at once
+    // Wait for the next tick. A late tick is made up: the next ones follow at once until the loop
+    // is back on its schedule, so that sim time keeps up with the wall clock through a hiccup (the
+    // machine busy with other work, a long service). Lag beyond ~max_lag is dropped instead (the
+    // schedule starts again from now; the diagnostics count it), and so is any while paused or
+    // running as fast as possible.
+    const bool keeps_schedule = !paused_ && settings_.real_time_factor > 0.0;
+    const NextTick next = nextTick(next_tick, paused_ ? paused_period : wall_period, SteadyClock::now(),
+                                   std::chrono::duration<double>(keeps_schedule ? settings_.max_lag : 0.0));
+    next_tick = next.due;
+    if (keeps_schedule) diagnostics_window_.lag_dropped += next.dropped;
+    if (step_job_.active) next_tick = SteadyClock::now();  // a ~step in slices: the next slice at once
     waitForTick(next_tick);
   }
 
@@ -966,6 +973,7 @@ void SimNode::produceDiagnostics(diagnostic_updater::DiagnosticStatusWrapper& st
   loop.stability_events = events_since_diagnostics_;
   loop.ticks_sent = w.ticks_sent;
   loop.ticks_skipped = w.ticks_skipped;
+  loop.lag_dropped = w.lag_dropped;
   buildDiagnostics(*world_, loop, settings_.diagnostic_max_strain, stat);
   events_since_diagnostics_ = 0;
 }

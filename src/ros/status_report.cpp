@@ -283,6 +283,7 @@ void buildDiagnostics(const core::World& world, const LoopFigures& loop, double 
   stat.add("ticks of markers, meshes and clouds sent since last report", loop.ticks_sent);
   stat.add("ticks of markers, meshes and clouds skipped since last report (publishing thread busy)",
            loop.ticks_skipped);
+  stat.add("wall time behind schedule and not made up since last report [s] (beyond ~max_lag)", loop.lag_dropped);
 }
 
 std::string statusLine(const core::World& world, double real_time_factor, double step_time_us, bool paused)

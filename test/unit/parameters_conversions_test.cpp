@@ -33,6 +33,7 @@ TEST(ParametersConversions, DefaultsAreValidAndDocumented)
   EXPECT_TRUE(validate(defaults).ok);
   EXPECT_EQ(defaults.rate, 50.0);             // [Hz]
   EXPECT_EQ(defaults.real_time_factor, 1.0);  // [-]
+  EXPECT_EQ(defaults.max_lag, 0.5);           // [s]
   EXPECT_EQ(defaults.dt, 0.0);                // the scene's
   EXPECT_EQ(defaults.frame_id, "world");
   EXPECT_EQ(defaults.parent_frame_id, "map");
@@ -55,6 +56,13 @@ TEST(ParametersConversions, RateAndRealTimeFactorAreRefusedOutsideTheirLimits)
             "~real_time_factor = -1 is out of range: must be in [0, 1000] - (0 = as fast as possible; negative "
             "values have no meaning)");
   s.real_time_factor = 0.0;  // as fast as possible
+  EXPECT_TRUE(validate(s).ok);
+
+  s.max_lag = -0.1;
+  EXPECT_EQ(refusal(s), "~max_lag = -0.1 is out of range: must be in [0, 60] s (0 = never make up a late tick)");
+  s.max_lag = kInf;
+  EXPECT_EQ(refusal(s), "~max_lag = inf is out of range: must be in [0, 60] s (0 = never make up a late tick)");
+  s.max_lag = 0.0;
   EXPECT_TRUE(validate(s).ok);
 }
 

@@ -30,6 +30,7 @@ constexpr Range kSolverVelocityTolerance{0.0, 1.0, "m/s"};  // cg_velocity_toler
 constexpr Range kGlobalDamping{0.0, 100.0, "1/s"};
 constexpr Range kRealTimeFactor{0.0, 1000.0, "-"};     // 0 = as fast as possible
 constexpr Range kPublishRate{0.1, 1000.0, "Hz"};
+constexpr Range kMaxLag{0.0, 60.0, "s"};           // ~max_lag: wall time the node's loop makes up when late
 constexpr Range kMarkerPoints{1, 1e7, "points"};       // points of all particle markers of a tick (~max_marker_points)
 constexpr Range kContactThickness{0.0, 1.0, "m"};      // distance a body keeps from ground and spheres
 constexpr Range kTearStrain{0.0, 100.0, "-"};          // tear_strain: a spring stretched past it breaks; 0 = never

@@ -55,6 +55,7 @@ constexpr const char* kMaxParticlesParam = "max_particles_per_body";
 constexpr const char* kMaxWorldParticlesParam = "max_particles_per_world";
 constexpr const char* kThreadsParam = "threads";
 constexpr const char* kStatusPeriodParam = "status_period";
+constexpr const char* kMaxLagParam = "max_lag";
 constexpr const char* kColorByStrainParam = "color_by_strain";
 constexpr const char* kStrainColorMaxParam = "strain_color_max";
 constexpr const char* kDiagnosticPeriodParam = "diagnostic_period";  // also read by diagnostic_updater

@@ -18,6 +18,7 @@ struct NodeSettings
   double rate = 50.0;                                  ///< ~rate [Hz] publish rate (and physics ticks)
   double dt = 0.0;                                     ///< ~dt [s] physics step; 0 = the scene's world.dt
   double real_time_factor = 1.0;                       ///< ~real_time_factor [-]; 0 = as fast as possible
+  double max_lag = 0.5;                                ///< ~max_lag [s] of wall time the loop makes up when late
   bool paused = false;                                 ///< ~paused: start paused
   std::string frame_id = "world";                      ///< ~frame_id: frame of every marker
   std::string parent_frame_id = "map";                 ///< ~parent_frame_id: tf parent of frame_id

@@ -163,6 +163,7 @@ private:
     bool paused = false;          // paused or stepped by ~step at some time in the window
     long long ticks_sent = 0;     // ticks whose markers, meshes and clouds were sent
     long long ticks_skipped = 0;  // ticks that skipped them: the publishing thread was busy
+    double lag_dropped = 0.0;     // [s] wall time the loop fell behind beyond ~max_lag and did not make up
     void restart(double sim_time, bool is_paused)
     {
       start = std::chrono::steady_clock::now();
@@ -171,6 +172,7 @@ private:
       step_seconds = 0.0;
       paused = is_paused;
       ticks_sent = ticks_skipped = 0;
+      lag_dropped = 0.0;
     }
   };
 

@@ -54,6 +54,9 @@ struct LoopFigures
   /// subscriber for them but skipped them because the publishing thread was still sending.
   long long ticks_sent = 0;
   long long ticks_skipped = 0;
+  /// [s] wall time the loop fell behind its schedule beyond ~max_lag since the last report: sim
+  /// time lost against the wall clock (times the target real-time factor), not made up.
+  double lag_dropped = 0.0;
 };
 
 /// /diagnostics' "simulation" status: OK "running" or "paused"; ERROR naming frozen bodies; WARN
