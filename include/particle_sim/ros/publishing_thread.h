@@ -18,11 +18,15 @@ namespace ros_interface
 /// the sends in order: each is a publish(), which is where roscpp serialises a message for its
 /// remote subscribers and writes it to their sockets. The loop never waits for it. While a batch is
 /// still being sent, busy() is true, and the loop skips that tick's heavy messages: the topic loses
-/// a tick, the physics loses nothing. The thread starts with the first batch.
+/// a tick, the physics loses nothing. The thread starts with the first batch, at a lower CPU
+/// priority than the loop's (its nice value kNiceIncrement higher): on a machine whose cores are
+/// all busy, the physics gets them first, and the messages are what waits.
 class PublishingThread
 {
 public:
   using Send = std::function<void()>;
+  /// How much higher the thread's nice value is than its creator's (Linux: per thread, up to 19).
+  static constexpr int kNiceIncrement = 10;
 
   PublishingThread() = default;
   /// stop().
