@@ -321,6 +321,9 @@ void SimNode::waitForTick(std::chrono::steady_clock::time_point next_tick)
 
 void SimNode::tick()
 {
+  // A snapshot of the emitters' particles serves the markers of the tick whose last step took it,
+  // never a later tick's (services between ticks may have changed the particles).
+  marker_samples_[free_samples_].asked = false;
   if (drag_markers_) drag_markers_->beginTick(*world_);  // mouse events from rviz, paused or not
   if (step_job_.active)
     runStepSlice();

@@ -114,7 +114,8 @@ private:
   long long emitted_ = 0;
   long long dropped_ = 0;
   WorkerPool* workers_ = nullptr;  // the world's, for the motion's pass
-  int snapshot_stride_ = 0;                   // snapshotNextStep()'s request, for the next step only
+  // snapshotNextStep()'s request, for the next step only.
+  int snapshot_stride_ = 0;
   ParticleSnapshot* snapshot_ = nullptr;
 };
 
