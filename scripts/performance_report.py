@@ -1072,9 +1072,12 @@ def main():
                      'with their real types, so every message is received and deserialised as rviz would, and reads '
                      '/clock against the wall clock. The real-time factor is the one reached (sim time over wall time '
                      'after a warm-up), with its one-second windows; the wall time between ticks should be 16.7 ms. '
-                     'The node, the probe and roscore share the machine\'s cores. Markers are built by the physics '
-                     'thread and sent by the publishing thread (README "Publishing"); the rows with '
-                     '`publishing_thread false` send them from the physics thread, for comparison.')
+                     'The node, the probe and roscore share the machine\'s cores. The loop makes up a late tick, '
+                     'up to ~max_lag (0.5 s; README "Time"), so a factor above 1 is lag from before the window made '
+                     'up within it. An emitter\'s marker points are written by the publishing thread from a snapshot '
+                     'that the tick\'s last step took of the particles, and that thread sends the messages at a '
+                     'lower priority than the physics (README "Publishing"); the rows with `publishing_thread false` '
+                     'build and send everything on the physics thread, for comparison.')
         lines.append('')
         lines.append('| case | particles | real-time factor (1-s windows) | wall ms between ticks, min (median–max) | '
                      'topics: rate, points per message | integrator |')
