@@ -36,6 +36,7 @@ RANGE_TEXT = {
     "kGlobalDamping": "global damping (`world.global_damping`, live `global_damping`)",
     "kRealTimeFactor": "real-time factor (`~real_time_factor`, live; 0 = as fast as possible)",
     "kPublishRate": "publish rate (`~rate`, live)",
+    "kMaxLag": "wall time a late node loop makes up (`~max_lag`; 0 = none)",
     "kMarkerPoints": "points of all particle markers of one tick together (`~max_marker_points`; more live particles are decimated evenly)",
     "kContactThickness": "distance a body keeps from ground and spheres (`contact_thickness`)",
     "kTearStrain": "strain past which a spring breaks (`tear_strain` of ropes, cloth, jelly and networks; 0 = never)",
