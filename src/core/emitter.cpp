@@ -202,14 +202,14 @@ double EmitterBody::potentialEnergy(const Eigen::Vector3d& gravity) const
   return energy;
 }
 
-void EmitterBody::snapshotNextStep(int stride, ParticleSnapshot* into)
-{
-  snapshot_stride_ = into != nullptr ? std::max(stride, 1) : 0;
-  snapshot_ = into;
-}
-
 namespace
 {
+// ⌈count / stride⌉: how many of `count` particles a snapshot copies.
+std::size_t copiedOf(int count, int stride)
+{
+  return static_cast<std::size_t>((count + stride - 1) / stride);
+}
+
 // Copies particle i into slot i / stride of the snapshot.
 inline void copyIntoSnapshot(const ParticlePool& p, int i, int stride, ParticleSnapshot& snapshot)
 {
@@ -219,12 +219,11 @@ inline void copyIntoSnapshot(const ParticlePool& p, int i, int stride, ParticleS
   snapshot.age[static_cast<std::size_t>(k)] = p.age[i];
 }
 
-// Resizes the snapshot for the particles [0, live): ⌈live / stride⌉ of them.
+// Resizes the snapshot for the particles [0, live).
 void sizeSnapshot(int live, int stride, ParticleSnapshot& snapshot)
 {
-  const std::size_t copied = static_cast<std::size_t>((live + stride - 1) / stride);
-  snapshot.position.resize(3 * copied);
-  snapshot.age.resize(copied);
+  snapshot.position.resize(3 * copiedOf(live, stride));
+  snapshot.age.resize(copiedOf(live, stride));
 }
 
 // The first multiple of `stride` at or after `i`.
@@ -233,6 +232,20 @@ inline int firstMultipleFrom(int i, int stride)
   return (i + stride - 1) / stride * stride;
 }
 }  // namespace
+
+void EmitterBody::snapshotNextStep(int stride, ParticleSnapshot* into)
+{
+  snapshot_stride_ = into != nullptr ? std::max(stride, 1) : 0;
+  snapshot_ = into;
+}
+
+void EmitterBody::copySnapshot(int stride, ParticleSnapshot& into) const
+{
+  into.stride = std::max(stride, 1);
+  sizeSnapshot(particles_.live_count, into.stride, into);
+  for (int i = 0; i < particles_.live_count; i += into.stride)
+    copyIntoSnapshot(particles_, i, into.stride, into);
+}
 
 void EmitterBody::step(double dt, const Environment& env)
 {

@@ -253,20 +253,8 @@ void addEmitter(const core::EmitterBody& emitter, int stride, const ros::Time& s
   EmitterMarkerSample& sample = samples.emitters[samples.used++];
   sample.marker = out.markers.size() - 1;
   sample.lifetime = emitter.definition().lifetime;
-  core::ParticleSnapshot& copy = sample.particles;
-  if (samples.asked && sample.emitter == &emitter && copy.stride == stride) return;  // the step's snapshot
-
-  const core::ParticlePool& p = emitter.particles();
-  const std::size_t drawn = static_cast<std::size_t>((p.size() + stride - 1) / stride);
-  copy.stride = stride;
-  copy.position.resize(3 * drawn);
-  copy.age.resize(drawn);
-  for (int i = 0, k = 0; i < p.size(); i += stride, ++k)
-  {
-    for (int c = 0; c < 3; ++c)
-      copy.position[3 * static_cast<std::size_t>(k) + c] = p.position(c, i);
-    copy.age[static_cast<std::size_t>(k)] = p.age[i];
-  }
+  const bool taken_by_step = samples.asked && sample.emitter == &emitter && sample.particles.stride == stride;
+  if (!taken_by_step) emitter.copySnapshot(stride, sample.particles);
 }
 
 // An emitter's marker from its sample: a point and a colour by age for each finite particle.

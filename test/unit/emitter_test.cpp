@@ -199,7 +199,8 @@ TEST(EmitterBody, ASnapshotIsEveryKthParticleAsTheStepLeftThemAndChangesNothing)
   // Two emitters of the same seed, one asked for a snapshot at some steps: the snapshot equals, bit
   // for bit, every k-th particle copied after the step (also where recycling moved particles into
   // copied slots and emission added some), the two emitters stay identical, and a step not asked
-  // leaves the last snapshot alone. One thread and two (the motion's chunks shared).
+  // leaves the last snapshot alone; copySnapshot() after the step gives the same. One thread and two
+  // (the motion's chunks shared).
   for (const int threads : {1, 2})
   {
     SCOPED_TRACE("threads " + std::to_string(threads));
@@ -243,6 +244,11 @@ TEST(EmitterBody, ASnapshotIsEveryKthParticleAsTheStepLeftThemAndChangesNothing)
         for (int d = 0; d < 3; ++d)
           ASSERT_EQ(snapshot.position[3 * c + d], p.position(d, i)) << "step " << k << " particle " << i;
       }
+      ParticleSnapshot after;  // a copy made now: the same
+      asked.copySnapshot(stride, after);
+      ASSERT_EQ(after.stride, stride);
+      ASSERT_EQ(after.position, snapshot.position);
+      ASSERT_EQ(after.age, snapshot.age);
     }
     EXPECT_GT(asked.particles().size(), 15000);
     EXPECT_GT(asked.emittedCount(), asked.particles().size() + 10000);  // recycling happened

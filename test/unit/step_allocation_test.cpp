@@ -22,8 +22,10 @@
 #include <string>
 #include <vector>
 
+#include "particle_sim/core/emitter.h"
 #include "particle_sim/core/integrators/registry.h"
 #include "particle_sim/core/spring_network.h"
+#include "particle_sim/core/worker_pool.h"
 #include "particle_sim/core/world.h"
 #include "particle_sim/scene/scene.h"
 #include "shipped_scenes.h"
@@ -356,5 +358,40 @@ TEST(TearAllocations, TearingAllocatesNothingUnderAnyMethod)
     EXPECT_EQ(allocations, 0) << core::toString(type) << ": " << allocations << " heap allocations in "
                               << counted - splitting_steps << " steps that split no vertex (of " << counted
                               << ", which tore " << cloth.tornSprings() << " springs)";
+  }
+}
+
+TEST(StepAllocations, AWarmedUpEmitterStepAskedForASnapshotAllocatesNothing)
+{
+  // The node asks each tick's last step for the particles its markers draw (README "Emitters"):
+  // once the pool is full (recycling and emitting every step) and the snapshot has grown to it, a
+  // step asked for one allocates nothing, at one thread and two.
+  for (int threads : {1, 2})
+  {
+    SCOPED_TRACE(std::to_string(threads) + " threads");
+    core::EmitterDef def;
+    def.name = "fountain";
+    def.rate = 20000.0;
+    def.lifetime = 0.5;
+    def.max_particles = 20000;
+    core::WorkerPool workers(threads);
+    core::EmitterBody emitter(def);
+    emitter.setWorkers(&workers);
+    const core::Environment env;
+    core::ParticleSnapshot snapshot;
+    long long allocations = 0;
+    for (int k = 0; k < 1600; ++k)
+    {
+      emitter.snapshotNextStep(3, &snapshot);
+      const bool warmed_up = k >= 600;  // 0.6 s: the pool is full and recycling since 0.5 s
+      g_allocations.store(0);
+      g_counting.store(warmed_up);
+      emitter.step(0.001, env);
+      g_counting.store(false);
+      allocations += g_allocations.load();
+    }
+    EXPECT_EQ(snapshot.stride, 3);
+    EXPECT_GT(emitter.particles().size(), 9000);
+    EXPECT_EQ(allocations, 0);
   }
 }

@@ -96,8 +96,12 @@ public:
   /// `stride` once it is taken. It is taken while the step has each particle in the cache: the
   /// motion's chunks copy theirs, and the slots that recycling and emission write afterwards are
   /// copied again, so it equals a copy made after the step, at a fraction of the memory traffic.
-  /// Only the next step; snapshotNextStep(0, nullptr) takes the request back.
+  /// Only the next step; snapshotNextStep(0, nullptr) takes the request back. The step grows
+  /// `into`'s vectors only past their capacity: a snapshot asked again and again allocates nothing
+  /// once the particles' count has settled.
   void snapshotNextStep(int stride, ParticleSnapshot* into);
+  /// The same snapshot of the particles as they are now (stride ≥ 1), a pass over them.
+  void copySnapshot(int stride, ParticleSnapshot& into) const;
   long long emittedCount() const { return emitted_; }
   long long droppedCount() const { return dropped_; }
 
