@@ -551,19 +551,21 @@ TEST(SparseBlockLdlt, AutoTurnsDirectWhenCgTakesMoreIterationsThanTheFactorizati
 {
   // A stiff 48 x 48 spring cloth at dt = 1/60: too large for `auto` to start directly, but CG needs
   // hundreds of iterations to a relative residual of 1e-8 (the velocity rule alone would stop it
-  // sooner), more than one factorization costs; from the next step on it is direct. (On the way, its
-  // first CG solve over kMultigridTrialCgIterations brings one solve by the multigrid, which costs
-  // more than CG here and is not kept: MultigridSolver.AutoGoesBackToCgForGood...)
+  // sooner), more than one factorization costs; from the next step on it is direct. On the way, its
+  // first CG solve over kMultigridTrialCgIterations brings one solve by the multigrid, whose cost
+  // here is within a few per cent of that CG solve's (since 2026-12-07 a little below it, so it is
+  // kept): then the multigrid's solves, not CG's, are the ones that turn it direct.
   ClothGridDef def = stiffSheetOnAuto();
   def.integrator.cg_velocity_tolerance = 0.0;
   SpringNetworkBody body(buildClothGrid(def));
   Environment env;
   env.ground.enabled = false;
-  // CG first; the step after the first CG solve whose iterations exceed the factorization's cost is
-  // direct, and so is every step after it. That trigger is the most iterations so far (the count
-  // to beat is fixed for the pattern), and far above the first step's (from rest, a few).
+  // CG first; the step after the first solve that costs more than the factorization is direct, and
+  // so is every step after it. When that solve is CG's, its iterations are the most so far (the
+  // count to beat is fixed for the pattern), and far above the first step's (from rest, a few).
   std::vector<int> iterations;
   int first_direct = -1;
+  bool last_by_multigrid = false;
   for (int step = 0; step < 60; ++step)
   {
     body.step(1.0 / 60.0, env);
@@ -574,13 +576,19 @@ TEST(SparseBlockLdlt, AutoTurnsDirectWhenCgTakesMoreIterationsThanTheFactorizati
     else
     {
       EXPECT_LT(first_direct, 0) << "back to CG at step " << step;
-      iterations.push_back(body.lastSolve().iterations);
+      last_by_multigrid = body.lastSolve().multigrid;
+      if (!last_by_multigrid) iterations.push_back(body.lastSolve().iterations);
     }
   }
   ASSERT_GT(first_direct, 0) << "auto never turned direct in 60 steps";
-  ASSERT_EQ(static_cast<int>(iterations.size()), first_direct);
-  EXPECT_EQ(iterations.back(), *std::max_element(iterations.begin(), iterations.end()));
-  EXPECT_GT(iterations.back(), 10 * iterations.front());
+  ASSERT_GE(iterations.size(), 2u);
+  const int most = *std::max_element(iterations.begin(), iterations.end());
+  if (!last_by_multigrid)
+  {
+    EXPECT_EQ(iterations.back(), most);
+  }
+  EXPECT_GT(most, kMultigridTrialCgIterations) << "no CG solve brought the multigrid's trial";
+  EXPECT_GT(most, 10 * iterations.front());
   EXPECT_TRUE(body.lastSolve().converged);
   // A forced CG stays CG.
   def.integrator.linear_solver = LinearSolverType::ConjugateGradient;

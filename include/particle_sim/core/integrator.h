@@ -84,11 +84,13 @@ inline constexpr double kDirectSolverCgIterations = 40.0;
 /// vector passes, counted from the hierarchy's sizes), and otherwise goes back to CG for good; the
 /// multigrid kept gives way to the direct solver as CG does, and to CG when a solve stops short.
 inline constexpr int kMultigridTrialCgIterations = 100;
-/// What a flop of the multigrid's hierarchy (its setup and V-cycles) costs in flops of CG, in that
+/// What a flop of the multigrid's hierarchy (its setup and cycles) costs in flops of CG, in that
 /// comparison: its 6x6 blocks, its Galerkin products' scattered sums and its serial setup run at
 /// about half the rate of CG's streamed pair product (one thread, spring cloths of 32² to 96² at
 /// dt = 1/60: at 32² and 48² CG is the faster, 1.3x; at 64² the two tie; from 96² on the multigrid
-/// is the faster, README "Or by multigrid").
+/// is the faster, README "Or by multigrid"). The cycle's smoothings and residuals on the finest
+/// level (SmoothedAggregation::finestCycleFlops()), block-diagonal products and CG's own product,
+/// count as CG's flops.
 inline constexpr double kMultigridFlopWeight = 2.0;
 
 /// "auto", "cg", "direct", "multigrid".

@@ -410,11 +410,13 @@ double ImplicitEulerSolver::directCostInCgIterations(bool* supernodal) const
 
 double ImplicitEulerSolver::multigridCostInCgIterations(int iterations) const
 {
-  // The hierarchy's numbers, then a V-cycle before the first iteration and one more with each
-  // iteration's product and vector passes (the last iteration's V-cycle is skipped when it converges;
-  // counted all the same); the hierarchy's flops weighted by kMultigridFlopWeight.
+  // The hierarchy's numbers, then a cycle before the first iteration and one more with each
+  // iteration's product and vector passes (the last iteration's cycle is skipped when it converges;
+  // counted all the same); the hierarchy's flops weighted by kMultigridFlopWeight, but for the
+  // cycle's smoothings and residuals on the finest level, which are CG's own kinds of operation.
   const double cg_iteration = cgIterationFlops();
-  const double cycle = kMultigridFlopWeight * multigrid_.cycleFlops();
+  const double finest = multigrid_.finestCycleFlops();
+  const double cycle = kMultigridFlopWeight * (multigrid_.cycleFlops() - finest) + finest;
   return (kMultigridFlopWeight * multigrid_.setupFlops() + cycle + iterations * (cycle + cg_iteration)) / cg_iteration;
 }
 
@@ -657,7 +659,7 @@ SolverReport ImplicitEulerSolver::solveLinear(const std::vector<char>& pinned, c
 bool ImplicitEulerSolver::autoMultigrid(const std::vector<char>& pinned, const IntegratorDef& settings,
                                         SolverReport& report)
 {
-  // The multigrid's cost in CG iterations (flops: its setup, V-cycles, products and vector passes)
+  // The multigrid's cost in CG iterations (flops: its setup, cycles, products and vector passes)
   // decides. On trial it is kept for good when it is below the CG solve's that led to the trial, else
   // CG is back for good. Kept, it gives way to the direct solver for good once a solve costs more
   // than the direct solve (as CG does). A solve short of the tolerance (or a hierarchy that is not

@@ -120,7 +120,8 @@ void SmoothedAggregation::layOut(Level& level)
   level.a.assign(level.column.size() * b * b, 0.0);
   level.inverse_diagonal.assign(static_cast<std::size_t>(level.nodes) * b * b, 0.0);
   level.modes.assign(static_cast<std::size_t>(level.nodes) * b * kModes, 0.0);
-  for (Eigen::VectorXd* v : {&level.rhs, &level.x, &level.residual, &level.power, &level.power_product})
+  for (Eigen::VectorXd* v : {&level.rhs, &level.x, &level.residual, &level.first_visit_x, &level.first_visit_rhs,
+                             &level.power, &level.power_product})
     v->setZero(static_cast<Eigen::Index>(level.nodes) * b);
 }
 
@@ -594,22 +595,39 @@ void SmoothedAggregation::setupLevel(int index)
 double SmoothedAggregation::cycleFlops() const
 {
   if (!planned_) return 0.0;
-  double flops = 0.0;
+  // Each level's visits in one cycle: the first coarse level once, each one below it kCoarseVisits
+  // times as often as the level above (cycle(), visitNext()), the coarsest as often as the one
+  // above it.
+  double flops = 0.0, visits = 1.0;
   for (std::size_t l = 0; l + 1 < levels_.size(); ++l)
   {
     const Level& level = levels_[l];
     const double b = level.block, nodes = level.nodes;
     const double blocks = level.start.back(), p_blocks = level.p_start.back();
-    flops += 2.0 * 2.0 * b * b * nodes;          // two smoothings: D⁻¹ r
-    flops += 2.0 * 2.0 * b * b * blocks;         // two residuals: r − A x
-    flops += 2.0 * 2.0 * b * kModes * p_blocks;  // restriction and prolongation
+    double visit = 2.0 * kSmoothingSweeps * 2.0 * b * b * nodes;  // the smoothings: D⁻¹ r
+    visit += 2.0 * kSmoothingSweeps * 2.0 * b * b * blocks;       // as many residuals: r − A x
+    visit += 2.0 * 2.0 * b * kModes * p_blocks;                   // restriction and prolongation
+    // A coarse level's further visits of the next one above the coarsest: its residual and sum.
+    const Level& next = levels_[l + 1];
+    if (l > 0 && l + 2 < levels_.size())
+      visit += (kCoarseVisits - 1) * (2.0 * kModes * kModes * next.start.back() + 2.0 * kModes * next.nodes);
+    flops += visits * visit;
+    if (l > 0 && l + 2 < levels_.size()) visits *= kCoarseVisits;
   }
   const Level& coarsest = levels_.back();
   // The coarsest level's solve: with its dense factor (two triangular solves), else its block Jacobi.
   const double unknowns = static_cast<double>(coarsest_.rows());
-  flops += unknowns > 0.0 ? 2.0 * unknowns * unknowns
-                          : 2.0 * coarsest.block * coarsest.block * static_cast<double>(coarsest.nodes);
+  flops += visits * (unknowns > 0.0 ? 2.0 * unknowns * unknowns
+                                    : 2.0 * coarsest.block * coarsest.block * static_cast<double>(coarsest.nodes));
   return flops;
+}
+
+double SmoothedAggregation::finestCycleFlops() const
+{
+  if (!planned_ || levels_.size() < 2) return 0.0;
+  const Level& finest = levels_[0];
+  const double b = finest.block, nodes = finest.nodes, blocks = finest.start.back();
+  return 2.0 * kSmoothingSweeps * 2.0 * b * b * (nodes + blocks);
 }
 
 double SmoothedAggregation::setupFlops() const
@@ -783,10 +801,10 @@ void SmoothedAggregation::cycle(int index)
           level.rhs.segment(b * i, b);
     return;
   }
-  // Pre-smoothing from zero, the coarse correction of the residual left, post-smoothing; in the
-  // kernels of the level's block size B.
+  // Pre-smoothing from zero, the coarse correction of the residual left (visitNext()),
+  // post-smoothing; in the kernels of the level's block size B.
   Level& next = levels_[index + 1];
-  auto vCycle = [&](auto block_size) {
+  auto levelCycle = [&](auto block_size) {
     constexpr int B = decltype(block_size)::value;
     // The finest level's residuals through the product from outside when there is one.
     auto residual = [&] {
@@ -797,17 +815,49 @@ void SmoothedAggregation::cycle(int index)
     };
     level.x.setZero();
     smooth<B>(level, level.rhs, level.x);
+    for (int sweep = 1; sweep < kSmoothingSweeps; ++sweep)
+    {
+      residual();
+      smooth<B>(level, level.residual, level.x);
+    }
     residual();
     restrictResidual<B>(level, next.rhs);
-    cycle(index + 1);
+    if (index == 0)
+      cycle(index + 1);
+    else
+      visitNext(index);
     prolongAdd<B>(level, next.x, level.x);
-    residual();
-    smooth<B>(level, level.residual, level.x);
+    for (int sweep = 0; sweep < kSmoothingSweeps; ++sweep)
+    {
+      residual();
+      smooth<B>(level, level.residual, level.x);
+    }
   };
   if (level.block == 3)
-    vCycle(std::integral_constant<int, 3>());
+    levelCycle(std::integral_constant<int, 3>());
   else
-    vCycle(std::integral_constant<int, kModes>());
+    levelCycle(std::integral_constant<int, kModes>());
+}
+
+void SmoothedAggregation::visitNext(int index)
+{
+  // The first visit solves for next.rhs; each further one for the residual its answer leaves on the
+  // next level, r_c − A_c x_c (the restriction of the fine residual, A_c being Galerkin's), and adds
+  // its answer. The next level's own vectors serve its cycles, so the first answer and the rhs wait
+  // in first_visit_x and first_visit_rhs.
+  Level& next = levels_[index + 1];
+  cycle(index + 1);
+  if (static_cast<std::size_t>(index) + 2 == levels_.size()) return;  // the coarsest is solved exactly
+  next.first_visit_rhs = next.rhs;
+  for (int visit = 1; visit < kCoarseVisits; ++visit)
+  {
+    next.first_visit_x = next.x;
+    residualOf<kModes>(next, next.x, next.residual);
+    next.rhs = next.residual;
+    cycle(index + 1);
+    next.x += next.first_visit_x;
+    next.rhs = next.first_visit_rhs;
+  }
 }
 
 void SmoothedAggregation::apply(const Eigen::Matrix3Xd& r, Eigen::Matrix3Xd& z)

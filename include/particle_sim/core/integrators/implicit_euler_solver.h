@@ -175,7 +175,8 @@ public:
   /// (allocates): for decisions taken once.
   double directCostInCgIterations(bool* supernodal = nullptr) const;
   /// A multigrid solve of `iterations` iterations for this pattern, in CG iterations (flops:
-  /// SmoothedAggregation::setupFlops() and cycleFlops(), and per iteration a CG iteration's product
+  /// SmoothedAggregation::setupFlops() and cycleFlops(), the part of them that is not
+  /// finestCycleFlops() weighted by kMultigridFlopWeight, and per iteration a CG iteration's product
   /// and vector passes), from the hierarchy of the last multigrid solve.
   double multigridCostInCgIterations(int iterations) const;
   /// The pairs kept by addPairBlocks() in this step, not yet in the blocks of A (for tests).

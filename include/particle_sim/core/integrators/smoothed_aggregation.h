@@ -48,9 +48,16 @@ inline Eigen::Matrix3d symmetricBlock(const std::array<double, 6>& c)
 /// diagonal block instead, so that a row's sum is kept and P spreads an aggregate over its strong
 /// neighbours only (Vaněk, Mandel & Brezina's filtered matrix: fewer blocks in P, A P and the coarse
 /// levels); the next level's matrix is A_c = Pᵀ A P (Galerkin, with A whole). Down to a few nodes,
-/// which a dense L D Lᵀ solves. The V-cycle smooths once with damped block Jacobi before the coarse
-/// correction and once after: the same smoother both ways, so the cycle is a symmetric positive
-/// definite operator, as CG needs.
+/// which a dense L D Lᵀ solves. The cycle smooths kSmoothingSweeps times with damped block Jacobi
+/// before the coarse correction and as many times after, on every level: the same smoother both
+/// ways, so the cycle is a symmetric positive definite operator, as CG needs. The finest level
+/// corrects once from the first coarse level, and every coarse level twice from the level below it
+/// (kCoarseVisits: a W-cycle below the first coarse level): the second visit solves for what the
+/// first left, the coarse residual r_c − A_c x_c, and adds its answer, so that a level's correction
+/// is (2 B − B A_c B) r_c with B the next level's cycle, symmetric again. On the bench's spring cloth
+/// (goal 2 of issue 13) the plain V-cycle's iterations grew by 1.44 from 64² to 128² (14.2 → 20.4
+/// a step); this cycle's grow by about 1.3, and its step costs less at both sizes (README, "Or by
+/// multigrid").
 ///
 /// Pinned particles: setup() takes the filtered system (pinned rows and columns cleared, the diagonal
 /// kept), their rows of P̂ are zero, and a coarse mode that the pins leave empty is dropped (its
@@ -87,7 +94,7 @@ public:
   /// Starts the next setup's estimates of ρ(D⁻¹ A) afresh (after a reset: the same bits as a new
   /// solver).
   void forgetHistory();
-  /// z = one V-cycle on r (3 x particles, filtered: zero on pinned rows).
+  /// z = one cycle on r (3 x particles, filtered: zero on pinned rows).
   void apply(const Eigen::Matrix3Xd& r, Eigen::Matrix3Xd& z);
   /// y = Ã x with Ã the filtered matrix of the last setup() (pinned rows and columns cleared, an
   /// identity on their diagonal).
@@ -100,14 +107,19 @@ public:
   using FinestProduct = std::function<void(const double* x, double* y)>;
   void setFinestProduct(FinestProduct product) { finest_product_ = std::move(product); }
   void useFinestProduct(bool use) { use_finest_product_ = use && finest_product_; }
-  /// Floating-point operations of one apply() (a V-cycle: two smoothings, two residuals, the
-  /// restriction and prolongation on every level above the coarsest, the coarsest's solve) and of
+  /// Floating-point operations of one apply() (a cycle: on each visit of a level above the coarsest
+  /// 2 kSmoothingSweeps smoothings and as many residuals, the restriction and prolongation, and for
+  /// a second visit of the next level its residual and sum; the coarsest's solve on each visit) and of
   /// one setup() after the first (the numbers of every level: inverse diagonals, the power
   /// iterations, P̂ and P, A P and Pᵀ A P, the coarsest factorization), a multiply and an add counted
   /// as two, from the hierarchy's sizes: for ImplicitEulerSolver's `auto`, which compares them with
   /// the conjugate gradient's flops. 0 before the first setup().
   double cycleFlops() const;
   double setupFlops() const;
+  /// The part of cycleFlops() that is the finest level's smoothings and residuals: block-diagonal
+  /// products and products with A (the springs' pairs, when a finest product is set), the kinds of
+  /// operation a CG iteration of block Jacobi does (its preconditioner and its product).
+  double finestCycleFlops() const;
   /// The number of levels, the finest included (0 before setPattern(), 1 until the first setup()).
   int levels() const { return static_cast<int>(levels_.size()); }
   /// Nodes of level `level` (particles on the finest, aggregates below).
@@ -135,6 +147,10 @@ public:
 
   /// Nodes of the coarsest level at most (it is solved by a dense factorization).
   static constexpr int kCoarsestNodes = 24;
+  /// Damped block Jacobi sweeps before a level's coarse correction, and as many after it.
+  static constexpr int kSmoothingSweeps = 2;
+  /// How many times each coarse level (all but the finest) visits the level below it in one cycle.
+  static constexpr int kCoarseVisits = 2;
   /// The rigid-body modes of a node's aggregate: the coarse block size.
   static constexpr int kModes = 6;
 
@@ -180,9 +196,9 @@ private:
     std::vector<std::array<int, 2>> mirrored;
     double omega = 0.0;          // the smoother's damping, 4 / (3 ρ(D⁻¹ A))
     bool power_started = false;  // `power` holds the last setup's eigenvector estimate
-    // The V-cycle's vectors: right-hand side, iterate, residual (b a node); and the power
-    // iteration's two.
-    Eigen::VectorXd rhs, x, residual, power, power_product;
+    // The cycle's vectors: right-hand side, iterate, residual (b a node); a coarse level's first
+    // visit's iterate and right-hand side, kept over its second visit; and the power iteration's two.
+    Eigen::VectorXd rhs, x, residual, first_visit_x, first_visit_rhs, power, power_product;
   };
 
   // Sizes a level's arrays from its pattern.
@@ -227,8 +243,10 @@ private:
   void restrictResidual(const Level& level, Eigen::VectorXd& coarse_rhs) const;
   template <int B>
   void prolongAdd(const Level& level, const Eigen::VectorXd& coarse, Eigen::VectorXd& x) const;
-  // x = V-cycle on `level`'s rhs.
+  // x = the cycle on `level`'s rhs.
   void cycle(int level);
+  // The next level's cycle on its rhs, visited kCoarseVisits times from a coarse level `level`.
+  void visitNext(int level);
   bool factorCoarsest();
   // The finest level's matrix from the solver's blocks and pairs, pinned rows and columns filtered.
   void copyFinest(const std::vector<Eigen::Matrix3d>& blocks, const std::vector<char>& pinned,
