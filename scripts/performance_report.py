@@ -921,8 +921,10 @@ def main():
                      % ms(springs_node['tick_ms_median']))
     lines.append('What is left for goal 3, a 128² cloth in real time at 60 Hz, a tick of 16.7 ms: since '
                  '2026-12-03 `auto` hands such a cloth to the multigrid after its first hard step (README, "Or by '
-                 'multigrid"), some 20 iterations a step where block Jacobi\'s CG needs some 500 (the Cloth table). '
-                 'Still, ' + mg_text + '.' + node_text + ' In a profile of that step on one thread (2026-12-05) the '
+                 'multigrid"), some 13 iterations a step since the cycle of 2026-12-07 (20 with the V-cycle before) '
+                 'where block Jacobi\'s CG needs some 500 (the Cloth table). '
+                 'Still, ' + mg_text + '.' + node_text + ' In a profile of that step on one thread (2026-12-05, '
+                 'with the V-cycle; on the AMD EPYC host of 2026-12-07 the setup was about half of it) the '
                  'setup takes about a quarter, the 6 × 6 level\'s products about a fifth, the springs\' pair '
                  'products an eighth and the finest level\'s restriction and prolongation a tenth; with neither the '
                  'bytes nor the arithmetic of the largest part bounding it (above), no factor of four or more is in '
