@@ -1,6 +1,6 @@
 // Smoothed-aggregation multigrid (SmoothedAggregation), the preconditioner of the linear solver
 // `multigrid`: its tentative prolongator rebuilds each level's rigid-body modes from the next level's
-// (Q R = B, aggregate by aggregate); its V-cycle is the symmetric positive definite operator the
+// (Q R = B, aggregate by aggregate); its cycle is the symmetric positive definite operator the
 // conjugate gradient needs, zero on pinned rows; and the implicit step it preconditions reaches the
 // direct solve's answer, in iterations that grow far slower with the size of the cloth than block
 // Jacobi's, which double with its side.
@@ -179,15 +179,23 @@ TEST(SmoothedAggregation, CoarsensTheSheetAndRebuildsEachLevelsModesFromTheNext)
     }
 }
 
-TEST(SmoothedAggregation, VCycleIsSymmetricPositiveDefiniteAndZeroOnPinnedRows)
+TEST(SmoothedAggregation, TheCycleIsSymmetricPositiveDefiniteAndZeroOnPinnedRows)
 {
-  for (const auto& [n, bend] : {std::pair{4, false}, {17, false}, {40, false}, {17, true}, {40, true}})
+  // The smaller sheets' hierarchies have few levels, where a coarse level's next may be the coarsest
+  // (visited once); at 64² there are at least four, so the second level is visited twice
+  // (visitNext()), and the test covers the W-cycle's second visit.
+  for (const auto& [n, bend] :
+       {std::pair{4, false}, {17, false}, {40, false}, {17, true}, {40, true}, {64, false}, {64, true}})
   {
     SCOPED_TRACE("n = " + std::to_string(n) + (bend ? ", bend springs" : ""));
     const SheetSystem s = crumpledSheet(n, 2, bend);
     SmoothedAggregation multigrid;
     multigrid.setPattern(s.particles, s.row_start, s.column);
     ASSERT_TRUE(multigrid.setup(s.blocks, s.x, s.pinned));
+    if (n == 64)
+    {
+      ASSERT_GE(multigrid.levels(), 4);
+    }
     Eigen::Matrix3Xd zu(3, s.particles), zv(3, s.particles);
     for (unsigned trial = 0; trial < 4; ++trial)
     {
@@ -257,7 +265,7 @@ TEST(SmoothedAggregation, EachCoarseMatrixIsTheGalerkinProductWithTheSameBitsAtT
 }
 
 // The finest level's product may come from outside (the implicit solver's product by the springs'
-// pairs): the V-cycle and multiplyFinest() then take it, twice a V-cycle and once a product, and give
+// pairs): the cycle and multiplyFinest() then take it, once a smoothing sweep of a cycle and once a product, and give
 // what the hierarchy's own blocks give, to rounding. The product here is the sheet's filtered matrix
 // as an Eigen sparse matrix, its pinned rows zero (x is zero there).
 TEST(SmoothedAggregation, AFinestProductFromOutsideGivesTheBlocksCycle)
@@ -302,7 +310,7 @@ TEST(SmoothedAggregation, AFinestProductFromOutsideGivesTheBlocksCycle)
 
 // The implicit solver hands its kept pairs to setup() beside blocks whose off-diagonal blocks are
 // zero (FinestPairs) instead of adding them to its blocks first: every level's matrix and prolongator,
-// and a V-cycle, are then the same bits as from the blocks with the pairs added to them in their
+// and a cycle, are then the same bits as from the blocks with the pairs added to them in their
 // order (the solver's movePairsIntoBlocks()). Each spring's C here is its off-diagonal block of the
 // sheet made symmetric bit for bit (its lower triangle), as the solver's are; the pinned corners are
 // filtered.
@@ -450,10 +458,10 @@ Environment noGround()
 
 TEST(SmoothedAggregation, ItsFlopCountsGrowLinearlyWithTheSheet)
 {
-  // The V-cycle's and the setup's flop counts (the `auto` linear solver's comparison with CG): the
-  // V-cycle smooths and takes two residuals on the finest level, at least 2 · 2 · 9 flops a block of
+  // The cycle's and the setup's flop counts (the `auto` linear solver's comparison with CG): the
+  // cycle smooths and takes at least two residuals on the finest level, at least 2 · 2 · 9 flops a block of
   // A there, and the hierarchy's levels shrink geometrically, so both counts grow like the sheet's
-  // particles (a 64² sheet has four times a 32² sheet's), and a setup costs more than a V-cycle.
+  // particles (a 64² sheet has four times a 32² sheet's), and a setup costs more than a cycle.
   auto counts = [](int n) {
     const SheetSystem s = crumpledSheet(n, 5, true);
     SmoothedAggregation multigrid;
@@ -558,7 +566,7 @@ TEST(MultigridSolver, AutoGoesBackToCgForGoodWhenTheMultigridCostsMore)
 {
   // A 40² cloth on `auto` at a relative 1e-6: its first CG solve over kMultigridTrialCgIterations
   // (about 160) brings the multigrid's trial, which converges in about a dozen iterations but costs
-  // more than those CG iterations there (its setup and V-cycles, at kMultigridFlopWeight): CG is back
+  // more than those CG iterations there (its setup and cycles, at kMultigridFlopWeight): CG is back
   // for good, converged, and the direct solver still dearer.
   const auto cloth = hangingCloth(40, LinearSolverType::Auto, 1e-6);
   SpringNetworkBody& body = *cloth;

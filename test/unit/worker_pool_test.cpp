@@ -451,7 +451,7 @@ TEST(WorkerPool, EveryMethodStepsAClothToTheSameBitsAtTwoThreads)
 }
 
 // The multigrid solver shares its passes over a level's nodes, its setup's (the Galerkin product
-// among them) as well as the V-cycle's: an 80 × 80 spring cloth (6400 particles: four chunks of the
+// among them) as well as the cycle's: an 80 × 80 spring cloth (6400 particles: four chunks of the
 // finest level, about 700 aggregates below it, six chunks) steps to the same bits in three steps at
 // two threads as at one. Its CG's own vector passes are serial, so
 // the loops the two threads shared count the multigrid's: each iteration has the finest product

@@ -64,7 +64,7 @@ enum class LinearSolverType
                       ///< or cg_tolerance
   Direct,             ///< sparse block L D Lᵀ in a fill-reducing order (exact; O(n) on a rope)
   /// the conjugate gradient of ConjugateGradient (the same stopping rule and cap) preconditioned by
-  /// one V-cycle of smoothed-aggregation multigrid (SmoothedAggregation) instead of block Jacobi:
+  /// one cycle of smoothed-aggregation multigrid (SmoothedAggregation) instead of block Jacobi:
   /// iterations that hardly grow with the size of a sheet, each dearer; its hierarchy is built anew
   /// each solve
   Multigrid,
@@ -80,7 +80,7 @@ inline constexpr double kDirectSolverCgIterations = 40.0;
 /// `auto` tries the multigrid (LinearSolverType::Multigrid) for one solve once a converged CG solve
 /// took more than this many iterations while the direct solver was dearer: a sheet whose slow
 /// bending and swinging modes block Jacobi needs hundreds of iterations for. It keeps the multigrid
-/// for good when that solve cost fewer flops than the CG solve did (its setup, V-cycles, products and
+/// for good when that solve cost fewer flops than the CG solve did (its setup, cycles, products and
 /// vector passes, counted from the hierarchy's sizes), and otherwise goes back to CG for good; the
 /// multigrid kept gives way to the direct solver as CG does, and to CG when a solve stops short.
 inline constexpr int kMultigridTrialCgIterations = 100;

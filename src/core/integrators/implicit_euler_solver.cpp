@@ -903,7 +903,7 @@ void ImplicitEulerSolver::multigridConjugateGradient(const std::vector<char>& pi
   // The hierarchy reads A whole: the kept pairs go into its copy of the blocks (not into blocks_,
   // whose off-diagonal blocks then stay zero and need no clearing in the next step). Its aggregates
   // and plans are laid out at the first solve of a pattern; its numbers every solve. The products
-  // with A on the finest level (CG's, and the V-cycles' residuals there) take the kept pairs while
+  // with A on the finest level (CG's, and the cycles' residuals there) take the kept pairs while
   // there are any (multiplyFilteredPairs(): a third of the bytes of the blocks, which the products
   // would read three times an iteration), else the hierarchy's blocks.
   const bool pair_product = !pairs_in_blocks_ && preparePairProduct();
@@ -933,7 +933,7 @@ void ImplicitEulerSolver::multigridConjugateGradient(const std::vector<char>& pi
   report.multigrid = true;
   // Preconditioned CG from the warm start on the filtered system, which the hierarchy's finest level
   // holds (pinned rows and columns cleared): its product is zero on pinned rows of a filtered
-  // direction, and so is a V-cycle of a filtered residual (filtered again all the same).
+  // direction, and so is a cycle of a filtered residual (filtered again all the same).
   filter(pinned, delta_v_);
   residual_ = rhs_;
   filter(pinned, residual_);
@@ -958,7 +958,7 @@ void ImplicitEulerSolver::multigridConjugateGradient(const std::vector<char>& pi
   {
     multigrid_.multiplyFinest(multigrid_direction_, multigrid_product_);
     const double curvature = dot(multigrid_direction_, multigrid_product_);
-    // Non-positive (or NaN) curvature, or r·z: A or the V-cycle is not positive definite.
+    // Non-positive (or NaN) curvature, or r·z: A or the cycle is not positive definite.
     if (!(curvature > 0.0) || !(rz > 0.0))
     {
       report.breakdown = true;

@@ -598,6 +598,7 @@ double SmoothedAggregation::cycleFlops() const
   // Each level's visits in one cycle: the first coarse level once, each one below it kCoarseVisits
   // times as often as the level above (cycle(), visitNext()), the coarsest as often as the one
   // above it.
+  const double unknowns = static_cast<double>(coarsest_.rows());
   double flops = 0.0, visits = 1.0;
   for (std::size_t l = 0; l + 1 < levels_.size(); ++l)
   {
@@ -607,16 +608,16 @@ double SmoothedAggregation::cycleFlops() const
     double visit = 2.0 * kSmoothingSweeps * 2.0 * b * b * nodes;  // the smoothings: D⁻¹ r
     visit += 2.0 * kSmoothingSweeps * 2.0 * b * b * blocks;       // as many residuals: r − A x
     visit += 2.0 * 2.0 * b * kModes * p_blocks;                   // restriction and prolongation
-    // A coarse level's further visits of the next one above the coarsest: its residual and sum.
+    // A coarse level's further visits of the next one above the coarsest (visitNext(): with the
+    // coarsest factored): its residual and sum.
     const Level& next = levels_[l + 1];
-    if (l > 0 && l + 2 < levels_.size())
-      visit += (kCoarseVisits - 1) * (2.0 * kModes * kModes * next.start.back() + 2.0 * kModes * next.nodes);
+    const bool visited_again = l > 0 && l + 2 < levels_.size() && unknowns > 0.0;
+    if (visited_again) visit += (kCoarseVisits - 1) * (2.0 * kModes * kModes * next.start.back() + kModes * next.nodes);
     flops += visits * visit;
-    if (l > 0 && l + 2 < levels_.size()) visits *= kCoarseVisits;
+    if (visited_again) visits *= kCoarseVisits;
   }
   const Level& coarsest = levels_.back();
   // The coarsest level's solve: with its dense factor (two triangular solves), else its block Jacobi.
-  const double unknowns = static_cast<double>(coarsest_.rows());
   flops += visits * (unknowns > 0.0 ? 2.0 * unknowns * unknowns
                                     : 2.0 * coarsest.block * coarsest.block * static_cast<double>(coarsest.nodes));
   return flops;
@@ -847,7 +848,12 @@ void SmoothedAggregation::visitNext(int index)
   // in first_visit_x and first_visit_rhs.
   Level& next = levels_[index + 1];
   cycle(index + 1);
-  if (static_cast<std::size_t>(index) + 2 == levels_.size()) return;  // the coarsest is solved exactly
+  // A second visit makes the correction (2 B − B A_c B) r_c, positive definite while the cycle below
+  // is a contraction (‖I − B A_c‖ < 1 in A_c's norm), which the damped smoothers and the coarsest's
+  // exact solve make it; the coarsest's undamped block Jacobi (a level too large to factor) does not
+  // promise that, so then one visit only. None either when the next level is the coarsest: its
+  // exact solve leaves nothing for a second visit.
+  if (static_cast<std::size_t>(index) + 2 == levels_.size() || coarsest_.rows() == 0) return;
   next.first_visit_rhs = next.rhs;
   for (int visit = 1; visit < kCoarseVisits; ++visit)
   {

@@ -23,7 +23,7 @@ namespace core
 ///
 /// solved by their modified preconditioned conjugate gradient: pinned particles' Δv is held at 0
 /// by filtering every search direction and residual (no huge masses); 3x3 block-Jacobi
-/// preconditioner, or under LinearSolverType::Multigrid one V-cycle of smoothed-aggregation multigrid
+/// preconditioner, or under LinearSolverType::Multigrid one cycle of smoothed-aggregation multigrid
 /// (SmoothedAggregation); warm start from the previous step's Δv. Particles resting on a collider are
 /// held the same way along the surface's normal only (RestingContact): their normal velocity is
 /// set to the surface's, and the rest of the system is solved for what remains. Or, by IntegratorDef::linear_solver,
@@ -343,7 +343,7 @@ private:
   // `auto`'s multigrid solve (solveLinear()): false, with the multigrid rejected for good, when it
   // did not converge (CG then finishes the solve).
   bool autoMultigrid(const std::vector<char>& pinned, const IntegratorDef& settings, SolverReport& report);
-  // The same conjugate gradient and stopping rule, preconditioned by a V-cycle of multigrid_ (set up
+  // The same conjugate gradient and stopping rule, preconditioned by a cycle of multigrid_ (set up
   // for this system first) instead of block Jacobi; block Jacobi's when the hierarchy is not definite.
   void multigridConjugateGradient(const std::vector<char>& pinned, const IntegratorDef& settings, SolverReport& report);
   // y = Ã x for the multigrid (SmoothedAggregation::setFinestProduct()), on 3 x particles numbers,

@@ -33,7 +33,7 @@ inline Eigen::Matrix3d symmetricBlock(const std::array<double, 6>& c)
 }
 
 /// Smoothed-aggregation algebraic multigrid (Vaněk, Mandel & Brezina 1996) as the conjugate
-/// gradient's preconditioner for the implicit system of a body of particles: one symmetric V-cycle
+/// gradient's preconditioner for the implicit system of a body of particles: one symmetric cycle
 /// approximates A⁻¹ r. Each level lumps strongly coupled neighbouring nodes into aggregates (a
 /// particle and its stretch and shear neighbours on the finest level, about 3 × 3 particles of a
 /// cloth); the coarse space of an aggregate is spanned by the six rigid-body modes of its particles
@@ -61,12 +61,12 @@ inline Eigen::Matrix3d symmetricBlock(const std::array<double, 6>& c)
 ///
 /// Pinned particles: setup() takes the filtered system (pinned rows and columns cleared, the diagonal
 /// kept), their rows of P̂ are zero, and a coarse mode that the pins leave empty is dropped (its
-/// column zero, its diagonal one). So the V-cycle of a filtered residual is zero on pinned rows.
+/// column zero, its diagonal one). So the cycle of a filtered residual is zero on pinned rows.
 ///
 /// setPattern() takes the finest level's pattern; the first setup() after it aggregates each level
 /// by the strength of its couplings in that first system and lays out every level's patterns and the
 /// plans of its Galerkin products (allocates); every setup() computes the numbers for one system and
-/// apply() runs a V-cycle: neither allocates after the first setup(). The passes over a level's
+/// apply() runs a cycle: neither allocates after the first setup(). The passes over a level's
 /// nodes in which each node's result is computed alone are shared with setWorkers()' threads by
 /// chunks of nodes: the products, the residuals, the smoothing, the prolongation, the restriction
 /// (gathered by aggregate), the finest level's copy, the inverse diagonal blocks of A and of the
@@ -149,7 +149,8 @@ public:
   static constexpr int kCoarsestNodes = 24;
   /// Damped block Jacobi sweeps before a level's coarse correction, and as many after it.
   static constexpr int kSmoothingSweeps = 2;
-  /// How many times each coarse level (all but the finest) visits the level below it in one cycle.
+  /// How many times each coarse level (all but the finest) visits the level below it in one cycle
+  /// (once when the coarsest level is too large to factor: visitNext()).
   static constexpr int kCoarseVisits = 2;
   /// The rigid-body modes of a node's aggregate: the coarse block size.
   static constexpr int kModes = 6;
