@@ -603,18 +603,15 @@ double SmoothedAggregation::cycleFlops() const
   for (std::size_t l = 0; l + 1 < levels_.size(); ++l)
   {
     const Level& level = levels_[l];
-    const double b = level.block, nodes = level.nodes;
-    const double blocks = level.start.back(), p_blocks = level.p_start.back();
-    double visit = 2.0 * kSmoothingSweeps * 2.0 * b * b * nodes;  // the smoothings: D⁻¹ r
-    visit += 2.0 * kSmoothingSweeps * 2.0 * b * b * blocks;       // as many residuals: r − A x
-    visit += 2.0 * 2.0 * b * kModes * p_blocks;                   // restriction and prolongation
-    // A coarse level's further visits of the next one above the coarsest (visitNext(): with the
-    // coarsest factored): its residual and sum.
+    const double b = level.block, p_blocks = level.p_start.back();
+    double visit = smoothingFlops(level);
+    visit += 2.0 * 2.0 * b * kModes * p_blocks;  // restriction and prolongation
+    // The further visits of the next level (visitNext()): its residual and sum each.
     const Level& next = levels_[l + 1];
-    const bool visited_again = l > 0 && l + 2 < levels_.size() && unknowns > 0.0;
-    if (visited_again) visit += (kCoarseVisits - 1) * (2.0 * kModes * kModes * next.start.back() + kModes * next.nodes);
+    const int next_visits = visitsOfNext(static_cast<int>(l));
+    visit += (next_visits - 1) * (2.0 * kModes * kModes * next.start.back() + kModes * next.nodes);
     flops += visits * visit;
-    if (visited_again) visits *= kCoarseVisits;
+    visits *= next_visits;
   }
   const Level& coarsest = levels_.back();
   // The coarsest level's solve: with its dense factor (two triangular solves), else its block Jacobi.
@@ -626,9 +623,26 @@ double SmoothedAggregation::cycleFlops() const
 double SmoothedAggregation::finestCycleFlops() const
 {
   if (!planned_ || levels_.size() < 2) return 0.0;
-  const Level& finest = levels_[0];
-  const double b = finest.block, nodes = finest.nodes, blocks = finest.start.back();
-  return 2.0 * kSmoothingSweeps * 2.0 * b * b * (nodes + blocks);
+  return smoothingFlops(levels_[0]);
+}
+
+double SmoothedAggregation::smoothingFlops(const Level& level)
+{
+  // 2 kSmoothingSweeps smoothings D⁻¹ r and as many residuals r − A x.
+  const double b = level.block;
+  return 2.0 * kSmoothingSweeps * 2.0 * b * b * (static_cast<double>(level.nodes) + level.start.back());
+}
+
+int SmoothedAggregation::visitsOfNext(int index) const
+{
+  // The finest level visits the first coarse level once. A second visit makes the correction
+  // (2 B − B A_c B) r_c, positive definite while the cycle below is a contraction (‖I − B A_c‖ < 1
+  // in A_c's norm), which the damped smoothers and the coarsest's exact solve make it; the
+  // coarsest's undamped block Jacobi (a level too large to factor) does not promise that, so then
+  // one visit only. One also when the next level is the coarsest: its exact solve leaves nothing for
+  // a second visit.
+  const bool last_above_coarsest = static_cast<std::size_t>(index) + 2 == levels_.size();
+  return index == 0 || last_above_coarsest || coarsest_.rows() == 0 ? 1 : kCoarseVisits;
 }
 
 double SmoothedAggregation::setupFlops() const
@@ -823,10 +837,7 @@ void SmoothedAggregation::cycle(int index)
     }
     residual();
     restrictResidual<B>(level, next.rhs);
-    if (index == 0)
-      cycle(index + 1);
-    else
-      visitNext(index);
+    visitNext(index);
     prolongAdd<B>(level, next.x, level.x);
     for (int sweep = 0; sweep < kSmoothingSweeps; ++sweep)
     {
@@ -848,14 +859,10 @@ void SmoothedAggregation::visitNext(int index)
   // in first_visit_x and first_visit_rhs.
   Level& next = levels_[index + 1];
   cycle(index + 1);
-  // A second visit makes the correction (2 B − B A_c B) r_c, positive definite while the cycle below
-  // is a contraction (‖I − B A_c‖ < 1 in A_c's norm), which the damped smoothers and the coarsest's
-  // exact solve make it; the coarsest's undamped block Jacobi (a level too large to factor) does not
-  // promise that, so then one visit only. None either when the next level is the coarsest: its
-  // exact solve leaves nothing for a second visit.
-  if (static_cast<std::size_t>(index) + 2 == levels_.size() || coarsest_.rows() == 0) return;
+  const int visits = visitsOfNext(index);
+  if (visits == 1) return;
   next.first_visit_rhs = next.rhs;
-  for (int visit = 1; visit < kCoarseVisits; ++visit)
+  for (int visit = 1; visit < visits; ++visit)
   {
     next.first_visit_x = next.x;
     residualOf<kModes>(next, next.x, next.residual);

@@ -246,8 +246,14 @@ private:
   void prolongAdd(const Level& level, const Eigen::VectorXd& coarse, Eigen::VectorXd& x) const;
   // x = the cycle on `level`'s rhs.
   void cycle(int level);
-  // The next level's cycle on its rhs, visited kCoarseVisits times from a coarse level `level`.
+  // The next level's cycle on its rhs, visited visitsOfNext(level) times from `level`.
   void visitNext(int level);
+  // How many times one cycle of `level` visits the next level: kCoarseVisits from a coarse level,
+  // else once (see the definition).
+  int visitsOfNext(int level) const;
+  // The flops of one visit's smoothings and residuals on `level` (kSmoothingSweeps of each, before
+  // and after the coarse correction).
+  static double smoothingFlops(const Level& level);
   bool factorCoarsest();
   // The finest level's matrix from the solver's blocks and pairs, pinned rows and columns filtered.
   void copyFinest(const std::vector<Eigen::Matrix3d>& blocks, const std::vector<char>& pinned,
