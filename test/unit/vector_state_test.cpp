@@ -1,0 +1,249 @@
+// Every vectorized pass of the core (AVX2 and AVX-512) returns with the upper halves of the vector
+// registers cleared (VZEROUPPER), on every path, its scalar tails included. Left set, they slow every
+// plain SSE instruction that follows on the same thread (Eigen's fixed-size arithmetic, the rest of
+// the library) until the next clearing: on the AMD EPYC host of 2026-12-07 the multigrid's setup took
+// about three times as long after a Jacobian pass that returned through its scalar tail without it
+// (README, "Or by multigrid"). The processor says whether the upper halves are in use: XGETBV with
+// ECX = 1 (XINUSE), bit 2, set by any 256-bit write and cleared by VZEROUPPER. Where it cannot say
+// (no AVX2, or no XGETBV with ECX = 1), no pass runs its vector form, and the tests check nothing.
+
+#include <cpuid.h>
+#include <gtest/gtest.h>
+#include <immintrin.h>
+
+#include <array>
+#include <functional>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "particle_sim/core/builders/cloth_grid.h"
+#include "particle_sim/core/environment.h"
+#include "particle_sim/core/integrators/cg_avx2.h"
+#include "particle_sim/core/integrators/dense_panel.h"
+#include "particle_sim/core/integrators/padded_vectors.h"
+#include "particle_sim/core/spring.h"
+#include "particle_sim/core/spring_network.h"
+#include "particle_sim/core/worker_pool.h"
+
+namespace core = particle_sim::core;
+
+namespace
+{
+// Whether XGETBV with ECX = 1 reports the state components in use (CPUID leaf 0xD, sub-leaf 1,
+// EAX bit 2) and the processor has AVX2 (else no vector pass runs).
+bool canTell()
+{
+  unsigned eax = 0, ebx = 0, ecx = 0, edx = 0;
+  if (!__get_cpuid_count(0xD, 1, &eax, &ebx, &ecx, &edx)) return false;
+  return (eax & (1u << 2)) != 0 && core::springPartsVectorized();
+}
+
+__attribute__((target("xsave"))) bool upperHalvesInUse()
+{
+  return (_xgetbv(1) & (1u << 2)) != 0;
+}
+
+__attribute__((target("avx"))) void clearUpperHalves()
+{
+  _mm256_zeroupper();
+}
+
+// A 256-bit register written and left so: in a function not compiled for AVX, which the compiler
+// therefore never clears after (it does after its own AVX functions, even around such an asm).
+void setUpperHalves()
+{
+  asm volatile("vpcmpeqd %%ymm7, %%ymm7, %%ymm7" ::: "xmm7");
+}
+
+// `pass` with the upper halves clear before it; whether they are still clear after it.
+void expectLeavesUpperHalvesClear(const std::string& name, const std::function<void()>& pass)
+{
+  clearUpperHalves();
+  ASSERT_FALSE(upperHalvesInUse()) << "cleared before " << name;
+  pass();
+  EXPECT_FALSE(upperHalvesInUse()) << name << " returned with the upper halves of the vector registers set";
+}
+
+std::vector<double> randomNumbers(std::size_t count, std::mt19937& random)
+{
+  std::uniform_real_distribution<double> uniform(-1.0, 1.0);
+  std::vector<double> numbers(count);
+  for (double& n : numbers)
+    n = uniform(random);
+  return numbers;
+}
+}  // namespace
+
+TEST(VectorState, TheProbeSeesA256BitWriteAndItsClearing)
+{
+  if (!canTell()) GTEST_SKIP() << "no AVX2, or XGETBV cannot report the vector state in use";
+  clearUpperHalves();
+  EXPECT_FALSE(upperHalvesInUse());
+  setUpperHalves();
+  EXPECT_TRUE(upperHalvesInUse());
+  clearUpperHalves();
+  EXPECT_FALSE(upperHalvesInUse());
+}
+
+TEST(VectorState, EverySpringPassReturnsWithTheUpperHalvesClear)
+{
+  if (!canTell()) GTEST_SKIP() << "no AVX2, or XGETBV cannot report the vector state in use";
+  // Springs of a chain of 12 particles and some across it: counts with and without a scalar tail.
+  std::mt19937 random(7);
+  const int particles = 12;
+  const std::vector<double> x = randomNumbers(3 * particles, random), v = randomNumbers(3 * particles, random);
+  for (int count : {3, 4, 7, 8, 11})
+  {
+    std::vector<core::Spring> springs;
+    for (int s = 0; s < count; ++s)
+    {
+      core::Spring spring;
+      spring.i = s % particles;
+      spring.j = (s * 5 + 1) % particles;
+      spring.rest_length = 0.1;
+      spring.stiffness = 100.0;
+      spring.damping = 0.1;
+      springs.push_back(spring);
+    }
+    std::vector<double> force(3 * particles, 0.0), energy(count, 0.0);
+    for (bool add_i : {true, false})
+      for (bool add_j : {true, false})
+      {
+        if (!add_i && !add_j) continue;
+        for (bool with_energy : {true, false})
+          expectLeavesUpperHalvesClear(
+              "addSpringForcesOf(" + std::to_string(count) + " springs, add_i " + std::to_string(add_i) + ", add_j " +
+                  std::to_string(add_j) + ", energy " + std::to_string(with_energy) + ")",
+              [&] {
+                double energy_sum = 0.0;
+                core::addSpringForcesOf(springs.data(), springs.data() + count, x.data(), v.data(), force.data(),
+                                        with_energy ? energy.data() : nullptr, with_energy ? &energy_sum : nullptr,
+                                        add_i, add_j, true);
+              });
+      }
+    core::SpringJacobianParts parts;
+    parts.resize(springs.size());
+    expectLeavesUpperHalvesClear("springJacobianPartsOf(" + std::to_string(count) + " springs)",
+                                 [&] { core::springJacobianPartsOf(springs.data(), 0, count, x.data(), true, parts); });
+  }
+}
+
+TEST(VectorState, EveryConjugateGradientPassReturnsWithTheUpperHalvesClear)
+{
+  if (!canTell() || !core::cg_avx2::available()) GTEST_SKIP() << "no AVX2, or XGETBV cannot report the state";
+  std::mt19937 random(11);
+  const int rows = 11;
+  // The passes' vectors are padded and aligned (PaddedVectors), as the solver's are.
+  auto vectors = [&] {
+    core::PaddedVectors v;
+    v.setZero(rows);
+    const std::vector<double> numbers = randomNumbers(3 * rows, random);
+    for (int i = 0; i < rows; ++i)
+      v.col(i) = Eigen::Vector3d(numbers[3 * i], numbers[3 * i + 1], numbers[3 * i + 2]);
+    return v;
+  };
+  core::PaddedVectors p = vectors(), out = vectors(), direction = vectors(), product = vectors(), delta_v = vectors(),
+                      residual = vectors(), preconditioned = vectors();
+  const std::vector<double> scale = randomNumbers(rows, random), inverse_mass(rows, 2.0);
+  std::vector<Eigen::Matrix3d> inverse_diagonal(rows, Eigen::Matrix3d::Identity());
+  std::vector<char> pinned(rows, 0);
+  pinned[3] = 1;
+  std::vector<std::array<int, 2>> ends;
+  std::vector<std::array<double, 6>> cs;
+  for (int k = 0; k < 10; ++k)  // pairs for every range below (the last ends at 10)
+  {
+    ends.push_back({k, (k + 2) % rows});
+    cs.push_back({1.0, 0.1, 0.2, 1.0, 0.3, 1.0});
+  }
+  for (int first : {0, 1})
+    for (int last : {first + 4, first + 5, first + 9})
+    {
+      const std::string range = "[" + std::to_string(first) + ", " + std::to_string(last) + ")";
+      expectLeavesUpperHalvesClear("addPairProducts" + range, [&] {
+        core::cg_avx2::addPairProducts(true, true, ends.data(), cs.data(), first, last, p.data(), out.data());
+      });
+      expectLeavesUpperHalvesClear("scaleRows" + range,
+                                   [&] { core::cg_avx2::scaleRows(scale.data(), first, last, p.data(), out.data()); });
+      expectLeavesUpperHalvesClear("curvature" + range, [&] {
+        core::cg_avx2::curvature(pinned.data(), first, last, direction.data(), product.data());
+      });
+      expectLeavesUpperHalvesClear("updateIterate" + range, [&] {
+        core::cg_avx2::updateIterate(first, last, 0.5, inverse_mass.data(), inverse_diagonal.data(), direction.data(),
+                                     product.data(), delta_v.data(), residual.data(), preconditioned.data());
+      });
+      expectLeavesUpperHalvesClear("updateDirection" + range, [&] {
+        core::cg_avx2::updateDirection(pinned.data(), first, last, 0.5, preconditioned.data(), direction.data());
+      });
+    }
+}
+
+TEST(VectorState, EveryDensePanelKernelReturnsWithTheUpperHalvesClear)
+{
+  if (!canTell() || !core::dense_panel::available()) GTEST_SKIP() << "no AVX2 and FMA, or XGETBV cannot tell";
+  std::mt19937 random(13);
+  for (int n : {3, 4, 7, 17, 21})
+  {
+    const int k = 5, columns = 6;
+    const std::vector<double> t = randomNumbers(static_cast<std::size_t>(n) * k, random),
+                              l = randomNumbers(static_cast<std::size_t>(columns) * k, random),
+                              panel = randomNumbers(static_cast<std::size_t>(n) * columns, random),
+                              factors = randomNumbers(columns, random), x = randomNumbers(n, random);
+    std::vector<double> c(static_cast<std::size_t>(n) * columns, 0.0), out = randomNumbers(n, random), kept(n, 0.0),
+                                                                       dots(columns, 0.0);
+    std::vector<int> row_offset(n);
+    std::vector<long> column_offset(columns);
+    for (int i = 0; i < n; ++i)
+      row_offset[i] = i;
+    for (int j = 0; j < columns; ++j)
+      column_offset[j] = static_cast<long>(j) * n;
+    const std::string size = "(n = " + std::to_string(n) + ")";
+    for (core::dense_panel::Tiles tiles : {core::dense_panel::Tiles::Avx2, core::dense_panel::Tiles::Avx512})
+      expectLeavesUpperHalvesClear(
+          std::string("subtractLowerProducts, ") + (tiles == core::dense_panel::Tiles::Avx2 ? "AVX2" : "AVX-512") +
+              " tiles " + size,
+          [&] {
+            core::dense_panel::subtractLowerProducts(tiles, n, std::min(n, columns), k, t.data(), n, l.data(), columns,
+                                                     row_offset.data(), column_offset.data(), c.data());
+          });
+    expectLeavesUpperHalvesClear("subtractScaled" + size,
+                                 [&] { core::dense_panel::subtractScaled(true, n, t.data(), 0.5, out.data()); });
+    expectLeavesUpperHalvesClear("subtractScaledColumns" + size, [&] {
+      core::dense_panel::subtractScaledColumns(true, n, columns, panel.data(), n, factors.data(), out.data());
+    });
+    expectLeavesUpperHalvesClear("subtractScaledColumnsKeepAndScale" + size, [&] {
+      core::dense_panel::subtractScaledColumnsKeepAndScale(true, n, columns, panel.data(), n, factors.data(), 0.5,
+                                                           out.data(), kept.data());
+    });
+    expectLeavesUpperHalvesClear("dot" + size, [&] { core::dense_panel::dot(true, n, t.data(), x.data()); });
+    expectLeavesUpperHalvesClear("dotColumns" + size, [&] {
+      core::dense_panel::dotColumns(true, n, columns, panel.data(), n, x.data(), dots.data());
+    });
+  }
+}
+
+TEST(VectorState, AnImplicitStepOfEachLinearSolverEndsWithTheUpperHalvesClear)
+{
+  // Whole steps, at one thread and at two (the caller's half): whatever the step runs, it must leave
+  // the state clear for the plain code after it.
+  if (!canTell()) GTEST_SKIP() << "no AVX2, or XGETBV cannot report the vector state in use";
+  for (core::LinearSolverType solver :
+       {core::LinearSolverType::ConjugateGradient, core::LinearSolverType::Direct, core::LinearSolverType::Multigrid})
+    for (int threads : {1, 2})
+    {
+      core::ClothGridDef def(core::ClothModel::Springs);
+      def.nu = def.nv = 24;
+      def.named_pins = {"corner_00", "corner_10"};
+      def.integrator.type = core::kImplicitEulerIntegrator;
+      def.integrator.linear_solver = solver;
+      core::SpringNetworkBody body(core::buildClothGrid(def));
+      core::WorkerPool workers(threads);
+      body.setWorkers(&workers);
+      core::Environment environment;
+      environment.ground.enabled = false;
+      for (int step = 0; step < 3; ++step)
+        expectLeavesUpperHalvesClear("step " + std::to_string(step) + " by " + core::toString(solver) + " at " +
+                                         std::to_string(threads) + " threads",
+                                     [&] { body.step(1.0 / 60.0, environment); });
+    }
+}
