@@ -93,40 +93,45 @@ TEST(VectorState, EverySpringPassReturnsWithTheUpperHalvesClear)
   std::mt19937 random(7);
   const int particles = 12;
   const std::vector<double> x = randomNumbers(3 * particles, random), v = randomNumbers(3 * particles, random);
-  for (int count : {3, 4, 7, 8, 11})
-  {
-    std::vector<core::Spring> springs;
-    for (int s = 0; s < count; ++s)
+  // Every count from 1 to 13 (whole fours, and tails of one to three), in two layouts: each spring
+  // with an end i of its own, and runs of three springs that share end i (as a cloth's list has them).
+  for (const bool runs : {false, true})
+    for (int count = 1; count <= 13; ++count)
     {
-      core::Spring spring;
-      spring.i = s % particles;
-      spring.j = (s * 5 + 1) % particles;
-      spring.rest_length = 0.1;
-      spring.stiffness = 100.0;
-      spring.damping = 0.1;
-      springs.push_back(spring);
-    }
-    std::vector<double> force(3 * particles, 0.0), energy(count, 0.0);
-    for (bool add_i : {true, false})
-      for (bool add_j : {true, false})
+      std::vector<core::Spring> springs;
+      for (int s = 0; s < count; ++s)
       {
-        if (!add_i && !add_j) continue;
-        for (bool with_energy : {true, false})
-          expectLeavesUpperHalvesClear(
-              "addSpringForcesOf(" + std::to_string(count) + " springs, add_i " + std::to_string(add_i) + ", add_j " +
-                  std::to_string(add_j) + ", energy " + std::to_string(with_energy) + ")",
-              [&] {
-                double energy_sum = 0.0;
-                core::addSpringForcesOf(springs.data(), springs.data() + count, x.data(), v.data(), force.data(),
-                                        with_energy ? energy.data() : nullptr, with_energy ? &energy_sum : nullptr,
-                                        add_i, add_j, true);
-              });
+        core::Spring spring;
+        spring.i = runs ? s / 3 : s % particles;
+        spring.j = runs ? s / 3 + 1 + s % 3 : (s * 5 + 1) % particles;
+        spring.rest_length = 0.1;
+        spring.stiffness = 100.0;
+        spring.damping = 0.1;
+        springs.push_back(spring);
       }
-    core::SpringJacobianParts parts;
-    parts.resize(springs.size());
-    expectLeavesUpperHalvesClear("springJacobianPartsOf(" + std::to_string(count) + " springs)",
-                                 [&] { core::springJacobianPartsOf(springs.data(), 0, count, x.data(), true, parts); });
-  }
+      std::vector<double> force(3 * particles, 0.0), energy(count, 0.0);
+      for (bool add_i : {true, false})
+        for (bool add_j : {true, false})
+        {
+          if (!add_i && !add_j) continue;
+          for (bool with_energy : {true, false})
+            expectLeavesUpperHalvesClear(
+                "addSpringForcesOf(" + std::to_string(count) + (runs ? " springs in runs" : " springs") + ", add_i " +
+                    std::to_string(add_i) + ", add_j " + std::to_string(add_j) + ", energy " +
+                    std::to_string(with_energy) + ")",
+                [&] {
+                  double energy_sum = 0.0;
+                  core::addSpringForcesOf(springs.data(), springs.data() + count, x.data(), v.data(), force.data(),
+                                          with_energy ? energy.data() : nullptr, with_energy ? &energy_sum : nullptr,
+                                          add_i, add_j, true);
+                });
+        }
+      core::SpringJacobianParts parts;
+      parts.resize(springs.size());
+      expectLeavesUpperHalvesClear("springJacobianPartsOf(" + std::to_string(count) + " springs)", [&] {
+        core::springJacobianPartsOf(springs.data(), 0, count, x.data(), true, parts);
+      });
+    }
 }
 
 TEST(VectorState, EveryConjugateGradientPassReturnsWithTheUpperHalvesClear)
