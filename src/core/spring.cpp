@@ -338,9 +338,9 @@ __attribute__((target("avx2"))) void partsOfFour(const Spring* springs, int firs
     _mm256_storeu_pd(parts.isotropic_x.data() + s, _mm256_mul_pd(stiffness, transverse));
   }
   // The upper halves of the vector registers cleared before the scalar tail and the return: GCC 12
-  // leaves them set on this path, and every plain SSE instruction after it on this thread (the
-  // multigrid's setup, Eigen's fixed-size products) then runs about three times as slowly on the
-  // AMD EPYC host of 2026-12-07, until the next clearing (test VectorState).
+  // leaves them set on this path, and the plain SSE code after it on this thread then runs slowly
+  // until the next clearing (on the AMD EPYC host of 2026-12-07 the multigrid's Galerkin products,
+  // Eigen's fixed-size products, took three times as long; test VectorState).
   _mm256_zeroupper();
   for (; s < last; ++s)
     partsOfOne(springs[s], s, x, parts);

@@ -7,6 +7,7 @@
 // (XINUSE), bit 2, set by any 256-bit write and cleared by VZEROUPPER. Where it cannot say (no AVX2,
 // no XGETBV with ECX = 1, or a bit 2 that does not follow a 256-bit write), the tests skip.
 
+#if defined(__x86_64__)  // the vector passes and XGETBV are x86-64's
 #include <cpuid.h>
 #include <gtest/gtest.h>
 #include <immintrin.h>
@@ -290,3 +291,4 @@ TEST(VectorState, AnImplicitStepOfEachLinearSolverEndsWithTheUpperHalvesClear)
                                      [&] { body.step(1.0 / 60.0, environment); });
     }
 }
+#endif  // defined(__x86_64__)
