@@ -4,8 +4,8 @@
 // of 2026-12-07 the multigrid's Galerkin products took about three times as long after a Jacobian
 // pass that returned through its scalar tail without it (README, "The vector passes leave the vector
 // registers clean"). The processor says whether the upper halves are in use: XGETBV with ECX = 1
-// (XINUSE), bit 2, set by any 256-bit write and cleared by VZEROUPPER. Where it cannot say (no AVX2,
-// no XGETBV with ECX = 1, or a bit 2 that does not follow a 256-bit write), the tests skip.
+// (XINUSE), bit 2, set by any 256-bit write and cleared by VZEROUPPER. A processor that runs the
+// passes must be able to say so (the tests fail otherwise); one without AVX2 runs none of them.
 
 #if defined(__x86_64__)  // the vector passes and XGETBV are x86-64's
 #include <cpuid.h>
@@ -48,15 +48,13 @@ void setUpperHalves()
   asm volatile("vpcmpeqd %%ymm7, %%ymm7, %%ymm7" ::: "xmm7");
 }
 
-// Whether the processor runs the vector passes (AVX2) and can tell the state: XGETBV with ECX = 1
-// (CPUID leaf 0xD, sub-leaf 1, EAX bit 2), whose bit 2 is seen to follow a 256-bit write and its
-// clearing here.
+// Whether the processor can tell the state: XGETBV with ECX = 1 (CPUID leaf 0xD, sub-leaf 1, EAX
+// bit 2), whose bit 2 is seen to follow a 256-bit write and its clearing here.
 bool canTell()
 {
   static const bool can = [] {
     unsigned eax = 0, ebx = 0, ecx = 0, edx = 0;
     if (!__get_cpuid_count(0xD, 1, &eax, &ebx, &ecx, &edx) || (eax & (1u << 2)) == 0) return false;
-    if (!core::springPartsVectorized()) return false;
     clearUpperHalves();
     const bool clear_before = !upperHalvesInUse();
     setUpperHalves();
@@ -65,6 +63,23 @@ bool canTell()
     return clear_before && set && !upperHalvesInUse();
   }();
   return can;
+}
+
+// Whether the vector passes run on this processor (AVX2, and FMA for the dense tiles). Where they
+// run, the processor must be able to tell the state (a failure otherwise, not a skip). Where they do
+// not, no family of passes may claim to run its vector form, and then none can leave the state set.
+bool vectorPassesRun()
+{
+  if (!core::springPartsVectorized())
+  {
+    EXPECT_FALSE(core::cg_avx2::available()) << "CG's AVX2 passes run without AVX2";
+    EXPECT_FALSE(core::dense_panel::available()) << "the dense AVX2 tiles run without AVX2";
+    return false;
+  }
+  EXPECT_TRUE(core::cg_avx2::available());
+  EXPECT_TRUE(core::dense_panel::available()) << "AVX2 without FMA: the dense tiles would run scalar";
+  EXPECT_TRUE(canTell()) << "the vector passes run, but XGETBV with ECX = 1 cannot report their state";
+  return canTell();
 }
 
 // `pass` with the upper halves clear before it; whether they are still clear after it.
@@ -88,7 +103,7 @@ std::vector<double> randomNumbers(std::size_t count, std::mt19937& random)
 
 TEST(VectorState, EverySpringPassReturnsWithTheUpperHalvesClear)
 {
-  if (!canTell()) GTEST_SKIP() << "no AVX2, or XGETBV cannot report the vector state in use";
+  if (!vectorPassesRun()) return;
   // Springs among 12 particles, every count from 1 to 13 (whole fours, and tails of one to three;
   // below four no 256-bit register is written), in three layouts: each spring with an end i of its
   // own; runs of three springs that share end i, as a cloth's list has them; and the first layout
@@ -154,7 +169,7 @@ TEST(VectorState, EverySpringPassReturnsWithTheUpperHalvesClear)
 
 TEST(VectorState, EveryConjugateGradientPassReturnsWithTheUpperHalvesClear)
 {
-  if (!canTell() || !core::cg_avx2::available()) GTEST_SKIP() << "no AVX2, or XGETBV cannot report the state";
+  if (!vectorPassesRun()) return;
   std::mt19937 random(11);
   const int rows = 11;
   // The passes' vectors are padded and aligned (PaddedVectors), as the solver's are.
@@ -212,7 +227,7 @@ TEST(VectorState, EveryConjugateGradientPassReturnsWithTheUpperHalvesClear)
 
 TEST(VectorState, EveryDensePanelKernelReturnsWithTheUpperHalvesClear)
 {
-  if (!canTell() || !core::dense_panel::available()) GTEST_SKIP() << "no AVX2 and FMA, or XGETBV cannot tell";
+  if (!vectorPassesRun()) return;
   std::mt19937 random(13);
   for (int n : {3, 4, 7, 17, 21, 40})
   {
@@ -270,7 +285,7 @@ TEST(VectorState, AnImplicitStepOfEachLinearSolverEndsWithTheUpperHalvesClear)
   // plain code after it. This catches a step that ends with the upper halves set; a pass inside the
   // step that leaves them set until a later vector pass clears them (as the Jacobian pass did) only
   // the pass tests above catch.
-  if (!canTell()) GTEST_SKIP() << "no AVX2, or XGETBV cannot report the vector state in use";
+  if (!vectorPassesRun()) return;
   for (core::LinearSolverType solver :
        {core::LinearSolverType::ConjugateGradient, core::LinearSolverType::Direct, core::LinearSolverType::Multigrid})
     for (int threads : {1, 2})
