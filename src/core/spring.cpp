@@ -1,5 +1,7 @@
 #include "particle_sim/core/spring.h"
 
+#include "particle_sim/core/vector_registers.h"
+
 #if defined(__x86_64__)
 #include <immintrin.h>
 #endif
@@ -337,10 +339,8 @@ __attribute__((target("avx2"))) void partsOfFour(const Spring* springs, int firs
     _mm256_storeu_pd(parts.along_x.data() + s, _mm256_mul_pd(stiffness, _mm256_sub_pd(one, transverse)));
     _mm256_storeu_pd(parts.isotropic_x.data() + s, _mm256_mul_pd(stiffness, transverse));
   }
-  // The upper halves of the vector registers cleared before the scalar tail and the return: GCC 12
-  // leaves them set on this path, and the plain SSE code after it on this thread then runs slowly
-  // until the next clearing (on the AMD EPYC host of 2026-12-07 the multigrid's Galerkin products,
-  // Eigen's fixed-size products, took three times as long; test VectorState).
+  // The upper halves of the vector registers cleared before the scalar tail, which may be plain SSE
+  // code (and again by the caller after the return: clearUpperHalves()).
   _mm256_zeroupper();
   for (; s < last; ++s)
     partsOfOne(springs[s], s, x, parts);
@@ -369,6 +369,7 @@ void addRunForces(const Spring* first, const Spring* last, const double* x, cons
   if (vectorized && springPartsVectorized())
   {
     addRunForcesAvx2<kAddI, kAddJ>(first, last, x, v, force, energy, energy_sum);
+    clearUpperHalves();
     return;
   }
 #endif
@@ -395,6 +396,7 @@ void springJacobianPartsOf(const Spring* springs, int first, int last, const dou
   if (vectorized && springPartsVectorized())
   {
     partsOfFour(springs, first, last, x, parts);
+    clearUpperHalves();
     return;
   }
 #endif

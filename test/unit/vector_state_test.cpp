@@ -1,11 +1,13 @@
-// Every vectorized pass of the core (AVX2 and AVX-512) returns with the upper halves of the vector
-// registers cleared (VZEROUPPER), on every path, its scalar tails included. Left set, they slow the
-// plain SSE instructions that follow on the same thread until the next clearing: on the AMD EPYC host
-// of 2026-12-07 the multigrid's Galerkin products took about three times as long after a Jacobian
-// pass that returned through its scalar tail without it (README, "The vector passes leave the vector
-// registers clean"). The processor says whether the upper halves are in use: XGETBV with ECX = 1
-// (XINUSE), bit 2, set by any 256-bit write and cleared by VZEROUPPER. A processor that runs the
-// passes must be able to say so (the tests fail otherwise); one without AVX2 runs none of them.
+// Every vectorized pass of the core (AVX2 and AVX-512), as plain code calls it, returns with the upper
+// halves of the vector registers cleared (VZEROUPPER), on every path, its scalar tails included, in
+// every build (core::clearUpperHalves()). Left set, they slow the plain SSE instructions that follow
+// on the same thread until the next clearing: on the AMD EPYC host of 2026-12-07 the multigrid's
+// Galerkin products took about three times as long after a Jacobian pass that returned through its
+// scalar tail without it; and the sanitizer build (-O1, where GCC inserts no clearing of its own)
+// left every pass without one (README, "The vector passes leave the vector registers clean"). The
+// processor says whether the upper halves are in use: XGETBV with ECX = 1 (XINUSE), bit 2, set by
+// any 256-bit write and cleared by VZEROUPPER. A processor that runs the passes must be able to say
+// so (the tests fail otherwise); one without AVX2 runs none of them.
 
 #if defined(__x86_64__)  // the vector passes and XGETBV are x86-64's
 #include <cpuid.h>
@@ -25,6 +27,7 @@
 #include "particle_sim/core/integrators/padded_vectors.h"
 #include "particle_sim/core/spring.h"
 #include "particle_sim/core/spring_network.h"
+#include "particle_sim/core/vector_registers.h"
 #include "particle_sim/core/worker_pool.h"
 
 namespace core = particle_sim::core;
@@ -34,11 +37,6 @@ namespace
 __attribute__((target("xsave"))) bool upperHalvesInUse()
 {
   return (_xgetbv(1) & (1u << 2)) != 0;
-}
-
-__attribute__((target("avx"))) void clearUpperHalves()
-{
-  _mm256_zeroupper();
 }
 
 // A 256-bit register written and left so: in a function not compiled for AVX, which the compiler
@@ -55,11 +53,11 @@ bool canTell()
   static const bool can = [] {
     unsigned eax = 0, ebx = 0, ecx = 0, edx = 0;
     if (!__get_cpuid_count(0xD, 1, &eax, &ebx, &ecx, &edx) || (eax & (1u << 2)) == 0) return false;
-    clearUpperHalves();
+    core::clearUpperHalves();
     const bool clear_before = !upperHalvesInUse();
     setUpperHalves();
     const bool set = upperHalvesInUse();
-    clearUpperHalves();
+    core::clearUpperHalves();
     return clear_before && set && !upperHalvesInUse();
   }();
   return can;
@@ -85,7 +83,7 @@ bool vectorPassesRun()
 // `pass` with the upper halves clear before it; whether they are still clear after it.
 void expectLeavesUpperHalvesClear(const std::string& name, const std::function<void()>& pass)
 {
-  clearUpperHalves();
+  core::clearUpperHalves();
   ASSERT_FALSE(upperHalvesInUse()) << "cleared before " << name;
   pass();
   EXPECT_FALSE(upperHalvesInUse()) << name << " returned with the upper halves of the vector registers set";

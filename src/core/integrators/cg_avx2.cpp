@@ -1,6 +1,7 @@
 #include "particle_sim/core/integrators/cg_avx2.h"
 
 #include "particle_sim/core/integrators/padded_vectors.h"
+#include "particle_sim/core/vector_registers.h"
 
 #if defined(__x86_64__)
 #include <immintrin.h>
@@ -72,20 +73,10 @@ __attribute__((target("avx2"))) void addPairRun(const std::array<int, 2>* ends, 
   }
   if (kAddI && held >= 0) _mm256_store_pd(out + kStride * held, sum_i);
 }
-}  // namespace
 
-bool available()
-{
-  static const bool has_avx2 = [] {
-    __builtin_cpu_init();
-    return __builtin_cpu_supports("avx2") != 0;
-  }();
-  return has_avx2;
-}
-
-__attribute__((target("avx2"))) void addPairProducts(bool add_i, bool add_j, const std::array<int, 2>* ends,
-                                                     const std::array<double, 6>* cs, int first, int last,
-                                                     const double* p, double* out)
+__attribute__((target("avx2"))) void addPairProductsAvx2(bool add_i, bool add_j, const std::array<int, 2>* ends,
+                                                         const std::array<double, 6>* cs, int first, int last,
+                                                         const double* p, double* out)
 {
   if (add_i && add_j)
     addPairRun<true, true>(ends, cs, first, last, p, out);
@@ -95,14 +86,15 @@ __attribute__((target("avx2"))) void addPairProducts(bool add_i, bool add_j, con
     addPairRun<false, true>(ends, cs, first, last, p, out);
 }
 
-__attribute__((target("avx2"))) void scaleRows(const double* scale, int first, int last, const double* p, double* out)
+__attribute__((target("avx2"))) void scaleRowsAvx2(const double* scale, int first, int last, const double* p,
+                                                   double* out)
 {
   for (int i = first; i < last; ++i)
     _mm256_store_pd(out + kStride * i, _mm256_mul_pd(_mm256_set1_pd(scale[i]), _mm256_load_pd(p + kStride * i)));
 }
 
-__attribute__((target("avx2"))) double curvature(const char* pinned, int first, int last, const double* direction,
-                                                 double* product)
+__attribute__((target("avx2"))) double curvatureAvx2(const char* pinned, int first, int last, const double* direction,
+                                                     double* product)
 {
   __m256d sum = _mm256_setzero_pd();
   for (int i = first; i < last; ++i)
@@ -114,10 +106,11 @@ __attribute__((target("avx2"))) double curvature(const char* pinned, int first, 
   return sumOfThree(sum);
 }
 
-__attribute__((target("avx2"))) UpdateSums updateIterate(int first, int last, double alpha, const double* inverse_mass,
-                                                         const Eigen::Matrix3d* inverse_diagonal,
-                                                         const double* direction, const double* product,
-                                                         double* delta_v, double* residual, double* preconditioned)
+__attribute__((target("avx2"))) UpdateSums updateIterateAvx2(int first, int last, double alpha,
+                                                             const double* inverse_mass,
+                                                             const Eigen::Matrix3d* inverse_diagonal,
+                                                             const double* direction, const double* product,
+                                                             double* delta_v, double* residual, double* preconditioned)
 {
   const __m256d step = _mm256_set1_pd(alpha);
   __m256d sum_rz = _mm256_setzero_pd(), sum_r2 = _mm256_setzero_pd(), sum_weighted = _mm256_setzero_pd();
@@ -147,8 +140,8 @@ __attribute__((target("avx2"))) UpdateSums updateIterate(int first, int last, do
   return {sumOfThree(sum_rz), sumOfThree(sum_r2), sumOfThree(sum_weighted)};
 }
 
-__attribute__((target("avx2"))) void updateDirection(const char* pinned, int first, int last, double beta,
-                                                     const double* preconditioned, double* direction)
+__attribute__((target("avx2"))) void updateDirectionAvx2(const char* pinned, int first, int last, double beta,
+                                                         const double* preconditioned, double* direction)
 {
   const __m256d scale = _mm256_set1_pd(beta);
   for (int i = first; i < last; ++i)
@@ -158,6 +151,54 @@ __attribute__((target("avx2"))) void updateDirection(const char* pinned, int fir
         _mm256_add_pd(_mm256_load_pd(preconditioned + at), _mm256_mul_pd(scale, _mm256_load_pd(direction + at)));
     _mm256_store_pd(direction + at, pinned[i] ? _mm256_setzero_pd() : d);
   }
+}
+}  // namespace
+
+bool available()
+{
+  static const bool has_avx2 = [] {
+    __builtin_cpu_init();
+    return __builtin_cpu_supports("avx2") != 0;
+  }();
+  return has_avx2;
+}
+
+// The passes, each followed by the clearing of the upper halves (vector_registers.h).
+void addPairProducts(bool add_i, bool add_j, const std::array<int, 2>* ends, const std::array<double, 6>* cs, int first,
+                     int last, const double* p, double* out)
+{
+  addPairProductsAvx2(add_i, add_j, ends, cs, first, last, p, out);
+  clearUpperHalves();
+}
+
+void scaleRows(const double* scale, int first, int last, const double* p, double* out)
+{
+  scaleRowsAvx2(scale, first, last, p, out);
+  clearUpperHalves();
+}
+
+double curvature(const char* pinned, int first, int last, const double* direction, double* product)
+{
+  const double sum = curvatureAvx2(pinned, first, last, direction, product);
+  clearUpperHalves();
+  return sum;
+}
+
+UpdateSums updateIterate(int first, int last, double alpha, const double* inverse_mass,
+                         const Eigen::Matrix3d* inverse_diagonal, const double* direction, const double* product,
+                         double* delta_v, double* residual, double* preconditioned)
+{
+  const UpdateSums sums = updateIterateAvx2(first, last, alpha, inverse_mass, inverse_diagonal, direction, product,
+                                            delta_v, residual, preconditioned);
+  clearUpperHalves();
+  return sums;
+}
+
+void updateDirection(const char* pinned, int first, int last, double beta, const double* preconditioned,
+                     double* direction)
+{
+  updateDirectionAvx2(pinned, first, last, beta, preconditioned, direction);
+  clearUpperHalves();
 }
 #else
 // Elsewhere the scalar passes run; these are never called.

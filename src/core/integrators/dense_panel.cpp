@@ -1,6 +1,7 @@
 #include "particle_sim/core/integrators/dense_panel.h"
 
 #include "particle_sim/core/integrators/cg_avx2.h"
+#include "particle_sim/core/vector_registers.h"
 
 #if defined(__x86_64__)
 #include <immintrin.h>
@@ -388,11 +389,13 @@ Tiles subtractLowerProducts(Tiles tiles, int rows, int columns, int k, const dou
   if (k <= kMaxPacked && tiles == Tiles::Avx512 && widest == Tiles::Avx512)
   {
     subtractLowerProductsAvx512(rows, columns, k, t, ldt, l, ldl, row_offset, column_offset, c);
+    clearUpperHalves();
     return Tiles::Avx512;
   }
   if (k <= kMaxPacked && tiles != Tiles::Scalar && widest != Tiles::Scalar)
   {
     subtractLowerProductsAvx2(rows, columns, k, t, ldt, l, ldl, row_offset, column_offset, c);
+    clearUpperHalves();
     return Tiles::Avx2;
   }
 #else
@@ -406,7 +409,11 @@ void subtractScaled(bool avx2, int n, const double* t, double factor, double* co
 {
   int r = 0;
 #if defined(__x86_64__)
-  if (avx2 && available()) r = subtractScaledAvx2(n, t, factor, column);
+  if (avx2 && available())
+  {
+    r = subtractScaledAvx2(n, t, factor, column);
+    clearUpperHalves();
+  }
 #endif
   for (; r < n; ++r)
     column[r] -= t[r] * factor;
@@ -421,7 +428,10 @@ void subtractScaledColumnsOf(bool avx2, int n, int count, const double* columns,
   int r = 0;
 #if defined(__x86_64__)
   if (avx2 && available())
+  {
     r = subtractScaledColumnsAvx2<kKeepAndScale>(n, count, columns, ld, factors, out, scale, kept);
+    clearUpperHalves();
+  }
 #endif
   for (; r < n; ++r)
   {
@@ -458,6 +468,7 @@ void dotColumns(bool avx2, int n, int count, const double* columns, long ld, con
     for (; c + 4 <= count; c += 4)
     {
       const int r = dotFourColumnsAvx2(n, columns + c * ld, ld, x, dots + c);
+      clearUpperHalves();
       for (int q = c; q < c + 4; ++q)
         for (int rest = r; rest < n; ++rest)
           dots[q] += columns[q * ld + rest] * x[rest];
@@ -470,7 +481,12 @@ void dotColumns(bool avx2, int n, int count, const double* columns, long ld, con
 double dot(bool avx2, int n, const double* a, const double* b)
 {
 #if defined(__x86_64__)
-  if (avx2 && available()) return dotAvx2(n, a, b);
+  if (avx2 && available())
+  {
+    const double sum = dotAvx2(n, a, b);
+    clearUpperHalves();
+    return sum;
+  }
 #endif
   double lanes[4] = {0.0, 0.0, 0.0, 0.0};
   int r = 0;
