@@ -302,12 +302,12 @@ void SmoothedAggregation::planNextLevel(int index)
   {
     for (int slot = level.pt_start[coarse_row]; slot < level.pt_start[coarse_row + 1]; ++slot)
     {
-      const int q = level.pt_block[slot], i = level.pt_row[slot];
+      const int i = level.pt_row[slot];
       for (int t = level.ap_start[i]; t < level.ap_start[i + 1]; ++t)
       {
         if (level.ap_column[t] < coarse_row) continue;
         level.galerkin_plan.push_back(
-            {q, t, positionIn(next.column, next.start[coarse_row], next.start[coarse_row + 1], level.ap_column[t])});
+            {slot, t, positionIn(next.column, next.start[coarse_row], next.start[coarse_row + 1], level.ap_column[t])});
       }
     }
     level.galerkin_plan_start[coarse_row + 1] = static_cast<int>(level.galerkin_plan.size());
@@ -328,6 +328,7 @@ void SmoothedAggregation::planNextLevel(int index)
   }
   level.tentative.assign(static_cast<std::size_t>(n) * b * kModes, 0.0);
   level.p.assign(level.p_column.size() * b * kModes, 0.0);
+  level.pt_p.assign(level.p.size(), 0.0);
   level.ap.assign(level.ap_column.size() * b * kModes, 0.0);
   levels_.push_back(std::move(next));
   layOut(levels_.back());
@@ -564,6 +565,13 @@ void SmoothedAggregation::setupLevel(int index)
     }
   });
 
+  // P's blocks copied in Pᵀ's order, aggregate by aggregate.
+  shareLoop(workers_, next.nodes, kNodesPerChunk<kModes>, [&](int begin, int end) {
+    for (int slot = level.pt_start[begin]; slot < level.pt_start[end]; ++slot)
+      std::copy_n(level.p.data() + B * kModes * level.pt_block[slot], B * kModes,
+                  level.pt_p.data() + B * kModes * slot);
+  });
+
   // A P by its plan, each row alone; then A_c = Pᵀ (A P) by its plan, each row of A_c alone (its
   // blocks on and above the diagonal); then its lower blocks from the upper ones.
   shareLoop(workers_, n, kNodesPerChunk<B>, [&](int begin, int end) {
@@ -581,9 +589,9 @@ void SmoothedAggregation::setupLevel(int index)
               0.0);
     for (int e = level.galerkin_plan_start[begin]; e < level.galerkin_plan_start[end]; ++e)
     {
-      const auto& [q, t, c] = level.galerkin_plan[e];
+      const auto& [slot, t, c] = level.galerkin_plan[e];
       BlockMap<kModes, kModes>(next.a.data() + kModes * kModes * c).noalias() +=
-          ConstBlockMap<B, kModes>(level.p.data() + B * kModes * q).transpose() *
+          ConstBlockMap<B, kModes>(level.pt_p.data() + B * kModes * slot).transpose() *
           ConstBlockMap<B, kModes>(level.ap.data() + B * kModes * t);
     }
   });
@@ -768,15 +776,15 @@ void SmoothedAggregation::smooth(const Level& level, const Eigen::VectorXd& resi
 template <int B>
 void SmoothedAggregation::restrictResidual(const Level& level, Eigen::VectorXd& coarse_rhs) const
 {
-  // Each aggregate gathers P_qᵀ r_i over its column's blocks, by ascending row i: the sums of a
-  // scatter row after row, so the aggregates are shared with the workers.
+  // Each aggregate gathers P_qᵀ r_i over its column's blocks (pt_p, in order), by ascending row i:
+  // the sums of a scatter row after row, so the aggregates are shared with the workers.
   const int aggregates = static_cast<int>(level.pt_start.size()) - 1;
   shareLoop(workers_, aggregates, kNodesPerChunk<kModes>, [&](int begin, int end) {
     for (int a = begin; a < end; ++a)
     {
       Eigen::Matrix<double, kModes, 1> sum = Eigen::Matrix<double, kModes, 1>::Zero();
       for (int t = level.pt_start[a]; t < level.pt_start[a + 1]; ++t)
-        sum.noalias() += ConstBlockMap<B, kModes>(level.p.data() + B * kModes * level.pt_block[t]).transpose() *
+        sum.noalias() += ConstBlockMap<B, kModes>(level.pt_p.data() + B * kModes * t).transpose() *
                          ConstSegmentMap<B>(level.residual.data() + B * level.pt_row[t]);
       SegmentMap<kModes>(coarse_rhs.data() + kModes * a) = sum;
     }

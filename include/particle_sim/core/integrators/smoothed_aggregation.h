@@ -71,9 +71,9 @@ inline Eigen::Matrix3d symmetricBlock(const std::array<double, 6>& c)
 /// chunks of nodes: the products, the residuals, the smoothing, the prolongation, the restriction
 /// (gathered by aggregate), the finest level's copy, the inverse diagonal blocks of A and of the
 /// lumped matrix, the power iterations' D⁻¹ products, the tentative prolongator (by aggregate), P's
-/// rows, A P, and the Galerkin product Pᵀ (A P) (by row of A_c, each block summed in the order of
-/// the rows of A P). The rest is serial (the power iterations' norms, the coarsest solve). So the
-/// same bits at any thread count.
+/// rows, their copy in Pᵀ's order (by aggregate), A P, and the Galerkin product Pᵀ (A P) (by row
+/// of A_c, each block summed in the order of the rows of A P). The rest is serial (the power
+/// iterations' norms, the coarsest solve). So the same bits at any thread count.
 class SmoothedAggregation
 {
 public:
@@ -180,15 +180,18 @@ private:
     std::vector<double> tentative;  // b x 6 per node: its rows of P̂ (columns of its aggregate)
     std::vector<int> p_start, p_column;
     std::vector<double> p;  // b x 6 per block of P
-    // Pᵀ by rows (aggregates): each one's blocks of P (pt_block) and their rows (pt_row), ascending.
+    // Pᵀ by rows (aggregates): each one's blocks of P (pt_block) and their rows (pt_row), ascending;
+    // and a copy of P's blocks in that order (pt_p, b x 6 per block, made after P in each setup), so
+    // that the restriction and the Galerkin product read P in order rather than by scattered blocks.
     std::vector<int> pt_start, pt_block, pt_row;
+    std::vector<double> pt_p;
     // A P: rows of this level, columns of the next (its pattern, its blocks in `ap`), planned as
     // (block of A, block of P, block of A P) per product, row after row.
     std::vector<int> ap_start, ap_column;
     std::vector<double> ap;
     std::vector<std::array<int, 3>> ap_plan;
     std::vector<int> ap_plan_start;  // per row
-    // Pᵀ (A P) into the next level's blocks on and above the diagonal: (block of P, block of A P,
+    // Pᵀ (A P) into the next level's blocks on and above the diagonal: (block of pt_p, block of A P,
     // block of A_c) per product, by the row of A_c (a row of P's column) and within it by ascending
     // row of A P: each block of A_c sums its products in the order of the rows of A P.
     std::vector<std::array<int, 3>> galerkin_plan;
