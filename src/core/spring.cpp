@@ -339,9 +339,6 @@ __attribute__((target("avx2"))) void partsOfFour(const Spring* springs, int firs
     _mm256_storeu_pd(parts.along_x.data() + s, _mm256_mul_pd(stiffness, _mm256_sub_pd(one, transverse)));
     _mm256_storeu_pd(parts.isotropic_x.data() + s, _mm256_mul_pd(stiffness, transverse));
   }
-  // The upper halves of the vector registers cleared before the scalar tail, which may be plain SSE
-  // code (and again by the caller after the return: clearUpperHalves()).
-  _mm256_zeroupper();
   for (; s < last; ++s)
     partsOfOne(springs[s], s, x, parts);
 }

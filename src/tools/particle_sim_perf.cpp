@@ -49,6 +49,7 @@
 #include "particle_sim/core/integrators/symplectic_euler.h"
 #include "particle_sim/core/integrators/verlet.h"
 #include "particle_sim/core/spring_network.h"
+#include "particle_sim/core/vector_registers.h"
 #include "particle_sim/core/world.h"
 #include "particle_sim/process/huge_pages.h"
 
@@ -425,7 +426,12 @@ __attribute__((target("avx2,fma"))) double arithmeticPassFma(long iterations, in
 double arithmeticRoofFma(bool quick)
 {
 #if defined(__x86_64__)
-  if (core::dense_panel::available()) return bestPass(quick, arithmeticPassFma);
+  if (core::dense_panel::available())
+  {
+    const double roof = bestPass(quick, arithmeticPassFma);
+    core::clearUpperHalves();  // for the plain code of the cases after it, as the engine's passes do
+    return roof;
+  }
 #endif
   (void)quick;
   return 0.0;
