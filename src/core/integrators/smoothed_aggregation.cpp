@@ -120,8 +120,8 @@ void SmoothedAggregation::layOut(Level& level)
   level.a.assign(level.column.size() * b * b, 0.0);
   level.inverse_diagonal.assign(static_cast<std::size_t>(level.nodes) * b * b, 0.0);
   level.modes.assign(static_cast<std::size_t>(level.nodes) * b * kModes, 0.0);
-  for (Eigen::VectorXd* v : {&level.rhs, &level.x, &level.residual, &level.first_visit_x, &level.first_visit_rhs,
-                             &level.power, &level.power_product})
+  for (Eigen::VectorXd* v : {&level.rhs, &level.x, &level.residual, &level.chebyshev_step, &level.first_visit_x,
+                             &level.first_visit_rhs, &level.power, &level.power_product})
     v->setZero(static_cast<Eigen::Index>(level.nodes) * b);
 }
 
@@ -504,6 +504,13 @@ void SmoothedAggregation::setupLevel(int index)
       workers_, n, level.inverse_diagonal,
       [&](const Eigen::VectorXd& x, Eigen::VectorXd& y) { multiply<B>(level, x, y); }, level.power, level.power_product,
       level.power_started);
+  // The smoother's Chebyshev polynomial (chebyshevSteps()) on [u / α, u] stops contracting where
+  // t > u (1 + 1 / α); u is set so that this is 2 / ω, where damped Jacobi with the damping ω (P's
+  // smoother below) would stop: a true ρ up to 1.5 kSpectralMargin times the power iterations'
+  // estimate breaks neither. A ρ of zero (no coupling left) leaves the smoothing out, as Jacobi's
+  // ω = 0 would.
+  level.smoother =
+      level.omega > 0.0 ? chebyshevSteps(2.0 / (level.omega * (1.0 + 1.0 / kChebyshevRange))) : ChebyshevSteps{};
   if (level.has_weak)
   {
     shareLoop(workers_, n, kNodesPerChunk<B>, [&](int begin, int end) {
@@ -762,14 +769,46 @@ double SmoothedAggregation::smootherDamping(WorkerPool* workers, int nodes, cons
   return rho > 0.0 ? 4.0 / (3.0 * kSpectralMargin * rho) : 0.0;
 }
 
+SmoothedAggregation::ChebyshevSteps SmoothedAggregation::chebyshevSteps(double upper)
+{
+  // The three-term recurrence of the Chebyshev polynomials shifted to [lower, upper] (centre θ,
+  // half-width δ, σ = θ / δ): the first step is D⁻¹ r / θ, each next one
+  // step_k = g_k g_{k−1} step_{k−1} + (2 g_k / δ) D⁻¹ r with g_k = 1 / (2 σ − g_{k−1}), g_0 = 1 / σ
+  // (g_k = T_{k−1}(σ) / T_k(σ)). After k steps from x the error is T_k((θ − t) / δ) / T_k(σ) of what
+  // it was, on each eigenvector of D⁻¹ A with eigenvalue t.
+  const double lower = upper / kChebyshevRange;
+  const double theta = 0.5 * (upper + lower), delta = 0.5 * (upper - lower), sigma = theta / delta;
+  ChebyshevSteps steps;
+  double g = 1.0 / sigma;
+  steps.keep[0] = 0.0;
+  steps.scale[0] = 1.0 / theta;
+  for (int k = 1; k < kSmoothingSweeps; ++k)
+  {
+    const double g_next = 1.0 / (2.0 * sigma - g);
+    steps.keep[k] = g_next * g;
+    steps.scale[k] = 2.0 * g_next / delta;
+    g = g_next;
+  }
+  return steps;
+}
+
+// step = keep step + scale D⁻¹ r, x += step, node by node.
 template <int B>
-void SmoothedAggregation::smooth(const Level& level, const Eigen::VectorXd& residual, Eigen::VectorXd& x) const
+void SmoothedAggregation::chebyshevStep(Level& level, const Eigen::VectorXd& residual, double keep, double scale)
 {
   shareLoop(workers_, level.nodes, kNodesPerChunk<B>, [&](int begin, int end) {
     for (int i = begin; i < end; ++i)
-      SegmentMap<B>(x.data() + B * i).noalias() +=
-          level.omega * (ConstBlockMap<B, B>(level.inverse_diagonal.data() + B * B * i) *
-                         ConstSegmentMap<B>(residual.data() + B * i));
+    {
+      SegmentMap<B> step(level.chebyshev_step.data() + B * i);
+      const Eigen::Matrix<double, B, 1> correction =
+          scale * (ConstBlockMap<B, B>(level.inverse_diagonal.data() + B * B * i) *
+                   ConstSegmentMap<B>(residual.data() + B * i));
+      if (keep == 0.0)
+        step = correction;  // the first step: the last cycle's step is not read
+      else
+        step = keep * step + correction;
+      SegmentMap<B>(level.x.data() + B * i) += step;
+    }
   });
 }
 
@@ -836,22 +875,23 @@ void SmoothedAggregation::cycle(int index)
       else
         residualOf<B>(level, level.x, level.residual);
     };
+    // One smoothing: kSmoothingSweeps Chebyshev steps, each after a residual but the first from
+    // zero, whose residual is the rhs.
+    auto smoothing = [&](bool from_zero) {
+      for (int sweep = 0; sweep < kSmoothingSweeps; ++sweep)
+      {
+        if (sweep > 0 || !from_zero) residual();
+        chebyshevStep<B>(level, sweep == 0 && from_zero ? level.rhs : level.residual, level.smoother.keep[sweep],
+                         level.smoother.scale[sweep]);
+      }
+    };
     level.x.setZero();
-    smooth<B>(level, level.rhs, level.x);
-    for (int sweep = 1; sweep < kSmoothingSweeps; ++sweep)
-    {
-      residual();
-      smooth<B>(level, level.residual, level.x);
-    }
+    smoothing(true);
     residual();
     restrictResidual<B>(level, next.rhs);
     visitNext(index);
     prolongAdd<B>(level, next.x, level.x);
-    for (int sweep = 0; sweep < kSmoothingSweeps; ++sweep)
-    {
-      residual();
-      smooth<B>(level, level.residual, level.x);
-    }
+    smoothing(false);
   };
   if (level.block == 3)
     levelCycle(std::integral_constant<int, 3>());

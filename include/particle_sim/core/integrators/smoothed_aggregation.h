@@ -48,16 +48,19 @@ inline Eigen::Matrix3d symmetricBlock(const std::array<double, 6>& c)
 /// diagonal block instead, so that a row's sum is kept and P spreads an aggregate over its strong
 /// neighbours only (Vaněk, Mandel & Brezina's filtered matrix: fewer blocks in P, A P and the coarse
 /// levels); the next level's matrix is A_c = Pᵀ A P (Galerkin, with A whole). Down to a few nodes,
-/// which a dense L D Lᵀ solves. The cycle smooths kSmoothingSweeps times with damped block Jacobi
-/// before the coarse correction and as many times after, on every level: the same smoother both
-/// ways, so the cycle is a symmetric positive definite operator, as CG needs. The finest level
+/// which a dense L D Lᵀ solves. The cycle smooths before the coarse correction and after it, on every
+/// level, with kSmoothingSweeps steps of a Chebyshev polynomial in D⁻¹ A (block-diagonal D) that is
+/// smallest on the upper nine tenths of the spectrum, as far as ρ(D⁻¹ A) reaches (chebyshevSteps()),
+/// and that stops contracting where damped Jacobi with P's ω would: the same smoother both ways,
+/// so the cycle is a symmetric positive definite operator, as CG needs. The finest level
 /// corrects once from the first coarse level, and every coarse level twice from the level below it
 /// (kCoarseVisits: a W-cycle below the first coarse level): the second visit solves for what the
 /// first left, the coarse residual r_c − A_c x_c, and adds its answer, so that a level's correction
 /// is (2 B − B A_c B) r_c with B the next level's cycle, symmetric again. On the bench's spring cloth
 /// (goal 2 of issue 13) the plain V-cycle's iterations grew by 1.44 from 64² to 128² (14.2 → 20.4
-/// a step); this cycle's grow by about 1.3, and its step costs less at both sizes (README, "Or by
-/// multigrid").
+/// a step); this cycle's grow by about 1.3, and its step costs less at both sizes; the Chebyshev
+/// smoother takes a tenth fewer iterations than two damped Jacobi sweeps at the same cost (README,
+/// "Or by multigrid").
 ///
 /// Pinned particles: setup() takes the filtered system (pinned rows and columns cleared, the diagonal
 /// kept), their rows of P̂ are zero, and a coarse mode that the pins leave empty is dropped (its
@@ -147,8 +150,23 @@ public:
 
   /// Nodes of the coarsest level at most (it is solved by a dense factorization).
   static constexpr int kCoarsestNodes = 24;
-  /// Damped block Jacobi sweeps before a level's coarse correction, and as many after it.
+  /// Smoothing steps before a level's coarse correction, and as many after it: the degree of the
+  /// smoother's Chebyshev polynomial.
   static constexpr int kSmoothingSweeps = 2;
+  /// The ratio of the ends of the interval [u / kChebyshevRange, u] of eigenvalues of D⁻¹ A on which
+  /// the smoother's polynomial is smallest (the high ones: the low ones are the coarse levels' work).
+  static constexpr double kChebyshevRange = 10.0;
+  /// The coefficients of the smoother's steps on [u / kChebyshevRange, u], u = `upper`: step k is
+  /// keep[k] times the step before plus scale[k] D⁻¹ r (the residual before it), added to x; so that
+  /// after the steps the error on an eigenvector of D⁻¹ A with eigenvalue t is scaled by
+  /// T_k((θ − t) / δ) / T_k(θ / δ) (T_k Chebyshev's polynomial of degree k = kSmoothingSweeps, θ and δ
+  /// the interval's centre and half-width): at most 1 / T_k(θ / δ) in size on the interval, at most 1
+  /// for 0 ≤ t ≤ 2 θ.
+  struct ChebyshevSteps
+  {
+    std::array<double, kSmoothingSweeps> keep{}, scale{};
+  };
+  static ChebyshevSteps chebyshevSteps(double upper);
   /// How many times each coarse level (all but the finest) visits the level below it in one cycle
   /// (once when the coarsest level is too large to factor: visitNext()).
   static constexpr int kCoarseVisits = 2;
@@ -198,11 +216,12 @@ private:
     std::vector<int> galerkin_plan_start;  // per row of A_c (per node of the next level)
     // This level's blocks below the diagonal with their mirror above it (lower = upperᵀ).
     std::vector<std::array<int, 2>> mirrored;
-    double omega = 0.0;          // the smoother's damping, 4 / (3 ρ(D⁻¹ A))
+    double omega = 0.0;          // damped Jacobi's 4 / (3 ρ(D⁻¹ A)): P's smoothing, and the smoother's reach
+    ChebyshevSteps smoother;     // the cycle's smoothing steps (from ω: setupLevel())
     bool power_started = false;  // `power` holds the last setup's eigenvector estimate
-    // The cycle's vectors: right-hand side, iterate, residual (b a node); a coarse level's first
-    // visit's iterate and right-hand side, kept over its second visit; and the power iteration's two.
-    Eigen::VectorXd rhs, x, residual, first_visit_x, first_visit_rhs, power, power_product;
+    // The cycle's vectors: right-hand side, iterate, residual, the smoother's last step (b a node); a coarse level's
+    // first visit's iterate and right-hand side, kept over its second visit; and the power iteration's two.
+    Eigen::VectorXd rhs, x, residual, chebyshev_step, first_visit_x, first_visit_rhs, power, power_product;
   };
 
   // Sizes a level's arrays from its pattern.
@@ -241,8 +260,9 @@ private:
   static double smootherDamping(WorkerPool* workers, int nodes, const std::vector<double>& inverse_diagonal,
                                 const Product& product, Eigen::VectorXd& power, Eigen::VectorXd& power_product,
                                 bool& power_started);
+  // One step of the smoother on `level`: its step = keep step + scale D⁻¹ residual, x += step.
   template <int B>
-  void smooth(const Level& level, const Eigen::VectorXd& residual, Eigen::VectorXd& x) const;
+  void chebyshevStep(Level& level, const Eigen::VectorXd& residual, double keep, double scale);
   template <int B>
   void restrictResidual(const Level& level, Eigen::VectorXd& coarse_rhs) const;
   template <int B>
