@@ -310,7 +310,8 @@ TEST(SmoothedAggregation, ThePreconditionedOperatorsEigenvaluesLieBetweenZeroAnd
     EXPECT_LE(eigenvalues.maxCoeff(), 1.0 + 1e-9);
     // The condition number CG sees: small, or the cycle would not be worth its cost. (Tried: with the
     // smoother's interval scaled by 0.6, so that it stops contracting below ρ(D⁻¹ A), the eigenvalues
-    // go down to −1.2, the cycle indefinite, which the test above, on random vectors, misses.)
+    // go down to −1.2, the cycle indefinite, which TheCycleIsSymmetricPositiveDefinite…, on random
+    // vectors, misses.)
     EXPECT_LT(eigenvalues.maxCoeff() / eigenvalues.minCoeff(), 5.0);  // measured 2.1 to 2.7
   }
 }
