@@ -303,7 +303,9 @@ TEST(SmoothedAggregation, ThePreconditionedOperatorsEigenvaluesLieBetweenZeroAnd
       }
     }
     EXPECT_LT((b - b.transpose()).norm(), 1e-10 * b.norm());
-    const Eigen::MatrixXd lower = a.llt().matrixL();
+    const Eigen::LLT<Eigen::MatrixXd> cholesky(a);
+    ASSERT_EQ(cholesky.info(), Eigen::Success) << "the filtered system is not positive definite";
+    const Eigen::MatrixXd lower = cholesky.matrixL();
     const Eigen::MatrixXd symmetric = lower.transpose() * (0.5 * (b + b.transpose())) * lower;
     const Eigen::VectorXd eigenvalues = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(symmetric).eigenvalues();
     EXPECT_GT(eigenvalues.minCoeff(), 0.0);
