@@ -505,10 +505,11 @@ void SmoothedAggregation::setupLevel(int index)
       [&](const Eigen::VectorXd& x, Eigen::VectorXd& y) { multiply<B>(level, x, y); }, level.power, level.power_product,
       level.power_started);
   // The smoother's Chebyshev polynomial (chebyshevSteps()) on [u / α, u] stops contracting where
-  // t > u (1 + 1 / α); u is set so that this is 2 / ω, where damped Jacobi with the damping ω (P's
-  // smoother below) would stop: a true ρ up to 1.5 kSpectralMargin times the power iterations'
-  // estimate breaks neither. A ρ of zero (no coupling left) leaves the smoothing out, as Jacobi's
-  // ω = 0 would.
+  // t > u (1 + 1 / α); u is set so that this is 2 / ω, where damped Jacobi with the damping ω (the
+  // cycle's smoother until 2026-12-07; P's below where the level has no weak couplings) would stop:
+  // a true ρ up to 1.5 kSpectralMargin times the power iterations' estimate breaks neither (u is
+  // 1.5 times the estimate, the interval reaching past it). A ρ of zero (no coupling left) leaves the
+  // smoothing out, as Jacobi's ω = 0 would.
   level.smoother =
       level.omega > 0.0 ? chebyshevSteps(2.0 / (level.omega * (1.0 + 1.0 / kChebyshevRange))) : ChebyshevSteps{};
   if (level.has_weak)
@@ -774,7 +775,7 @@ SmoothedAggregation::ChebyshevSteps SmoothedAggregation::chebyshevSteps(double u
   // The three-term recurrence of the Chebyshev polynomials shifted to [lower, upper] (centre θ,
   // half-width δ, σ = θ / δ): the first step is D⁻¹ r / θ, each next one
   // step_k = g_k g_{k−1} step_{k−1} + (2 g_k / δ) D⁻¹ r with g_k = 1 / (2 σ − g_{k−1}), g_0 = 1 / σ
-  // (g_k = T_{k−1}(σ) / T_k(σ)). After k steps from x the error is T_k((θ − t) / δ) / T_k(σ) of what
+  // (g_k = T_k(σ) / T_{k+1}(σ)). After k steps from x the error is T_k((θ − t) / δ) / T_k(σ) of what
   // it was, on each eigenvector of D⁻¹ A with eigenvalue t.
   const double lower = upper / kChebyshevRange;
   const double theta = 0.5 * (upper + lower), delta = 0.5 * (upper - lower), sigma = theta / delta;

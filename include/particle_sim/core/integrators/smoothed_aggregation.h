@@ -50,9 +50,10 @@ inline Eigen::Matrix3d symmetricBlock(const std::array<double, 6>& c)
 /// levels); the next level's matrix is A_c = Pᵀ A P (Galerkin, with A whole). Down to a few nodes,
 /// which a dense L D Lᵀ solves. The cycle smooths before the coarse correction and after it, on every
 /// level, with kSmoothingSweeps steps of a Chebyshev polynomial in D⁻¹ A (block-diagonal D) that is
-/// smallest on the upper nine tenths of the spectrum, as far as ρ(D⁻¹ A) reaches (chebyshevSteps()),
-/// and that stops contracting where damped Jacobi with P's ω would: the same smoother both ways,
-/// so the cycle is a symmetric positive definite operator, as CG needs. The finest level
+/// smallest on [u / 10, u], the high end of the spectrum with u some 1.5 times the estimate of
+/// ρ(D⁻¹ A) (chebyshevSteps()), and that stops contracting where damped Jacobi with the damping
+/// ω = 4 / (3 ρ) it replaced would: the same smoother both ways, so the cycle is a symmetric
+/// positive definite operator, as CG needs. The finest level
 /// corrects once from the first coarse level, and every coarse level twice from the level below it
 /// (kCoarseVisits: a W-cycle below the first coarse level): the second visit solves for what the
 /// first left, the coarse residual r_c − A_c x_c, and adds its answer, so that a level's correction
@@ -216,8 +217,10 @@ private:
     std::vector<int> galerkin_plan_start;  // per row of A_c (per node of the next level)
     // This level's blocks below the diagonal with their mirror above it (lower = upperᵀ).
     std::vector<std::array<int, 2>> mirrored;
-    double omega = 0.0;          // damped Jacobi's 4 / (3 ρ(D⁻¹ A)): P's smoothing, and the smoother's reach
-    ChebyshevSteps smoother;     // the cycle's smoothing steps (from ω: setupLevel())
+    // Damped Jacobi's 4 / (3 ρ(D⁻¹ A)): the smoother's reach, and P's smoothing where no coupling is
+    // weak; the cycle's smoothing steps (from ω: setupLevel()).
+    double omega = 0.0;
+    ChebyshevSteps smoother;
     bool power_started = false;  // `power` holds the last setup's eigenvector estimate
     // The cycle's vectors: right-hand side, iterate, residual, the smoother's last step (b a node); a coarse level's
     // first visit's iterate and right-hand side, kept over its second visit; and the power iteration's two.
