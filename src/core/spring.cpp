@@ -172,10 +172,38 @@ template <bool kAddI, bool kAddJ>
 }
 
 #if defined(__x86_64__)
-// Particles a and b's first two coordinates in one register: (x_a, y_a, x_b, y_b).
-[[gnu::always_inline]] __attribute__((target("avx2"))) inline __m256d firstTwoOfTwo(const double* base, int a, int b)
+// A particle's three coordinates in lanes 0-2 of a register, lane 3 zero: a masked load, which
+// does not read the number after them (past the array's end for the last particle).
+[[gnu::always_inline]] __attribute__((target("avx2"))) inline __m256d coordinatesOf(const double* coordinates)
 {
-  return _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(base + 3L * a)), _mm_loadu_pd(base + 3L * b), 1);
+  return _mm256_maskload_pd(coordinates, _mm256_set_epi64x(0, -1, -1, -1));
+}
+
+// A particle's three coordinates as storeCoordinates() left them: read as it wrote them, two and one,
+// so that each read takes its numbers straight from the store before it (a read of all three at
+// once could not, and would wait for both stores to reach the cache).
+[[gnu::always_inline]] __attribute__((target("avx2"))) inline __m256d storedCoordinatesOf(const double* coordinates)
+{
+  return _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(coordinates)), _mm_load_sd(coordinates + 2), 1);
+}
+
+// Lanes 0-2 of a register as a particle's three coordinates.
+[[gnu::always_inline]] __attribute__((target("avx2"))) inline void storeCoordinates(double* coordinates, __m256d value)
+{
+  _mm_storeu_pd(coordinates, _mm256_castpd256_pd128(value));
+  _mm_store_sd(coordinates + 2, _mm256_extractf128_pd(value, 1));
+}
+
+// Four springs' (x, y, z, 0) differences a, b, c, d as x, y and z, each in the lanes (a, c, b, d).
+[[gnu::always_inline]] __attribute__((target("avx2"))) inline void inLanesACBD(__m256d a, __m256d b, __m256d c,
+                                                                               __m256d d, __m256d& x, __m256d& y,
+                                                                               __m256d& z)
+{
+  const __m256d ac_xz = _mm256_unpacklo_pd(a, c), bd_xz = _mm256_unpacklo_pd(b, d);  // (a.x, c.x, a.z, c.z), ...
+  const __m256d ac_y = _mm256_unpackhi_pd(a, c), bd_y = _mm256_unpackhi_pd(b, d);    // (a.y, c.y, 0, 0), ...
+  x = _mm256_permute2f128_pd(ac_xz, bd_xz, 0x20);
+  y = _mm256_permute2f128_pd(ac_y, bd_y, 0x20);
+  z = _mm256_permute2f128_pd(ac_xz, bd_xz, 0x31);
 }
 
 // Four numbers in the lanes (a, c, b, d), by broadcasts and blends (no shuffle).
@@ -187,29 +215,58 @@ template <bool kAddI, bool kAddJ>
   return _mm256_blend_pd(ac, bd, 0xC);
 }
 
+// The force of end i while consecutive springs share it, in registers until the end changes.
+struct HeldForce
+{
+  int particle = -1;  // none
+  __m256d force;      // (x, y, z, 0)
+
+  [[gnu::always_inline]] __attribute__((target("avx2"))) inline void store(double* fs)
+  {
+    if (particle < 0) return;
+    storeCoordinates(fs + 3L * particle, force);
+    particle = -1;
+  }
+};
+
+// A spring's force (x, y, z, 0) added to its end i (held) and taken from its end j.
+template <bool kAddI, bool kAddJ>
+[[gnu::always_inline]] __attribute__((target("avx2"))) inline void addForceOf(const Spring& spring, __m256d force,
+                                                                              double* fs, HeldForce& held)
+{
+  if (kAddI)
+  {
+    if (spring.i != held.particle)
+    {
+      held.store(fs);
+      held.particle = spring.i;
+      held.force = storedCoordinatesOf(fs + 3L * spring.i);
+    }
+    held.force = _mm256_add_pd(held.force, force);
+  }
+  if (kAddJ)
+  {
+    double* const fj = fs + 3L * spring.j;
+    storeCoordinates(fj, _mm256_sub_pd(storedCoordinatesOf(fj), force));
+  }
+}
+
 // addSpringForcesOf()'s vector form: four springs a, b, c, d at a time, in the lanes (a, c, b, d)
-// that unpacking two registers of two springs each gives. Each lane does the scalar form's
+// (inLanesACBD(): unpacking and swapping halves puts them there). Each lane does the scalar form's
 // operations in its order (AVX2 without FMA: every product rounded before its sum), so the same
 // bits. The four forces are then added spring after spring as in the scalar form, but for end i:
 // while consecutive springs share it (a cloth's point starts five of its springs), its force stays
-// in registers and is stored once the end changes (the same sums in the same order). Four springs
+// in a register and is stored once the end changes (the same sums in the same order). Four springs
 // with one of zero length take the scalar form.
 template <bool kAddI, bool kAddJ>
 __attribute__((target("avx2"))) void addRunForcesAvx2(const Spring* first, const Spring* last, const double* xs,
                                                       const double* vs, double* fs, double* energy, double* energy_sum)
 {
   const __m256d zero = _mm256_setzero_pd(), half = _mm256_set1_pd(0.5);
-  alignas(32) double first_two[8];  // the forces' (x, y) of springs a, b, c, d
-  alignas(32) double third[4];      // and their z
-  int held = -1;                    // the end i whose force is in held_xy and held_z, not yet stored
-  __m128d held_xy = _mm_setzero_pd();
-  double held_z = 0.0;
-  auto store_held = [&] {
-    if (held < 0) return;
-    _mm_storeu_pd(fs + 3L * held, held_xy);
-    fs[3L * held + 2] = held_z;
-    held = -1;
-  };
+  HeldForce held;
+  held.force = zero;
+  // The energies' running sum (energy_sum's, when it is asked for), kept in a register.
+  double energy_so_far = energy_sum ? *energy_sum : 0.0;
   const Spring* s = first;
   for (; last - s >= 4; s += 4)
   {
@@ -219,32 +276,32 @@ __attribute__((target("avx2"))) void addRunForcesAvx2(const Spring* first, const
       __builtin_prefetch(s + kSpringsAhead + 2);
     }
     const Spring &a = s[0], &b = s[1], &c = s[2], &d = s[3];
-    const __m256d delta_ab = _mm256_sub_pd(firstTwoOfTwo(xs, a.j, b.j), firstTwoOfTwo(xs, a.i, b.i));
-    const __m256d delta_cd = _mm256_sub_pd(firstTwoOfTwo(xs, c.j, d.j), firstTwoOfTwo(xs, c.i, d.i));
-    const __m256d dx = _mm256_unpacklo_pd(delta_ab, delta_cd);
-    const __m256d dy = _mm256_unpackhi_pd(delta_ab, delta_cd);
-    const __m256d dz =
-        _mm256_sub_pd(laneOrderACBD(xs + 3L * a.j + 2, xs + 3L * c.j + 2, xs + 3L * b.j + 2, xs + 3L * d.j + 2),
-                      laneOrderACBD(xs + 3L * a.i + 2, xs + 3L * c.i + 2, xs + 3L * b.i + 2, xs + 3L * d.i + 2));
+    // The eight ends' offsets, each read for the positions and for the velocities.
+    const long ai = 3L * a.i, aj = 3L * a.j, bi = 3L * b.i, bj = 3L * b.j;
+    const long ci = 3L * c.i, cj = 3L * c.j, di = 3L * d.i, dj = 3L * d.j;
+    __m256d dx, dy, dz;
+    inLanesACBD(_mm256_sub_pd(coordinatesOf(xs + aj), coordinatesOf(xs + ai)),
+                _mm256_sub_pd(coordinatesOf(xs + bj), coordinatesOf(xs + bi)),
+                _mm256_sub_pd(coordinatesOf(xs + cj), coordinatesOf(xs + ci)),
+                _mm256_sub_pd(coordinatesOf(xs + dj), coordinatesOf(xs + di)), dx, dy, dz);
     const __m256d length = _mm256_sqrt_pd(
         _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(dx, dx), _mm256_mul_pd(dy, dy)), _mm256_mul_pd(dz, dz)));
     if (_mm256_movemask_pd(_mm256_cmp_pd(length, zero, _CMP_EQ_OQ)) != 0)
     {
-      store_held();
+      held.store(fs);
       for (int k = 0; k < 4; ++k)
         addSpringForce<kAddI, kAddJ>(s + k, xs, vs, fs, energy ? energy + (s + k - first) : nullptr);
-      if (energy_sum) addInOrder(energy_sum, energy + (s - first), 4);
+      if (energy_sum) addInOrder(&energy_so_far, energy + (s - first), 4);
       continue;
     }
     const __m256d ux = _mm256_div_pd(dx, length), uy = _mm256_div_pd(dy, length), uz = _mm256_div_pd(dz, length);
-    const __m256d dv_ab = _mm256_sub_pd(firstTwoOfTwo(vs, a.j, b.j), firstTwoOfTwo(vs, a.i, b.i));
-    const __m256d dv_cd = _mm256_sub_pd(firstTwoOfTwo(vs, c.j, d.j), firstTwoOfTwo(vs, c.i, d.i));
-    const __m256d dvz =
-        _mm256_sub_pd(laneOrderACBD(vs + 3L * a.j + 2, vs + 3L * c.j + 2, vs + 3L * b.j + 2, vs + 3L * d.j + 2),
-                      laneOrderACBD(vs + 3L * a.i + 2, vs + 3L * c.i + 2, vs + 3L * b.i + 2, vs + 3L * d.i + 2));
-    const __m256d along = _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(_mm256_unpacklo_pd(dv_ab, dv_cd), ux),
-                                                      _mm256_mul_pd(_mm256_unpackhi_pd(dv_ab, dv_cd), uy)),
-                                        _mm256_mul_pd(dvz, uz));
+    __m256d dvx, dvy, dvz;
+    inLanesACBD(_mm256_sub_pd(coordinatesOf(vs + aj), coordinatesOf(vs + ai)),
+                _mm256_sub_pd(coordinatesOf(vs + bj), coordinatesOf(vs + bi)),
+                _mm256_sub_pd(coordinatesOf(vs + cj), coordinatesOf(vs + ci)),
+                _mm256_sub_pd(coordinatesOf(vs + dj), coordinatesOf(vs + di)), dvx, dvy, dvz);
+    const __m256d along =
+        _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(dvx, ux), _mm256_mul_pd(dvy, uy)), _mm256_mul_pd(dvz, uz));
     // A record's rest length and stiffness lie side by side.
     const __m256d rest_stiffness_ab =
         _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(&a.rest_length)), _mm_loadu_pd(&b.rest_length), 1);
@@ -259,41 +316,25 @@ __attribute__((target("avx2"))) void addRunForcesAvx2(const Spring* first, const
       const __m256d spring_energy = _mm256_mul_pd(_mm256_mul_pd(_mm256_mul_pd(half, stiffness), stretch), stretch);
       double* const four = energy + (s - first);
       _mm256_storeu_pd(four, _mm256_permute4x64_pd(spring_energy, 0xD8));  // lanes a, b, c, d
-      if (energy_sum) addInOrder(energy_sum, four, 4);
+      if (energy_sum) energy_so_far = (((energy_so_far + four[0]) + four[1]) + four[2]) + four[3];
     }
+    // The four forces as (x, y, z, 0), one a register, added spring after spring.
     const __m256d fx = _mm256_mul_pd(magnitude, ux), fy = _mm256_mul_pd(magnitude, uy);
-    _mm256_store_pd(first_two, _mm256_unpacklo_pd(fx, fy));
-    _mm256_store_pd(first_two + 4, _mm256_unpackhi_pd(fx, fy));
-    _mm256_store_pd(third, _mm256_permute4x64_pd(_mm256_mul_pd(magnitude, uz), 0xD8));
-    for (int k = 0; k < 4; ++k)
-    {
-      const __m128d f_xy = _mm_load_pd(first_two + 2 * k);
-      if (kAddI)
-      {
-        if (s[k].i != held)
-        {
-          store_held();
-          held = s[k].i;
-          held_xy = _mm_loadu_pd(fs + 3L * held);
-          held_z = fs[3L * held + 2];
-        }
-        held_xy = _mm_add_pd(held_xy, f_xy);
-        held_z += third[k];
-      }
-      if (kAddJ)
-      {
-        double* const fj = fs + 3L * s[k].j;
-        _mm_storeu_pd(fj, _mm_sub_pd(_mm_loadu_pd(fj), f_xy));
-        fj[2] -= third[k];
-      }
-    }
+    const __m256d fz = _mm256_mul_pd(magnitude, uz);
+    const __m256d xy_ab = _mm256_unpacklo_pd(fx, fy), xy_cd = _mm256_unpackhi_pd(fx, fy);    // (x, y) of a, b; c, d
+    const __m256d z_ab = _mm256_unpacklo_pd(fz, zero), z_cd = _mm256_unpackhi_pd(fz, zero);  // (z, 0) of a, b; c, d
+    addForceOf<kAddI, kAddJ>(s[0], _mm256_permute2f128_pd(xy_ab, z_ab, 0x20), fs, held);
+    addForceOf<kAddI, kAddJ>(s[1], _mm256_permute2f128_pd(xy_ab, z_ab, 0x31), fs, held);
+    addForceOf<kAddI, kAddJ>(s[2], _mm256_permute2f128_pd(xy_cd, z_cd, 0x20), fs, held);
+    addForceOf<kAddI, kAddJ>(s[3], _mm256_permute2f128_pd(xy_cd, z_cd, 0x31), fs, held);
   }
-  store_held();
+  held.store(fs);
   for (; s != last; ++s)
   {
     addSpringForce<kAddI, kAddJ>(s, xs, vs, fs, energy ? energy + (s - first) : nullptr);
-    if (energy_sum) addInOrder(energy_sum, energy + (s - first), 1);
+    if (energy_sum) energy_so_far += energy[s - first];
   }
+  if (energy_sum) *energy_sum = energy_so_far;
 }
 #endif
 
