@@ -15,11 +15,23 @@ SolverReport SymplecticEulerMethod::step(double h, DynamicSystem& system, const 
   const DynamicSystem::StateArrays next = system.nextState();
   Eigen::Matrix3Xd& next_x = *next.positions;
   Eigen::Matrix3Xd& next_v = *next.velocities;
+  // v' = v + h (f m⁻¹), x' = x + h v', number by number on the arrays.
+  const double* const xs = x.data();
+  const double* const vs = v.data();
+  const double* const fs = force_.data();
+  const double* const inverse = inverse_mass.data();
+  double* const next_xs = next_x.data();
+  double* const next_vs = next_v.data();
   shareLoop(system.workers(), static_cast<int>(x.cols()), kParticlesPerVectorChunk, [&](int begin, int end) {
-    for (int i = begin; i < end; ++i)
+    for (long c = 3L * begin; c < 3L * end; c += 3)
     {
-      next_v.col(i) = v.col(i) + h * (force_.col(i) * inverse_mass[i]);
-      next_x.col(i) = x.col(i) + h * next_v.col(i);
+      const double w = inverse[c / 3];
+      for (long k = c; k < c + 3; ++k)
+      {
+        const double velocity = vs[k] + h * (fs[k] * w);
+        next_vs[k] = velocity;
+        next_xs[k] = xs[k] + h * velocity;
+      }
     }
   });
   system.stateWritten();
