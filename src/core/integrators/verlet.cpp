@@ -19,13 +19,27 @@ SolverReport VerletMethod::step(double h, DynamicSystem& system, const Integrato
   const DynamicSystem::StateArrays next = system.nextState();
   Eigen::Matrix3Xd& next_x = *next.positions;
   Eigen::Matrix3Xd& next_u = *next.velocities;
+  // Number by number on the arrays: a = f m⁻¹, u0 = u − (h/2) a on the first step (else u),
+  // u' = damping u0 + h a, x' = x + h u'.
+  const double* const xs = x.data();
+  const double* const us = u.data();
+  const double* const fs = force_.data();
+  const double* const inverse = inverse_mass.data();
+  double* const next_xs = next_x.data();
+  double* const next_us = next_u.data();
+  const double half_step = 0.5 * h;
   shareLoop(system.workers(), static_cast<int>(x.cols()), kParticlesPerVectorChunk, [&](int begin, int end) {
-    for (int i = begin; i < end; ++i)
+    for (long c = 3L * begin; c < 3L * end; c += 3)
     {
-      const Eigen::Vector3d a = force_.col(i) * inverse_mass[i];
-      const Eigen::Vector3d u0 = start ? Eigen::Vector3d(u.col(i) - 0.5 * h * a) : Eigen::Vector3d(u.col(i));
-      next_u.col(i) = damping * u0 + h * a;
-      next_x.col(i) = x.col(i) + h * next_u.col(i);
+      const double w = inverse[c / 3];
+      for (long k = c; k < c + 3; ++k)
+      {
+        const double a = fs[k] * w;
+        const double u0 = start ? us[k] - half_step * a : us[k];
+        const double displacement = damping * u0 + h * a;
+        next_us[k] = displacement;
+        next_xs[k] = xs[k] + h * displacement;
+      }
     }
   });
   system.stateWritten();
