@@ -23,10 +23,10 @@ SolverReport SymplecticEulerMethod::step(double h, DynamicSystem& system, const 
   double* const next_xs = next_x.data();
   double* const next_vs = next_v.data();
   shareLoop(system.workers(), static_cast<int>(x.cols()), kParticlesPerVectorChunk, [&](int begin, int end) {
-    for (long c = 3L * begin; c < 3L * end; c += 3)
+    for (int i = begin; i < end; ++i)
     {
-      const double w = inverse[c / 3];
-      for (long k = c; k < c + 3; ++k)
+      const double w = inverse[i];
+      for (long k = 3L * i; k < 3L * i + 3; ++k)
       {
         const double velocity = vs[k] + h * (fs[k] * w);
         next_vs[k] = velocity;

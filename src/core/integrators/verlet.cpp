@@ -29,10 +29,10 @@ SolverReport VerletMethod::step(double h, DynamicSystem& system, const Integrato
   double* const next_us = next_u.data();
   const double half_step = 0.5 * h;
   shareLoop(system.workers(), static_cast<int>(x.cols()), kParticlesPerVectorChunk, [&](int begin, int end) {
-    for (long c = 3L * begin; c < 3L * end; c += 3)
+    for (int i = begin; i < end; ++i)
     {
-      const double w = inverse[c / 3];
-      for (long k = c; k < c + 3; ++k)
+      const double w = inverse[i];
+      for (long k = 3L * i; k < 3L * i + 3; ++k)
       {
         const double a = fs[k] * w;
         const double u0 = start ? us[k] - half_step * a : us[k];
