@@ -28,6 +28,9 @@ int particleChunkFor(int particles, int threads)
   return std::max(kParticlesPerChunk, (per_part + kParticlesPerChunk - 1) / kParticlesPerChunk * kParticlesPerChunk);
 }
 
+// A chunk of springs whose sum a thread is going on with (SpringForces::chunk_next_spring_).
+constexpr int kSummingChunk = -1;
+
 std::size_t chunksOf(std::size_t springs)
 {
   return (springs + kSpringsPerChunk - 1) / kSpringsPerChunk;
@@ -39,6 +42,8 @@ SpringForces::SpringForces(std::vector<Spring> springs)
     : built_(springs), springs_(std::move(springs)), origin_(springs_.size()), kept_energy_(springs_.size())
 {
   kept_chunk_energy_.reserve(chunksOf(springs_.size()));
+  chunk_next_spring_ = std::make_unique<std::atomic<int>[]>(chunksOf(springs_.size()));
+  chunk_out_of_order_ = std::make_unique<std::atomic<bool>[]>(chunksOf(springs_.size()));
   std::iota(origin_.begin(), origin_.end(), 0);
 }
 
@@ -58,11 +63,33 @@ void SpringForces::addForcesKeepingEnergy(const ForceContext& context, const Eig
                                           const Eigen::Matrix3Xd& v, Eigen::Matrix3Xd& force) const
 {
   energy_kept_ = true;
-  energy_kept_by_chunks_ = !sharesForces(context);
-  if (!energy_kept_by_chunks_)
+  energy_kept_by_chunks_ = true;
+  if (sharesForces(context))
   {
     kept_energy_.resize(springs_.size());  // sized at construction: tears shrink it, mend() restores it
-    addForcesShared(*context.workers, x, v, force, kept_energy_.data());
+    const int chunks = static_cast<int>(chunksOf(springs_.size()));
+    kept_chunk_energy_.assign(chunks, 0.0);  // reserved at construction: never larger
+    for (int m = 0; m < chunks; ++m)
+    {
+      chunk_next_spring_[m].store(m * kSpringsPerChunk, std::memory_order_relaxed);
+      chunk_out_of_order_[m].store(false, std::memory_order_relaxed);
+    }
+    energy_kept_by_chunks_ = addForcesShared(*context.workers, x, v, force, kept_energy_.data(), true);
+    if (!energy_kept_by_chunks_) return;  // (the two passes: addKeptEnergy() sums kept_energy_)
+    // A chunk whose pieces did not all come in order: its energies summed now, in order (addEnergy()'s
+    // sum of the chunk, so the same bits).
+    const int springs = static_cast<int>(springs_.size());
+    for (int m = 0; m < chunks; ++m)
+    {
+      const int first = m * kSpringsPerChunk, last = std::min(springs, first + kSpringsPerChunk);
+      if (!chunk_out_of_order_[m].load(std::memory_order_relaxed) &&
+          chunk_next_spring_[m].load(std::memory_order_relaxed) == last)
+        continue;
+      double sum = 0.0;
+      for (int k = first; k < last; ++k)
+        sum += kept_energy_[k];
+      kept_chunk_energy_[m] = sum;
+    }
     return;
   }
   // One thread: addEnergy()'s chunks of springs, each chunk's energies written to a buffer that
@@ -108,15 +135,15 @@ void SpringForces::addForcesTo(const ForceContext& context, const Eigen::Matrix3
 {
   if (sharesForces(context))
   {
-    addForcesShared(*context.workers, x, v, force, energy);
+    addForcesShared(*context.workers, x, v, force, energy, false);
     return;
   }
   addSpringForcesOf(springs_.data(), springs_.data() + springs_.size(), x.data(), v.data(), force.data(), energy,
                     nullptr, true, true, ImplicitEulerSolver::useAvx2());
 }
 
-void SpringForces::addForcesShared(WorkerPool& workers, const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v,
-                                   Eigen::Matrix3Xd& force, double* energy) const
+bool SpringForces::addForcesShared(WorkerPool& workers, const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v,
+                                   Eigen::Matrix3Xd& force, double* energy, bool sum_chunks) const
 {
   const int particles = static_cast<int>(x.cols());
   indexEnds(particles, workers.threads());
@@ -132,6 +159,9 @@ void SpringForces::addForcesShared(WorkerPool& workers, const Eigen::Matrix3Xd& 
     const PairChunks& chunks = chunks_;
     const bool vectorized = ImplicitEulerSolver::useAvx2();
     const int chunk_size = particle_chunk_;
+    std::atomic<int>* const next_spring = chunk_next_spring_.get();
+    std::atomic<bool>* const out_of_order = chunk_out_of_order_.get();
+    double* const chunk_sums = kept_chunk_energy_.data();
     workers.forEachChunk(particles, chunk_size, [=, &chunks](int begin, int end) {
       for (int chunk = begin / chunk_size; chunk * chunk_size < end; ++chunk)
       {
@@ -140,14 +170,38 @@ void SpringForces::addForcesShared(WorkerPool& workers, const Eigen::Matrix3Xd& 
           const PairChunks::Run run = runs[r];
           const Spring* const first = all + run.first;
           const Spring* const last = first + run.count;
+          const bool add_i = run.ends != PairChunks::kEndJ, add_j = run.ends != PairChunks::kEndI;
           // A spring's energy is written by the run that holds its end i (one writer a spring).
-          double* const run_energy = energy ? energy + run.first : nullptr;
-          addSpringForcesOf(first, last, xs, vs, fs, run.ends == PairChunks::kEndJ ? nullptr : run_energy, nullptr,
-                            run.ends != PairChunks::kEndJ, run.ends != PairChunks::kEndI, vectorized);
+          if (!energy || !add_i)
+          {
+            addSpringForcesOf(first, last, xs, vs, fs, nullptr, nullptr, add_i, add_j, vectorized);
+            continue;
+          }
+          if (!sum_chunks)
+          {
+            addSpringForcesOf(first, last, xs, vs, fs, energy + run.first, nullptr, add_i, add_j, vectorized);
+            continue;
+          }
+          // Piece by piece within the chunks of springs: a piece that starts where its chunk's sum
+          // stopped goes on with that sum in the pass (claimed while it runs); one that does not marks
+          // its chunk to be summed afterwards.
+          for (int piece = run.first; piece < run.first + run.count;)
+          {
+            const int m = piece / kSpringsPerChunk;
+            const int piece_end = std::min(run.first + run.count, (m + 1) * kSpringsPerChunk);
+            int expected = piece;
+            const bool in_order =
+                next_spring[m].compare_exchange_strong(expected, kSummingChunk, std::memory_order_acquire);
+            if (!in_order) out_of_order[m].store(true, std::memory_order_relaxed);
+            addSpringForcesOf(all + piece, all + piece_end, xs, vs, fs, energy + piece,
+                              in_order ? chunk_sums + m : nullptr, add_i, add_j, vectorized);
+            if (in_order) next_spring[m].store(piece_end, std::memory_order_release);
+            piece = piece_end;
+          }
         }
       }
     });
-    return;
+    return true;
   }
   const int springs = static_cast<int>(springs_.size());
   workers.forEachChunk(springs, kSpringsPerChunk, [&](int begin, int end) {
@@ -175,6 +229,7 @@ void SpringForces::addForcesShared(WorkerPool& workers, const Eigen::Matrix3Xd& 
       }
     }
   });
+  return false;
 }
 
 void SpringForces::indexEnds(int particles, int threads) const

@@ -1,6 +1,8 @@
 #pragma once
 
 #include <array>
+#include <atomic>
+#include <memory>
 #include <vector>
 
 #include "particle_sim/core/forces/force_element.h"
@@ -56,9 +58,12 @@ private:
   /// its bits). A spring across two chunks is computed twice; when that would be more than a
   /// quarter of the springs (a network numbered without locality), every spring's force goes into
   /// spring_force_ once and every particle then sums its springs' in spring order (PairChunks).
-  /// `energy`: null, or where each spring's energy goes (per spring of springs_).
-  void addForcesShared(WorkerPool& workers, const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v,
-                       Eigen::Matrix3Xd& force, double* energy) const;
+  /// `energy`: null, or where each spring's energy goes (per spring of springs_). With `sum_chunks`
+  /// (and `energy`), also each chunk of springs' sum into kept_chunk_energy_, in the pass where the
+  /// chunk's pieces come in order (addForcesKeepingEnergy() sums the others afterwards): true when
+  /// the pass went by chunks of particles, false for the two passes (no chunk's sum made).
+  bool addForcesShared(WorkerPool& workers, const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v,
+                       Eigen::Matrix3Xd& force, double* energy, bool sum_chunks) const;
   /// Whether addForces() is shared between `context`'s threads (addForcesShared()).
   bool sharesForces(const ForceContext& context) const;
   /// addForces(), with each spring's energy into `energy` unless it is null.
@@ -95,6 +100,12 @@ private:
   // One thread's addForcesKeepingEnergy() keeps each chunk's sum of addEnergy() instead of each spring's.
   mutable std::vector<double> kept_chunk_energy_;
   mutable bool energy_kept_by_chunks_ = false;
+  // Shared between threads, addForcesKeepingEnergy() sums a chunk of springs in the pass as one thread
+  // does, while its pieces (the runs' parts in it) come in order: per chunk of springs, the first
+  // spring not yet summed (kSummingChunk while a thread sums a piece) and whether a piece came out of
+  // order (the chunk is then summed from kept_energy_ after the pass). Sized at construction.
+  mutable std::unique_ptr<std::atomic<int>[]> chunk_next_spring_;
+  mutable std::unique_ptr<std::atomic<bool>[]> chunk_out_of_order_;
   mutable SpringJacobianParts jacobian_parts_;  // addJacobians(): per spring of springs_, its parts
   mutable std::vector<char> jacobian_chunk_changed_;  // addJacobiansShared(): per chunk, a pair's ends changed
 };
