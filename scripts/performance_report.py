@@ -1027,7 +1027,15 @@ def main():
                  'energies summed as it goes; the same bits): side by side with the two-lane pass, 6.6–7.0 against '
                  '8.6–8.9 ns a step and spring at 64², 7.4–7.9 against 9.7–10.7 ns at 256² (one thread). The '
                  'divider still does not bound it (one division and three products instead of three divisions: '
-                 'no faster), nor does end i in registers alone.')
+                 'no faster), nor does end i in registers alone. Since the evening of 2026-12-07 each end\'s three '
+                 'coordinates come in with one masked load, the four forces go out as (x, y, z, 0) a register and '
+                 'are read back from the force array in the two pieces they were stored in, so that the read takes '
+                 'its numbers from the stores just before it (read whole, it waited for both stores to reach the '
+                 'cache, and the pass with fewer instructions was no faster); the passes over the particles are '
+                 'written out on the arrays\' numbers (README, "The explicit force pass"; the same bits): the '
+                 'pass alone 0.85–0.89 of the time before at 64² and 0.88–0.90 at 256² (a driver calling the two '
+                 'passes in turn), 38 % fewer instructions in the pass and 0.95 of them in the step (callgrind). '
+                 'What is left to 2× the floor: the pass issues some 56 instructions a spring.')
     lines.append('')
     collision_rows = [r for r in rows if r['case'] == 'selfcollision']
     if collision_rows:
