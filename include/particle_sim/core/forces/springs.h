@@ -34,8 +34,10 @@ public:
   void addStabilityRows(const std::vector<Eigen::Vector3d>& rest, std::vector<double>& stiffness_rows,
                         std::vector<double>& damping_rows) const override;
   void addEnergy(const ForceContext& context, const Eigen::Matrix3Xd& x, double& energy) const override;
-  /// addForces() that also keeps the springs' energy, for addKeptEnergy(): each spring's (kept_energy_)
-  /// when shared between threads, else each chunk's sum as addEnergy() takes it (kept_chunk_energy_).
+  /// addForces() that also keeps the springs' energy, for addKeptEnergy(): each chunk's sum as
+  /// addEnergy() takes it (kept_chunk_energy_); shared between threads, also each spring's
+  /// (kept_energy_), from which the chunks whose pieces came out of order are summed (and all of them
+  /// when the pass is not by chunks of particles).
   void addForcesKeepingEnergy(const ForceContext& context, const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v,
                               Eigen::Matrix3Xd& force) const override;
   void addKeptEnergy(const ForceContext& context, const Eigen::Matrix3Xd& x, double& energy) const override;
@@ -97,7 +99,8 @@ private:
   mutable std::vector<double> chunk_energy_;  // addEnergy(): per chunk of springs, its energy
   mutable std::vector<double> kept_energy_;   // addForcesKeepingEnergy(): per spring of springs_, its energy
   mutable bool energy_kept_ = false;          // the kept energy is of the last addForcesKeepingEnergy()'s x
-  // One thread's addForcesKeepingEnergy() keeps each chunk's sum of addEnergy() instead of each spring's.
+  // addForcesKeepingEnergy(): each chunk's sum of addEnergy() (energy_kept_by_chunks_), else each
+  // spring's in kept_energy_.
   mutable std::vector<double> kept_chunk_energy_;
   mutable bool energy_kept_by_chunks_ = false;
   // Shared between threads, addForcesKeepingEnergy() sums a chunk of springs in the pass as one thread
