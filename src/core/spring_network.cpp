@@ -443,8 +443,6 @@ bool SpringNetworkBody::stateFinite(double* kinetic) const
   std::atomic<bool> finite{true};
   const double* const xs = p.position.data();
   const double* const vs = p.velocity.data();
-  const double* const mass = mass_.data();
-  const char* const pinned = pinned_.data();
   auto chunk_sum = [&](int first, int last) {
     double sum = 0.0;
     bool chunk_finite = true;
@@ -455,8 +453,7 @@ bool SpringNetworkBody::stateFinite(double* kinetic) const
       const double zero =
           ((x[0] - x[0]) + (x[1] - x[1])) + ((x[2] - x[2]) + (v[0] - v[0])) + ((v[1] - v[1]) + (v[2] - v[2]));
       chunk_finite &= zero == zero;
-      // kineticEnergyOf()'s operations, written out.
-      sum += kinetic && i < live && !pinned[i] ? 0.5 * mass[i] * ((v[0] * v[0] + v[1] * v[1]) + v[2] * v[2]) : 0.0;
+      sum += kinetic && i < live ? kineticEnergyOf(i) : 0.0;
     }
     if (!chunk_finite) finite.store(false, std::memory_order_relaxed);
     return sum;

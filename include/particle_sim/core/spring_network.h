@@ -245,9 +245,11 @@ private:
   // `re_explain`: have `auto` write its explanation anew at the next step.
   void updateStabilityBound(bool re_explain = true);
   // A free particle's kinetic energy [J] (0 for a pinned one): kineticEnergy()'s term.
+  // On the velocity's three numbers, |v|² as Eigen's squaredNorm() sums it, (v_x² + v_y²) + v_z².
   double kineticEnergyOf(int i) const
   {
-    return pinned_[i] ? 0.0 : 0.5 * mass_[i] * particles_.velocity.col(i).squaredNorm();
+    const double* const v = particles_.velocity.data() + 3L * i;
+    return pinned_[i] ? 0.0 : 0.5 * mass_[i] * ((v[0] * v[0] + v[1] * v[1]) + v[2] * v[2]);
   }
   // Whether every position and velocity is finite; with `kinetic`, also the kinetic energy, the bits
   // of kineticEnergy(), from the same pass over the particles.

@@ -18,28 +18,25 @@ void GravityForce::setForces(const ForceContext& context, const Eigen::Matrix3Xd
 {
   // 0.0 + (m g) rather than m g: the sum with the zeroed force the other elements start from
   // (it turns a −0 into +0), kept by the compiler as it would change that sign.
+  double* const fs = force.data();
   shareLoop(context.workers, static_cast<int>(x.cols()), kParticlesPerVectorChunk, [&](int begin, int end) {
     for (int i = begin; i < end; ++i)
-      force.col(i) = forceOn(context, i);
+      setForceOn(context, i, fs);
   });
 }
 
 void GravityForce::addEnergy(const ForceContext& context, const Eigen::Matrix3Xd& x, double& energy) const
 {
   // Summed in fixed chunks of particles, shared between threads: the same bits at any thread count.
+  const double* const xs = x.data();
   energy -= sumByChunks(context.workers, static_cast<int>(x.cols()), kParticlesPerVectorChunk, chunk_energy_,
-                        [&](int i) { return energyOf(context, x, i); });
+                        [&](int i) { return energyOf(context, xs, i); });
 }
 
 void GravityForce::setForcesKeepingEnergy(const ForceContext& context, const Eigen::Matrix3Xd& x,
                                           const Eigen::Matrix3Xd& /*v*/, Eigen::Matrix3Xd& force) const
 {
   // setForces()'s forces and addEnergy()'s chunks, summed in its order: the same bits as both.
-  // On the arrays' numbers: forceOn()'s and energyOf()'s operations, written out (Eigen's 3-vector
-  // expressions cost some 46 instructions a particle here, the step's third pass over them).
-  const double gx = context.gravity.x(), gy = context.gravity.y(), gz = context.gravity.z();
-  const double* const mass = context.mass.data();
-  const char* const pinned = context.pinned.data();
   const double* const xs = x.data();
   double* const fs = force.data();
   kept_sum_ = sumChunks(context.workers, static_cast<int>(x.cols()), kParticlesPerVectorChunk, chunk_energy_,
@@ -47,13 +44,8 @@ void GravityForce::setForcesKeepingEnergy(const ForceContext& context, const Eig
                           double sum = 0.0;
                           for (int i = first; i < last; ++i)
                           {
-                            const double m = mass[i];
-                            double* const f = fs + 3L * i;
-                            f[0] = m * gx + 0.0;
-                            f[1] = m * gy + 0.0;
-                            f[2] = m * gz + 0.0;
-                            const double* const p = xs + 3L * i;
-                            sum += pinned[i] ? 0.0 : m * ((gx * p[0] + gy * p[1]) + gz * p[2]);
+                            setForceOn(context, i, fs);
+                            sum += energyOf(context, xs, i);
                           }
                           return sum;
                         });
