@@ -43,7 +43,6 @@ SpringForces::SpringForces(std::vector<Spring> springs)
 {
   kept_chunk_energy_.reserve(chunksOf(springs_.size()));
   chunk_next_spring_ = std::make_unique<std::atomic<int>[]>(chunksOf(springs_.size()));
-  chunk_out_of_order_ = std::make_unique<std::atomic<bool>[]>(chunksOf(springs_.size()));
   std::iota(origin_.begin(), origin_.end(), 0);
 }
 
@@ -72,21 +71,18 @@ void SpringForces::addForcesKeepingEnergy(const ForceContext& context, const Eig
     for (int m = 0; m < chunks; ++m)
     {
       chunk_next_spring_[m].store(m * kSpringsPerChunk, std::memory_order_relaxed);
-      chunk_out_of_order_[m].store(false, std::memory_order_relaxed);
     }
     energy_kept_by_chunks_ = addForcesShared(*context.workers, x, v, force, kept_energy_.data(), true);
     if (!energy_kept_by_chunks_) return;  // (the two passes: addKeptEnergy() sums kept_energy_)
-    // A chunk whose pieces did not all come in order: its energies summed now, in order (addEnergy()'s
-    // sum of the chunk, so the same bits).
+    // A chunk whose pieces did not all come in order: its sum goes on, in order, from the first
+    // spring the pass did not sum, over the energies the pieces out of order kept (addEnergy()'s sum of
+    // the chunk, so the same bits).
     const int springs = static_cast<int>(springs_.size());
     for (int m = 0; m < chunks; ++m)
     {
-      const int first = m * kSpringsPerChunk, last = std::min(springs, first + kSpringsPerChunk);
-      if (!chunk_out_of_order_[m].load(std::memory_order_relaxed) &&
-          chunk_next_spring_[m].load(std::memory_order_relaxed) == last)
-        continue;
-      double sum = 0.0;
-      for (int k = first; k < last; ++k)
+      const int last = std::min(springs, (m + 1) * kSpringsPerChunk);
+      double sum = kept_chunk_energy_[m];
+      for (int k = chunk_next_spring_[m].load(std::memory_order_relaxed); k < last; ++k)
         sum += kept_energy_[k];
       kept_chunk_energy_[m] = sum;
     }
@@ -160,9 +156,9 @@ bool SpringForces::addForcesShared(WorkerPool& workers, const Eigen::Matrix3Xd& 
     const bool vectorized = ImplicitEulerSolver::useAvx2();
     const int chunk_size = particle_chunk_;
     std::atomic<int>* const next_spring = chunk_next_spring_.get();
-    std::atomic<bool>* const out_of_order = chunk_out_of_order_.get();
     double* const chunk_sums = kept_chunk_energy_.data();
     workers.forEachChunk(particles, chunk_size, [=, &chunks](int begin, int end) {
+      std::array<double, kSpringsPerChunk> piece_energy;
       for (int chunk = begin / chunk_size; chunk * chunk_size < end; ++chunk)
       {
         for (int r = chunks.runStart(chunk); r < chunks.runStart(chunk + 1); ++r)
@@ -183,8 +179,10 @@ bool SpringForces::addForcesShared(WorkerPool& workers, const Eigen::Matrix3Xd& 
             continue;
           }
           // Piece by piece within the chunks of springs: a piece that starts where its chunk's sum
-          // stopped goes on with that sum in the pass (claimed while it runs); one that does not marks
-          // its chunk to be summed afterwards.
+          // stopped goes on with that sum in the pass (claimed while it runs), its energies in a
+          // buffer that stays in the first-level cache; one that does not keeps its springs'
+          // energies in `energy`, from which the chunk's sum goes on afterwards. The pieces in order
+          // are a prefix of the chunk, so every spring after it is in a piece that kept its energy.
           for (int piece = run.first; piece < run.first + run.count;)
           {
             const int m = piece / kSpringsPerChunk;
@@ -192,8 +190,7 @@ bool SpringForces::addForcesShared(WorkerPool& workers, const Eigen::Matrix3Xd& 
             int expected = piece;
             const bool in_order =
                 next_spring[m].compare_exchange_strong(expected, kSummingChunk, std::memory_order_acquire);
-            if (!in_order) out_of_order[m].store(true, std::memory_order_relaxed);
-            addSpringForcesOf(all + piece, all + piece_end, xs, vs, fs, energy + piece,
+            addSpringForcesOf(all + piece, all + piece_end, xs, vs, fs, in_order ? piece_energy.data() : energy + piece,
                               in_order ? chunk_sums + m : nullptr, add_i, add_j, vectorized);
             if (in_order) next_spring[m].store(piece_end, std::memory_order_release);
             piece = piece_end;

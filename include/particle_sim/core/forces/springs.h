@@ -35,9 +35,10 @@ public:
                         std::vector<double>& damping_rows) const override;
   void addEnergy(const ForceContext& context, const Eigen::Matrix3Xd& x, double& energy) const override;
   /// addForces() that also keeps the springs' energy, for addKeptEnergy(): each chunk's sum as
-  /// addEnergy() takes it (kept_chunk_energy_); shared between threads, also each spring's
-  /// (kept_energy_), from which the chunks whose pieces came out of order are summed (and all of them
-  /// when the pass is not by chunks of particles).
+  /// addEnergy() takes it (kept_chunk_energy_); shared between threads, also the energy of each
+  /// spring in a chunk's pieces that came out of order (kept_energy_), from which those chunks' sums go
+  /// on after the pass (and each spring's, summed by addKeptEnergy(), when the pass is not by chunks
+  /// of particles).
   void addForcesKeepingEnergy(const ForceContext& context, const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v,
                               Eigen::Matrix3Xd& force) const override;
   void addKeptEnergy(const ForceContext& context, const Eigen::Matrix3Xd& x, double& energy) const override;
@@ -61,9 +62,11 @@ private:
   /// quarter of the springs (a network numbered without locality), every spring's force goes into
   /// spring_force_ once and every particle then sums its springs' in spring order (PairChunks).
   /// `energy`: null, or where each spring's energy goes (per spring of springs_). With `sum_chunks`
-  /// (and `energy`), also each chunk of springs' sum into kept_chunk_energy_, in the pass where the
-  /// chunk's pieces come in order (addForcesKeepingEnergy() sums the others afterwards): true when
-  /// the pass went by chunks of particles, false for the two passes (no chunk's sum made).
+  /// (and `energy`), each chunk of springs' sum goes into kept_chunk_energy_ instead, in the pass
+  /// while the chunk's pieces come in order, and only the energies of the pieces out of order into
+  /// `energy` (addForcesKeepingEnergy() goes on with those chunks' sums afterwards): true when the
+  /// pass went by chunks of particles, false for the two passes (no chunk's sum made; every
+  /// spring's energy in `energy`).
   bool addForcesShared(WorkerPool& workers, const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v,
                        Eigen::Matrix3Xd& force, double* energy, bool sum_chunks) const;
   /// Whether addForces() is shared between `context`'s threads (addForcesShared()).
@@ -105,10 +108,9 @@ private:
   mutable bool energy_kept_by_chunks_ = false;
   // Shared between threads, addForcesKeepingEnergy() sums a chunk of springs in the pass as one thread
   // does, while its pieces (the runs' parts in it) come in order: per chunk of springs, the first
-  // spring not yet summed (kSummingChunk while a thread sums a piece) and whether a piece came out of
-  // order (the chunk is then summed from kept_energy_ after the pass). Sized at construction.
+  // spring not yet summed (kSummingChunk while a thread sums a piece); after the pass, the chunk's
+  // sum goes on from there over kept_energy_. Sized at construction.
   mutable std::unique_ptr<std::atomic<int>[]> chunk_next_spring_;
-  mutable std::unique_ptr<std::atomic<bool>[]> chunk_out_of_order_;
   mutable SpringJacobianParts jacobian_parts_;  // addJacobians(): per spring of springs_, its parts
   mutable std::vector<char> jacobian_chunk_changed_;  // addJacobiansShared(): per chunk, a pair's ends changed
 };
