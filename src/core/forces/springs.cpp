@@ -15,17 +15,20 @@ namespace
 constexpr int kSpringsPerChunk = 2048;
 constexpr int kParticlesPerChunk = 2048;
 
-// Particles per chunk of the springs' passes shared by chunks of particles: kParticlesPerChunk, or
-// more, in whole multiples of it, for bodies that would make more than kChunksPerThread chunks a
-// thread. The springs across a chunk's edge are computed by both chunks (a grid cloth's chunk of r
-// rows computes some three rows' springs again: at 2048 particles, 19 % more springs at 128², 37 %
-// at 256²). Whatever the chunks, each particle gets its terms in the one-thread order: the same bits.
-constexpr int kChunksPerThread = 2;
+// Particles per chunk of the springs' passes shared by chunks of particles: one chunk a thread, in
+// whole multiples of kParticleChunkGrain (so that a chunk's forces start on a cache line of their
+// own), at least kParticlesPerChunk. The springs across a chunk's edge are computed by both chunks,
+// in short runs (along a grid cloth's edge, springs with both ends inside alternate with springs
+// with one: at 128² with four chunks, 3426 runs of fewer than 8 springs, 6477 springs in all), so
+// each edge costs a few per cent of the pass; a second chunk a thread, for a faster thread to take
+// from a slower one, cost more than it evened out (README, "Threads"). Whatever the chunks, each
+// particle gets its terms in the one-thread order: the same bits.
+constexpr int kParticleChunkGrain = 256;
 int particleChunkFor(int particles, int threads)
 {
-  const int parts = kChunksPerThread * std::max(threads, 1);
+  const int parts = std::max(threads, 1);
   const int per_part = (particles + parts - 1) / parts;
-  return std::max(kParticlesPerChunk, (per_part + kParticlesPerChunk - 1) / kParticlesPerChunk * kParticlesPerChunk);
+  return std::max(kParticlesPerChunk, (per_part + kParticleChunkGrain - 1) / kParticleChunkGrain * kParticleChunkGrain);
 }
 
 // A chunk of springs whose sum a thread is going on with (SpringForces::chunk_next_spring_).
