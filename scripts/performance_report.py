@@ -1093,8 +1093,8 @@ def main():
                          '2026-12-08 the 128² symplectic step alone took 0.68–0.73 ms on one and 0.49 ms on the other '
                          '(each process held on one with taskset), and the slower one changed within minutes. A '
                          'loop cut in equal halves then waits for the slower, and two threads can be at most '
-                         '2 / 1.4 = 1.43× as fast as one on the faster vCPU; a fixed uneven cut (58 % of the '
-                         'particles to the stepping thread) gained 4 % in one such spell, but which vCPU is the '
+                         '2 / 1.4 = 1.43× as fast as one on the faster vCPU; a fixed uneven cut (58 %% of the '
+                         'particles to the stepping thread) gained 4 %% in one such spell, but which vCPU is the '
                          'slower is not known in advance, so the cut stays even.' % ceiling)
             lines.append('')
         lines.append('| method | n | ms per step at 1 thread, min (median–max) | at 2 threads | speed-up, end state |')
