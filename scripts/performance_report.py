@@ -283,15 +283,24 @@ def ceiling_text(rows):
         r = next((r for r in rows if r['case'] == 'ceiling' and r['variant'] == variant), None)
         return r['ms_min'] if r else None
     parts = []
+    balanced = False
     for when in ('before', 'after'):
         arithmetic, triad, trip = (value('%s %s' % (kind, when)) for kind in ('arithmetic', 'triad', 'round trip'))
         if arithmetic is not None and triad is not None and trip is not None:
-            parts.append('%s: arithmetic %.2f×, triad %.2f×, round trip %.0f ns' % (when, arithmetic, triad, trip))
+            part = '%s: arithmetic %.2f×, triad %.2f×, round trip %.0f ns' % (when, arithmetic, triad, trip)
+            balance = value('vcpu balance %s' % when)
+            if balance is not None and balance == balance:  # not NaN
+                part += ', the slower vCPU alone at %.2f of the faster\'s speed' % balance
+                balanced = True
+            parts.append(part)
     if not parts:
         return ''
     return ('what two threads could get from this machine at the time (two kernels on two threads at once '
             'against one alone, 2 = two whole cores; a cache line\'s round trip between the threads, some '
-            '100 ns when the vCPUs share a cache): ' + '; '.join(parts))
+            '100 ns when the vCPUs share a cache' +
+            ('; each vCPU\'s speed alone, a 128² cloth\'s symplectic Euler steps on one thread held on it, '
+             '1 when even: a loop cut in equal halves waits for the slower' if balanced else '') +
+            '): ' + '; '.join(parts))
 
 
 def thread_pairs(rows):
