@@ -58,7 +58,13 @@ void SpringForces::addForces(const ForceContext& context, const Eigen::Matrix3Xd
                              Eigen::Matrix3Xd& force) const
 {
   energy_kept_ = false;
-  addForcesTo(context, x, v, force, nullptr);
+  if (sharesForces(context))
+  {
+    addForcesShared(*context.workers, x, v, force, nullptr);
+    return;
+  }
+  addSpringForcesOf(springs_.data(), springs_.data() + springs_.size(), x.data(), v.data(), force.data(), nullptr,
+                    nullptr, true, true, ImplicitEulerSolver::useAvx2());
 }
 
 void SpringForces::addForcesKeepingEnergy(const ForceContext& context, const Eigen::Matrix3Xd& x,
@@ -75,7 +81,7 @@ void SpringForces::addForcesKeepingEnergy(const ForceContext& context, const Eig
     {
       chunk_next_spring_[m].store(m * kSpringsPerChunk, std::memory_order_relaxed);
     }
-    energy_kept_by_chunks_ = addForcesShared(*context.workers, x, v, force, kept_energy_.data(), true);
+    energy_kept_by_chunks_ = addForcesShared(*context.workers, x, v, force, kept_energy_.data());
     if (!energy_kept_by_chunks_) return;  // (the two passes: addKeptEnergy() sums kept_energy_)
     // A chunk whose pieces did not all come in order: its sum goes on, in order, from the first
     // spring the pass did not sum, over the energies the pieces out of order kept (addEnergy()'s sum of
@@ -129,20 +135,8 @@ void SpringForces::addKeptEnergy(const ForceContext& context, const Eigen::Matri
                         [kept](int k) { return kept[k]; });
 }
 
-void SpringForces::addForcesTo(const ForceContext& context, const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v,
-                               Eigen::Matrix3Xd& force, double* energy) const
-{
-  if (sharesForces(context))
-  {
-    addForcesShared(*context.workers, x, v, force, energy, false);
-    return;
-  }
-  addSpringForcesOf(springs_.data(), springs_.data() + springs_.size(), x.data(), v.data(), force.data(), energy,
-                    nullptr, true, true, ImplicitEulerSolver::useAvx2());
-}
-
 bool SpringForces::addForcesShared(WorkerPool& workers, const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v,
-                                   Eigen::Matrix3Xd& force, double* energy, bool sum_chunks) const
+                                   Eigen::Matrix3Xd& force, double* energy) const
 {
   const int particles = static_cast<int>(x.cols());
   indexEnds(particles, workers.threads());
@@ -174,11 +168,6 @@ bool SpringForces::addForcesShared(WorkerPool& workers, const Eigen::Matrix3Xd& 
           if (!energy || !add_i)
           {
             addSpringForcesOf(first, last, xs, vs, fs, nullptr, nullptr, add_i, add_j, vectorized);
-            continue;
-          }
-          if (!sum_chunks)
-          {
-            addSpringForcesOf(first, last, xs, vs, fs, energy + run.first, nullptr, add_i, add_j, vectorized);
             continue;
           }
           // Piece by piece within the chunks of springs: a piece that starts where its chunk's sum

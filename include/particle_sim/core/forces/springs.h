@@ -61,19 +61,15 @@ private:
   /// its bits). A spring across two chunks is computed twice; when that would be more than a
   /// quarter of the springs (a network numbered without locality), every spring's force goes into
   /// spring_force_ once and every particle then sums its springs' in spring order (PairChunks).
-  /// `energy`: null, or where each spring's energy goes (per spring of springs_). With `sum_chunks`
-  /// (and `energy`), each chunk of springs' sum goes into kept_chunk_energy_ instead, in the pass
-  /// while the chunk's pieces come in order, and only the energies of the pieces out of order into
-  /// `energy` (addForcesKeepingEnergy() goes on with those chunks' sums afterwards): true when the
-  /// pass went by chunks of particles, false for the two passes (no chunk's sum made; every
-  /// spring's energy in `energy`).
+  /// `energy`: null, or where the springs' energies are kept (per spring of springs_). By chunks of
+  /// particles, each chunk of springs' sum goes into kept_chunk_energy_, in the pass while the
+  /// chunk's pieces come in order, and only the energies of the pieces out of order into `energy`
+  /// (addForcesKeepingEnergy() goes on with those chunks' sums afterwards): returns true. By the two
+  /// passes, every spring's energy goes into `energy` (no chunk's sum made): returns false.
   bool addForcesShared(WorkerPool& workers, const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v,
-                       Eigen::Matrix3Xd& force, double* energy, bool sum_chunks) const;
+                       Eigen::Matrix3Xd& force, double* energy) const;
   /// Whether addForces() is shared between `context`'s threads (addForcesShared()).
   bool sharesForces(const ForceContext& context) const;
-  /// addForces(), with each spring's energy into `energy` unless it is null.
-  void addForcesTo(const ForceContext& context, const Eigen::Matrix3Xd& x, const Eigen::Matrix3Xd& v,
-                   Eigen::Matrix3Xd& force, double* energy) const;
   /// Whether addJacobians() is shared between `context`'s threads (addJacobiansShared()): after the
   /// springs' parts of this step.
   bool sharesJacobians(const ForceContext& context, const ImplicitEulerSolver& solver, int particles) const;
